@@ -1,0 +1,65 @@
+# meshreduce: the two commands that matter are `make demo` and `make check`.
+# Everything builds with CMake into build*/ directories.
+
+JOBS      ?= $(shell nproc 2>/dev/null || echo 2)
+BUILD     ?= build
+CMAKE     ?= cmake
+FUZZ_SECONDS ?= 60
+
+# Debian packages each goal needs (installed by scripts/need-packages.sh).
+BUILD_PKGS = cmake gcc libc6-dev make
+TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
+FUZZ_PKGS  = clang libclang-rt-14-dev
+
+.PHONY: all build demo check asan fuzz bench clean deps-build deps-test deps-fuzz
+
+all: build
+
+deps-build:
+	@scripts/need-packages.sh $(BUILD_PKGS)
+deps-test:
+	@scripts/need-packages.sh $(TEST_PKGS)
+deps-fuzz:
+	@scripts/need-packages.sh $(FUZZ_PKGS)
+
+$(BUILD)/CMakeCache.txt:
+	$(CMAKE) -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+
+build: deps-test $(BUILD)/CMakeCache.txt
+	$(CMAKE) --build $(BUILD) -j $(JOBS)
+
+# Build, then run the main job on the embedded generated default mesh.
+demo: build
+	./$(BUILD)/meshreduce demo
+
+# Build and pass every test.
+check: build
+	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+# The test suite under AddressSanitizer and UndefinedBehaviorSanitizer.
+asan: deps-test
+	$(CMAKE) -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DMR_SANITIZE=ON -DMR_BUILD_BENCH=OFF
+	$(CMAKE) --build build-asan -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	    ctest --test-dir build-asan --output-on-failure -j $(JOBS)
+
+# Each reader's libFuzzer target for FUZZ_SECONDS under ASan + UBSan.
+fuzz: deps-build deps-fuzz
+	CC=clang $(CMAKE) -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DMR_FUZZ=ON \
+	    -DMR_BUILD_TESTS=OFF -DMR_BUILD_BENCH=OFF
+	$(CMAKE) --build build-fuzz -j $(JOBS)
+	@for f in obj ply stl xyz; do \
+	    mkdir -p build-fuzz/corpus/$$f; \
+	    cp tests/fuzz/seeds/*.$$f build-fuzz/corpus/$$f/ 2>/dev/null || true; \
+	    echo "fuzz_$$f: $(FUZZ_SECONDS) s"; \
+	    ./build-fuzz/tests/fuzz/fuzz_$$f -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 \
+	        -max_len=65536 -print_final_stats=1 build-fuzz/corpus/$$f 2>build-fuzz/fuzz_$$f.log \
+	        || { tail -60 build-fuzz/fuzz_$$f.log; exit 1; }; \
+	    grep -E 'stat::number_of_executed_units|Done' build-fuzz/fuzz_$$f.log | tail -2; \
+	done
+
+bench: build
+	./$(BUILD)/bench/bench_io
+
+clean:
+	rm -rf build build-asan build-fuzz out

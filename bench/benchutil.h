@@ -1,0 +1,38 @@
+/* Helpers shared by the benchmarks: clocks, medians, machine facts, peers. */
+#ifndef MR_BENCHUTIL_H
+#define MR_BENCHUTIL_H
+
+#include "meshreduce.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+
+double bench_now(void);
+
+/* Median, min and max of n samples (sorts the array in place). */
+typedef struct bench_summary {
+    double median, min, max;
+} bench_summary;
+bench_summary bench_summarize(double *samples, int n);
+
+/* Print one line naming the machine: CPU model, cores, memory, date. */
+void bench_print_machine(FILE *f);
+
+/* Peak resident set size of this process so far, in bytes. */
+size_t bench_peak_rss(void);
+
+/* The Python that has Debian's python3-open3d: $MR_PYTHON, else
+ * /usr/bin/python3 when present, else python3 from PATH. */
+const char *bench_python(void);
+
+/* True when that Python can import open3d. */
+bool bench_have_open3d(void);
+
+/* Run a command and return its stdout (malloc'd), or NULL on failure. */
+char *bench_capture(const char *cmd);
+
+/* Exit with a message when a library call failed. */
+void bench_check(mr_status st, const mr_error *err);
+
+#endif

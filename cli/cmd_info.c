@@ -1,0 +1,140 @@
+/* meshreduce info FILE: counts, bounds and topology of a mesh. */
+#include "cli.h"
+
+#include <string.h>
+
+static const char usage[] =
+    "usage: meshreduce info FILE [--json]\n"
+    "\n"
+    "Print a mesh's counts, bounding box, boundary edges and loops, non-manifold\n"
+    "edges and vertices, connected components, Euler characteristic and genus.\n"
+    "\n"
+    "  --json   one JSON object instead of the table\n";
+
+/* Genus of an orientable manifold from chi = 2C - 2g - b; -1 when the
+ * formula does not apply (non-manifold or point cloud). */
+static long long genus_of(const mr_stats *s)
+{
+    if (!s->manifold || s->triangle_count == 0)
+        return -1;
+    long long twice = 2 * (long long)s->components - s->euler_characteristic -
+                      (long long)s->boundary_loops;
+    return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
+}
+
+static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
+                        double seconds)
+{
+    char a[32], b[32], c[32];
+    unsigned long long size = cli_file_size(path);
+    mr_format fmt = mr_format_from_path(path);
+    printf("%-22s %s\n", "file", path);
+    printf("%-22s %s, %s, read in %.3f s\n", "format", cli_format_name(fmt),
+           cli_bytes(a, sizeof a, size), seconds);
+    printf("%-22s %s (%s referenced, %s unreferenced)\n", "vertices",
+           cli_count(a, sizeof a, s->vertex_count),
+           cli_count(b, sizeof b, s->referenced_vertices),
+           cli_count(c, sizeof c, s->unreferenced_vertices));
+    printf("%-22s %s", "triangles", cli_count(a, sizeof a, s->triangle_count));
+    if (s->triangle_count == 0)
+        printf(" (point cloud)");
+    printf("\n");
+    printf("%-22s %s%s%s\n", "attributes", m->normals ? "normals " : "",
+           m->texcoords ? "texcoords " : "",
+           m->colors ? "colors" : (m->normals || m->texcoords ? "" : "none"));
+    printf("%-22s %s\n", "edges", cli_count(a, sizeof a, s->edge_count));
+    printf("%-22s %s in %s loop%s\n", "boundary edges",
+           cli_count(a, sizeof a, s->boundary_edges),
+           cli_count(b, sizeof b, s->boundary_loops), s->boundary_loops == 1 ? "" : "s");
+    printf("%-22s %s\n", "non-manifold edges", cli_count(a, sizeof a, s->nonmanifold_edges));
+    printf("%-22s %s\n", "non-manifold vertices",
+           cli_count(a, sizeof a, s->nonmanifold_vertices));
+    printf("%-22s %s degenerate, %s duplicate\n", "bad triangles",
+           cli_count(a, sizeof a, s->degenerate_triangles),
+           cli_count(b, sizeof b, s->duplicate_triangles));
+    printf("%-22s %s\n", "components", cli_count(a, sizeof a, s->components));
+    printf("%-22s %lld\n", "euler characteristic", s->euler_characteristic);
+    long long g = genus_of(s);
+    if (g >= 0)
+        printf("%-22s %lld\n", "genus", g);
+    printf("%-22s %s, %s\n", "topology", s->closed ? "closed" : "open",
+           s->manifold ? "manifold" : "non-manifold");
+    printf("%-22s [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]\n", "bounding box", s->bbox_min[0],
+           s->bbox_min[1], s->bbox_min[2], s->bbox_max[0], s->bbox_max[1], s->bbox_max[2]);
+    printf("%-22s %.6g\n", "bbox diagonal", s->bbox_diagonal);
+    printf("%-22s %.6g\n", "surface area", s->surface_area);
+}
+
+static void print_json(const char *path, const mr_mesh *m, const mr_stats *s, double seconds)
+{
+    printf("{\"file\": ");
+    cli_json_string(stdout, path);
+    printf(", \"format\": \"%s\", \"bytes\": %llu, \"read_seconds\": %.6f",
+           cli_format_name(mr_format_from_path(path)), cli_file_size(path), seconds);
+    printf(", \"vertices\": %zu, \"referenced_vertices\": %zu, \"unreferenced_vertices\": %zu",
+           s->vertex_count, s->referenced_vertices, s->unreferenced_vertices);
+    printf(", \"triangles\": %zu, \"degenerate_triangles\": %zu, \"duplicate_triangles\": %zu",
+           s->triangle_count, s->degenerate_triangles, s->duplicate_triangles);
+    printf(", \"normals\": %s, \"texcoords\": %s, \"colors\": %s",
+           m->normals ? "true" : "false", m->texcoords ? "true" : "false",
+           m->colors ? "true" : "false");
+    printf(", \"edges\": %zu, \"boundary_edges\": %zu, \"boundary_loops\": %zu", s->edge_count,
+           s->boundary_edges, s->boundary_loops);
+    printf(", \"nonmanifold_edges\": %zu, \"nonmanifold_vertices\": %zu",
+           s->nonmanifold_edges, s->nonmanifold_vertices);
+    printf(", \"components\": %zu, \"euler_characteristic\": %lld", s->components,
+           s->euler_characteristic);
+    long long g = genus_of(s);
+    if (g >= 0)
+        printf(", \"genus\": %lld", g);
+    else
+        printf(", \"genus\": null");
+    printf(", \"closed\": %s, \"manifold\": %s", s->closed ? "true" : "false",
+           s->manifold ? "true" : "false");
+    printf(", \"bbox_min\": [%.9g, %.9g, %.9g], \"bbox_max\": [%.9g, %.9g, %.9g]",
+           s->bbox_min[0], s->bbox_min[1], s->bbox_min[2], s->bbox_max[0], s->bbox_max[1],
+           s->bbox_max[2]);
+    printf(", \"bbox_diagonal\": %.9g, \"surface_area\": %.9g}\n", s->bbox_diagonal,
+           s->surface_area);
+}
+
+static int run(int argc, char **argv)
+{
+    const char *path = NULL;
+    bool json = false;
+    for (int i = 1; i < argc;) {
+        if (cli_flag(argc, argv, &i, "--json"))
+            json = true;
+        else if (argv[i][0] == '-' && argv[i][1] != '\0')
+            return cli_usage_error("info", "unknown option '%s'", argv[i]);
+        else if (path)
+            return cli_usage_error("info", "one file at a time ('%s' and '%s' given)", path,
+                                   argv[i]);
+        else
+            path = argv[i++];
+    }
+    if (!path)
+        return cli_usage_error("info", "no input file given");
+
+    mr_mesh mesh;
+    mr_error err;
+    double t0 = cli_now();
+    if (mr_mesh_read(path, NULL, &mesh, &err) != MR_OK)
+        return cli_fail_err(&err);
+    double seconds = cli_now() - t0;
+
+    mr_stats stats;
+    if (mr_stats_compute(mesh.positions, 0, mesh.vertex_count, mesh.indices,
+                         mesh.triangle_count, &stats, &err) != MR_OK) {
+        mr_mesh_free(&mesh);
+        return cli_fail_err(&err);
+    }
+    if (json)
+        print_json(path, &mesh, &stats, seconds);
+    else
+        print_table(path, &mesh, &stats, seconds);
+    mr_mesh_free(&mesh);
+    return CLI_OK;
+}
+
+const cli_command cli_cmd_info = {"info", "counts, bounds and topology of a mesh", run, usage};

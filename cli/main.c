@@ -1,0 +1,103 @@
+/* meshreduce: command dispatch. Each subcommand lives in its own file. */
+#include "cli.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+static const cli_command *const commands[] = {
+    &cli_cmd_info, &cli_cmd_convert, &cli_cmd_clean, &cli_cmd_generate, &cli_cmd_demo,
+};
+enum { N_COMMANDS = sizeof commands / sizeof *commands };
+
+static void print_help(FILE *f)
+{
+    fprintf(f,
+            "meshreduce %s: reduce triangle meshes and point clouds, fast, on every core.\n"
+            "\n"
+            "usage: meshreduce COMMAND [options]\n"
+            "\n"
+            "commands:\n",
+            mr_version());
+    for (int i = 0; i < N_COMMANDS; i++)
+        fprintf(f, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
+    fprintf(f, "\n"
+               "global options (anywhere on the line):\n"
+               "  --threads N   worker threads (default: all cores)\n"
+               "  --help        help for a command: meshreduce COMMAND --help\n"
+               "  --version     print the version\n"
+               "\n"
+               "Files are read and written as OBJ, PLY (ascii, binary), STL (ascii, binary)\n"
+               "or XYZ point lists, by extension; PLY and STL are also recognised by content.\n");
+}
+
+/* Take "--threads N" / "--threads=N" out of argv wherever it stands, so
+ * every subcommand honours it. Returns -1 on a bad value. */
+static int take_threads(int *argc, char **argv)
+{
+    int out = 1;
+    for (int i = 1; i < *argc;) {
+        const char *v = NULL;
+        int j = i;
+        if (cli_value(*argc, argv, &j, "--threads", &v)) {
+            long long n;
+            if (!v || !cli_parse_int(v, &n) || n < 0 || n > 4096) {
+                fprintf(stderr, "meshreduce: --threads needs a count from 0 (all cores) "
+                                "to 4096\n");
+                return -1;
+            }
+#ifdef _OPENMP
+            if (n > 0)
+                omp_set_num_threads((int)n);
+#endif
+            i = j;
+            continue;
+        }
+        argv[out++] = argv[i++];
+    }
+    *argc = out;
+    argv[out] = NULL;
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (take_threads(&argc, argv) != 0)
+        return CLI_USAGE;
+    if (argc < 2) {
+        print_help(stderr);
+        return CLI_USAGE;
+    }
+    const char *name = argv[1];
+    if (!strcmp(name, "--help") || !strcmp(name, "-h") || !strcmp(name, "help")) {
+        if (argc > 2)
+            for (int i = 0; i < N_COMMANDS; i++)
+                if (!strcmp(argv[2], commands[i]->name)) {
+                    fputs(commands[i]->usage, stdout);
+                    return CLI_OK;
+                }
+        print_help(stdout);
+        return CLI_OK;
+    }
+    if (!strcmp(name, "--version") || !strcmp(name, "version")) {
+        printf("meshreduce %s\n", mr_version());
+        return CLI_OK;
+    }
+    for (int i = 0; i < N_COMMANDS; i++) {
+        if (strcmp(name, commands[i]->name) != 0)
+            continue;
+        for (int a = 2; a < argc; a++)
+            if (!strcmp(argv[a], "--help") || !strcmp(argv[a], "-h")) {
+                fputs(commands[i]->usage, stdout);
+                return CLI_OK;
+            }
+        /* Subcommands see their own name as argv[0]. */
+        return commands[i]->run(argc - 1, argv + 1);
+    }
+    fprintf(stderr, "meshreduce: unknown command '%s'\n\n", name);
+    print_help(stderr);
+    return CLI_USAGE;
+}

@@ -1,0 +1,259 @@
+/*
+ * meshreduce — reduce triangle meshes and point clouds, fast, on every core.
+ *
+ * This is the only header a user includes. Conventions:
+ *   - every name is prefixed mr_ (types, functions) or MR_ (macros, enum values);
+ *   - the algorithms take flat arrays (float positions with a byte stride,
+ *     uint32_t triangle indices), so callers need not adopt a mesh type;
+ *     mr_mesh is an owning container for file I/O and the command-line tool;
+ *   - every fallible call returns an mr_status and, when given a non-NULL
+ *     mr_error, fills it with a message naming the file, the line or byte
+ *     offset, and what is wrong. The library never prints, exits or aborts on
+ *     bad input;
+ *   - options structs are initialised by mr_*_options_default() so that
+ *     fields can be added without breaking callers.
+ */
+#ifndef MESHREDUCE_H
+#define MESHREDUCE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MR_VERSION_MAJOR 0
+#define MR_VERSION_MINOR 1
+#define MR_VERSION_PATCH 0
+#define MR_VERSION_STRING "0.1.0"
+
+/* ------------------------------------------------------------------------ */
+/* Status and errors                                                        */
+/* ------------------------------------------------------------------------ */
+
+typedef enum mr_status {
+    MR_OK = 0,
+    MR_ERR_INVALID_ARGUMENT, /* a bad option or argument from the caller */
+    MR_ERR_IO,               /* a file could not be opened, read or written */
+    MR_ERR_PARSE,            /* a file's content is malformed */
+    MR_ERR_UNSUPPORTED,      /* well-formed but not supported (format, type) */
+    MR_ERR_EMPTY,            /* the input holds nothing to work on */
+    MR_ERR_TOO_LARGE,        /* counts beyond what 32-bit indices can address */
+    MR_ERR_NO_MEMORY         /* an allocation failed */
+} mr_status;
+
+/* Sentinel for mr_error.line and mr_error.offset when they do not apply. */
+#define MR_NO_POSITION UINT64_MAX
+
+typedef struct mr_error {
+    mr_status status;
+    uint64_t line;      /* 1-based line in a text file, or MR_NO_POSITION */
+    uint64_t offset;    /* byte offset in the file, or MR_NO_POSITION */
+    char message[512];  /* full text, e.g. "bunny.obj:12: face index 0 ..." */
+} mr_error;
+
+/* A short constant name for a status ("parse error", ...). */
+const char *mr_status_string(mr_status status);
+
+/* Version string of the library that is linked in. */
+const char *mr_version(void);
+
+/* ------------------------------------------------------------------------ */
+/* The owning mesh                                                          */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Vertices are stored as tightly packed arrays; attribute arrays are NULL
+ * when absent. A mesh with triangle_count == 0 is a point cloud.
+ * Attributes are per vertex: a file whose corners use different texture
+ * coordinates or normals for one position (UV seams, hard edges) is read as
+ * several vertices at the same position.
+ */
+typedef struct mr_mesh {
+    size_t vertex_count;
+    size_t triangle_count;
+    float *positions;   /* 3 * vertex_count: x y z */
+    float *normals;     /* 3 * vertex_count, or NULL */
+    float *texcoords;   /* 2 * vertex_count: u v, or NULL */
+    float *colors;      /* 4 * vertex_count: r g b a in [0, 1], or NULL */
+    uint32_t *indices;  /* 3 * triangle_count, counter-clockwise */
+} mr_mesh;
+
+/* Flags for mr_mesh_alloc: which attribute arrays to allocate. */
+enum {
+    MR_ATTR_NORMALS = 1u << 0,
+    MR_ATTR_TEXCOORDS = 1u << 1,
+    MR_ATTR_COLORS = 1u << 2
+};
+
+/* An empty mesh (all counts zero, all pointers NULL). */
+void mr_mesh_init(mr_mesh *mesh);
+
+/* Free every array of the mesh and reset it to empty. NULL is allowed. */
+void mr_mesh_free(mr_mesh *mesh);
+
+/* Allocate arrays for vertex_count vertices, triangle_count triangles and
+ * the attributes in attr_flags (MR_ATTR_*). The contents are uninitialised.
+ * The mesh must be empty (mr_mesh_init). On failure the mesh stays empty. */
+mr_status mr_mesh_alloc(mr_mesh *mesh, size_t vertex_count, size_t triangle_count,
+                        unsigned attr_flags, mr_error *err);
+
+/* Deep copy. dst must be empty. */
+mr_status mr_mesh_copy(mr_mesh *dst, const mr_mesh *src, mr_error *err);
+
+/* The MR_ATTR_* flags of the attribute arrays present in the mesh. */
+unsigned mr_mesh_attributes(const mr_mesh *mesh);
+
+/* ------------------------------------------------------------------------ */
+/* File input and output                                                    */
+/* ------------------------------------------------------------------------ */
+
+typedef enum mr_format {
+    MR_FORMAT_AUTO = 0, /* by extension, with content sniffing for PLY/STL */
+    MR_FORMAT_OBJ,
+    MR_FORMAT_PLY,
+    MR_FORMAT_STL,
+    MR_FORMAT_XYZ       /* plain text point cloud: "x y z [nx ny nz]" lines */
+} mr_format;
+
+typedef enum mr_encoding {
+    MR_ENCODING_DEFAULT = 0, /* binary little endian for PLY/STL */
+    MR_ENCODING_ASCII,
+    MR_ENCODING_BINARY_LE,
+    MR_ENCODING_BINARY_BE    /* PLY only */
+} mr_encoding;
+
+typedef struct mr_read_options {
+    mr_format format;   /* MR_FORMAT_AUTO: from the extension and content */
+    int threads;        /* 0 = all cores */
+} mr_read_options;
+
+typedef struct mr_write_options {
+    mr_format format;      /* MR_FORMAT_AUTO: from the path's extension */
+    mr_encoding encoding;
+    int write_normals;     /* write the normals when the mesh has them (1) */
+    int write_texcoords;   /* likewise for texture coordinates (1) */
+    int write_colors;      /* likewise for colors (1) */
+} mr_write_options;
+
+void mr_read_options_default(mr_read_options *options);
+void mr_write_options_default(mr_write_options *options);
+
+/* Format named by a path's extension (case-insensitive: .obj .ply .stl
+ * .xyz), or MR_FORMAT_AUTO when it names none. */
+mr_format mr_format_from_path(const char *path);
+
+/* Format of a file's content: MR_FORMAT_PLY ("ply\n" magic),
+ * MR_FORMAT_STL (ascii "solid ... facet" or a binary body whose size
+ * matches its triangle count), else MR_FORMAT_AUTO. */
+mr_format mr_format_sniff(const void *data, size_t size);
+
+/* Read a mesh or point cloud. `mesh` must be empty; it stays empty on
+ * failure. `options` may be NULL for the defaults. Large files are
+ * memory-mapped. */
+mr_status mr_mesh_read(const char *path, const mr_read_options *options,
+                       mr_mesh *mesh, mr_error *err);
+
+/* Parse from memory. `name` is used in error messages (may be NULL). */
+mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
+                              const mr_read_options *options, mr_mesh *mesh,
+                              mr_error *err);
+
+/* Write a mesh. The file appears complete or not at all: it is written to a
+ * temporary file beside the destination and renamed into place.
+ * `options` may be NULL for the defaults. */
+mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
+                        const mr_write_options *options, mr_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* Cleanup                                                                  */
+/* ------------------------------------------------------------------------ */
+
+/* Each returns MR_OK and the number of removed elements in *removed (may be
+ * NULL). They keep the relative order of what stays. */
+
+/* Remove vertices that no triangle references. Point clouds (no triangles)
+ * are left unchanged. */
+mr_status mr_mesh_remove_unreferenced(mr_mesh *mesh, size_t *removed, mr_error *err);
+
+/* Merge vertices whose positions are bitwise equal (and, when
+ * require_same_attributes is set, whose attributes are equal too) into the
+ * first of them; triangles are remapped. */
+mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes,
+                             size_t *removed, mr_error *err);
+
+/* Remove triangles that use a vertex twice, and (when remove_duplicates)
+ * every triangle after the first over the same three vertices, in either
+ * orientation. */
+mr_status mr_mesh_remove_degenerate(mr_mesh *mesh, int remove_duplicates,
+                                    size_t *removed, mr_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* Statistics                                                               */
+/* ------------------------------------------------------------------------ */
+
+typedef struct mr_stats {
+    size_t vertex_count;            /* all vertices */
+    size_t referenced_vertices;     /* vertices used by a triangle */
+    size_t unreferenced_vertices;
+    size_t triangle_count;
+    size_t degenerate_triangles;    /* a vertex repeated */
+    size_t duplicate_triangles;     /* same vertex set as an earlier triangle */
+    size_t edge_count;              /* distinct undirected edges */
+    size_t boundary_edges;          /* edges with one incident triangle */
+    size_t nonmanifold_edges;       /* edges with three or more */
+    size_t nonmanifold_vertices;    /* referenced vertices whose triangles form
+                                       more than one fan, or touch a
+                                       non-manifold edge */
+    size_t boundary_loops;          /* closed chains of boundary edges */
+    size_t components;              /* triangle components connected through
+                                       shared vertices (isolated vertices
+                                       not counted) */
+    long long euler_characteristic; /* V - E + F over referenced vertices */
+    int closed;                     /* no boundary edge, no non-manifold edge */
+    int manifold;                   /* no non-manifold edge or vertex */
+    double bbox_min[3], bbox_max[3];/* over all vertices */
+    double bbox_diagonal;
+    double surface_area;
+} mr_stats;
+
+/* Statistics of a mesh given as flat arrays. stride is the byte distance
+ * between consecutive positions (0 = 3 * sizeof(float)). */
+mr_status mr_stats_compute(const float *positions, size_t stride, size_t vertex_count,
+                           const uint32_t *indices, size_t triangle_count,
+                           mr_stats *stats, mr_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* Procedural meshes: the embedded default input                            */
+/* ------------------------------------------------------------------------ */
+
+typedef enum mr_generator {
+    MR_GEN_SPHERE = 0, /* unit geodesic sphere, closed, genus 0: 20 f^2
+                          triangles for the frequency f nearest the request;
+                          the seed is not used */
+    MR_GEN_TORUS,      /* torus (radii 1 and 0.35) with 3-6 round holes
+                          placed from the seed: open, Euler characteristic
+                          -holes (below ~400 triangles: no holes) */
+    MR_GEN_SCAN        /* closed, genus-0 noisy scan-like surface with
+                          detail down to the edge length, radius 30-70
+                          units around the origin; the default input */
+} mr_generator;
+
+/* Generator kind from its name ("sphere", "torus", "scan"); returns 0 and
+ * sets *kind, or -1 for an unknown name. */
+int mr_generator_from_name(const char *name, mr_generator *kind);
+const char *mr_generator_name(mr_generator kind);
+
+/* Generate a mesh with about `triangles` triangles (the nearest count the
+ * kind's tessellation allows). Deterministic for a given kind, triangle
+ * count and seed, on every platform and thread count. `mesh` must be
+ * empty. */
+mr_status mr_generate(mr_generator kind, size_t triangles, uint64_t seed,
+                      mr_mesh *mesh, mr_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MESHREDUCE_H */

@@ -1,0 +1,81 @@
+/*
+ * Internal helpers shared by every part of the library: error reporting,
+ * checked allocation, byte order. Not part of the public API.
+ */
+#ifndef MR_INTERNAL_H
+#define MR_INTERNAL_H
+
+#include "meshreduce.h"
+
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__GNUC__)
+#define MR_PRINTF(f, a) __attribute__((format(printf, f, a)))
+#define MR_LIKELY(x) __builtin_expect(!!(x), 1)
+#define MR_UNLIKELY(x) __builtin_expect(!!(x), 0)
+#else
+#define MR_PRINTF(f, a)
+#define MR_LIKELY(x) (x)
+#define MR_UNLIKELY(x) (x)
+#endif
+
+/*
+ * Fill `err` (when non-NULL) and return `status`. The message is composed as
+ *   "<name>:<line>: <text>"            when line != MR_NO_POSITION
+ *   "<name>: byte <offset>: <text>"    when only offset is given
+ *   "<name>: <text>"                   otherwise
+ * and name may be NULL, in which case the "<name>" prefix is left out
+ * ("line 12: ...", "byte 40: ...").
+ */
+mr_status mr_fail(mr_error *err, mr_status status, const char *name, uint64_t line,
+                  uint64_t offset, const char *fmt, ...) MR_PRINTF(6, 7);
+
+/* mr_fail without a position. */
+#define mr_fail_plain(err, status, name, ...) \
+    mr_fail((err), (status), (name), MR_NO_POSITION, MR_NO_POSITION, __VA_ARGS__)
+
+/* Report an allocation failure of `bytes` bytes. */
+mr_status mr_fail_nomem(mr_error *err, const char *name, size_t bytes);
+
+/* Clear an error record to MR_OK with an empty message. */
+void mr_error_clear(mr_error *err);
+
+/* malloc/calloc/realloc with overflow-checked element counts. They return
+ * NULL on overflow or failure; count 0 returns a valid non-NULL pointer. */
+void *mr_alloc_array(size_t count, size_t size);
+void *mr_calloc_array(size_t count, size_t size);
+void *mr_realloc_array(void *p, size_t count, size_t size);
+
+/* Compact the vertex arrays of `mesh` given old -> new indices (new index
+ * < old index or equal, UINT32_MAX = dropped) and the new vertex count.
+ * Attribute arrays move with the positions. Triangle indices are not
+ * touched. */
+void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_count);
+
+/* Byte order helpers for binary formats (the host may be of either order). */
+static inline bool mr_host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    uint8_t b;
+    memcpy(&b, &one, 1);
+    return b == 1;
+}
+
+static inline uint16_t mr_bswap16(uint16_t v) { return (uint16_t)((v >> 8) | (v << 8)); }
+static inline uint32_t mr_bswap32(uint32_t v)
+{
+    return ((v & 0xffu) << 24) | ((v & 0xff00u) << 8) | ((v >> 8) & 0xff00u) | (v >> 24);
+}
+static inline uint64_t mr_bswap64(uint64_t v)
+{
+    return ((uint64_t)mr_bswap32((uint32_t)v) << 32) | mr_bswap32((uint32_t)(v >> 32));
+}
+
+/* Number of threads to use for a requested count (0 = all cores). */
+int mr_thread_count(int requested);
+
+#endif /* MR_INTERNAL_H */

@@ -1,0 +1,281 @@
+/* Format dispatch, file mapping and all-or-nothing writes. */
+#define _GNU_SOURCE /* mkstemp, fileno under strict C11 */
+#include "io_internal.h"
+#include "text.h"
+
+#include <ctype.h>
+#include <strings.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+void mr_read_options_default(mr_read_options *options)
+{
+    options->format = MR_FORMAT_AUTO;
+    options->threads = 0;
+}
+
+void mr_write_options_default(mr_write_options *options)
+{
+    options->format = MR_FORMAT_AUTO;
+    options->encoding = MR_ENCODING_DEFAULT;
+    options->write_normals = 1;
+    options->write_texcoords = 1;
+    options->write_colors = 1;
+}
+
+static bool ends_with_ci(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    if (m > n)
+        return false;
+    for (size_t i = 0; i < m; i++)
+        if (tolower((unsigned char)s[n - m + i]) != suffix[i])
+            return false;
+    return true;
+}
+
+mr_format mr_format_from_path(const char *path)
+{
+    if (!path)
+        return MR_FORMAT_AUTO;
+    if (ends_with_ci(path, ".obj"))
+        return MR_FORMAT_OBJ;
+    if (ends_with_ci(path, ".ply"))
+        return MR_FORMAT_PLY;
+    if (ends_with_ci(path, ".stl"))
+        return MR_FORMAT_STL;
+    if (ends_with_ci(path, ".xyz"))
+        return MR_FORMAT_XYZ;
+    return MR_FORMAT_AUTO;
+}
+
+static uint32_t read_le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+mr_format mr_format_sniff(const void *data, size_t size)
+{
+    const unsigned char *d = data;
+    if (size >= 4 && memcmp(d, "ply", 3) == 0 && (d[3] == '\n' || d[3] == '\r'))
+        return MR_FORMAT_PLY;
+    /* Binary STL: 80-byte header, triangle count, 50 bytes per triangle.
+     * Checked before ascii because binary headers often start "solid". */
+    if (size >= 84 && (size - 84) % 50 == 0 && read_le32(d + 80) == (size - 84) / 50)
+        return MR_FORMAT_STL;
+    if (size >= 6) {
+        size_t i = 0;
+        while (i < size && isspace(d[i]))
+            i++;
+        if (size - i >= 6 && strncasecmp((const char *)d + i, "solid", 5) == 0 &&
+            isspace(d[i + 5])) {
+            /* ascii STL: a "facet" keyword follows within the first bytes */
+            size_t lim = size < 4096 ? size : 4096;
+            for (size_t j = i + 5; j + 5 <= lim; j++)
+                if (strncasecmp((const char *)d + j, "facet", 5) == 0)
+                    return MR_FORMAT_STL;
+            if (lim == size) /* "solid name\nendsolid": an empty ascii STL */
+                return MR_FORMAT_STL;
+        }
+    }
+    return MR_FORMAT_AUTO;
+}
+
+mr_status mr_validate_mesh(const mr_mesh *mesh, const char *name, mr_error *err)
+{
+    for (size_t i = 0; i < mesh->vertex_count * 3; i++)
+        if (!isfinite(mesh->positions[i]))
+            return mr_fail_plain(err, MR_ERR_PARSE, name,
+                                 "vertex %zu has a non-finite coordinate (%g)", i / 3,
+                                 (double)mesh->positions[i]);
+    for (size_t i = 0; i < mesh->triangle_count * 3; i++)
+        if (mesh->indices[i] >= mesh->vertex_count)
+            return mr_fail_plain(err, MR_ERR_PARSE, name,
+                                 "triangle %zu uses vertex %u, but there are %zu vertices",
+                                 i / 3, mesh->indices[i], mesh->vertex_count);
+    return MR_OK;
+}
+
+mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
+                              const mr_read_options *options, mr_mesh *mesh,
+                              mr_error *err)
+{
+    mr_error_clear(err);
+    if (!mesh || (!data && size))
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, name, "no mesh or no data given");
+    mr_mesh_init(mesh);
+    mr_read_options defaults;
+    if (!options) {
+        mr_read_options_default(&defaults);
+        options = &defaults;
+    }
+    if (size == 0)
+        return mr_fail_plain(err, MR_ERR_EMPTY, name, "file is empty");
+
+    mr_format fmt = options->format;
+    mr_format sniffed = mr_format_sniff(data, size);
+    if (fmt == MR_FORMAT_AUTO)
+        fmt = mr_format_from_path(name);
+    /* Content wins over a misleading extension for the formats that can
+     * be recognised by their content. */
+    if (sniffed != MR_FORMAT_AUTO && options->format == MR_FORMAT_AUTO)
+        fmt = sniffed;
+    if (fmt == MR_FORMAT_AUTO)
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, name,
+                             "unknown file format (expected .obj, .ply, .stl or .xyz)");
+
+    int threads = mr_thread_count(options->threads);
+    mr_status st;
+    switch (fmt) {
+    case MR_FORMAT_OBJ: st = mr_read_obj(data, size, name, threads, mesh, err); break;
+    case MR_FORMAT_PLY: st = mr_read_ply(data, size, name, threads, mesh, err); break;
+    case MR_FORMAT_STL: st = mr_read_stl(data, size, name, threads, mesh, err); break;
+    case MR_FORMAT_XYZ: st = mr_read_xyz(data, size, name, threads, mesh, err); break;
+    default:
+        st = mr_fail_plain(err, MR_ERR_UNSUPPORTED, name, "unknown file format");
+    }
+    if (st != MR_OK) {
+        mr_mesh_free(mesh);
+        return st;
+    }
+    return MR_OK;
+}
+
+mr_status mr_mesh_read(const char *path, const mr_read_options *options, mr_mesh *mesh,
+                       mr_error *err)
+{
+    mr_error_clear(err);
+    if (!path || !mesh)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "no path or mesh given");
+    mr_mesh_init(mesh);
+
+    int fd = open(path, O_RDONLY);
+    if (fd < 0)
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot open for reading: %s",
+                             strerror(errno));
+    struct stat sb;
+    if (fstat(fd, &sb) != 0) {
+        int e = errno;
+        close(fd);
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot stat: %s", strerror(e));
+    }
+    if (S_ISDIR(sb.st_mode)) {
+        close(fd);
+        return mr_fail_plain(err, MR_ERR_IO, path, "is a directory, not a mesh file");
+    }
+    if (!S_ISREG(sb.st_mode)) {
+        close(fd);
+        return mr_fail_plain(err, MR_ERR_IO, path, "is not a regular file");
+    }
+    size_t size = (size_t)sb.st_size;
+    if (size == 0) {
+        close(fd);
+        return mr_fail_plain(err, MR_ERR_EMPTY, path, "file is empty");
+    }
+
+    void *map = mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    close(fd);
+    if (map == MAP_FAILED)
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot map file: %s", strerror(errno));
+    madvise(map, size, MADV_SEQUENTIAL | MADV_WILLNEED);
+
+    mr_status st = mr_mesh_read_memory(map, size, path, options, mesh, err);
+    munmap(map, size);
+    return st;
+}
+
+/* Directory part of a path ("." when it has none), into buf. */
+static void dir_of(const char *path, char *buf, size_t cap)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        snprintf(buf, cap, ".");
+        return;
+    }
+    size_t n = (size_t)(slash - path);
+    if (n == 0)
+        n = 1; /* "/file" */
+    if (n >= cap)
+        n = cap - 1;
+    memcpy(buf, path, n);
+    buf[n] = '\0';
+}
+
+mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
+                        const mr_write_options *options, mr_error *err)
+{
+    mr_error_clear(err);
+    if (!path || !mesh)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "no path or mesh given");
+    mr_write_options defaults;
+    if (!options) {
+        mr_write_options_default(&defaults);
+        options = &defaults;
+    }
+    mr_format fmt = options->format != MR_FORMAT_AUTO ? options->format
+                                                      : mr_format_from_path(path);
+    if (fmt == MR_FORMAT_AUTO)
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
+                             "cannot tell the output format from the extension "
+                             "(use .obj, .ply, .stl or .xyz)");
+    if (fmt == MR_FORMAT_STL && mesh->triangle_count == 0 && mesh->vertex_count > 0)
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
+                             "STL holds triangles only; a point cloud cannot be written "
+                             "as STL (use .ply, .obj or .xyz)");
+    if (mesh->vertex_count && !mesh->positions)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path, "mesh has no positions");
+    for (size_t i = 0; i < mesh->triangle_count * 3; i++)
+        if (mesh->indices[i] >= mesh->vertex_count)
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path,
+                                 "triangle %zu uses vertex %u, but there are %zu vertices",
+                                 i / 3, mesh->indices[i], mesh->vertex_count);
+
+    /* Write next to the destination, then rename: the destination either
+     * keeps its old content or gets the complete new file. */
+    char dir[4096], tmp[4200];
+    dir_of(path, dir, sizeof dir);
+    snprintf(tmp, sizeof tmp, "%s/.meshreduce-XXXXXX", dir);
+    int fd = mkstemp(tmp);
+    if (fd < 0)
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
+                             strerror(errno));
+    FILE *f = fdopen(fd, "wb");
+    if (!f) {
+        int e = errno;
+        close(fd);
+        unlink(tmp);
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(e));
+    }
+    static const size_t bufsize = 1 << 20;
+    char *buf = malloc(bufsize);
+    if (buf)
+        setvbuf(f, buf, _IOFBF, bufsize);
+
+    mr_status st;
+    switch (fmt) {
+    case MR_FORMAT_OBJ: st = mr_write_obj(f, mesh, options, path, err); break;
+    case MR_FORMAT_PLY: st = mr_write_ply(f, mesh, options, path, err); break;
+    case MR_FORMAT_STL: st = mr_write_stl(f, mesh, options, path, err); break;
+    case MR_FORMAT_XYZ: st = mr_write_xyz(f, mesh, options, path, err); break;
+    default: st = mr_fail_plain(err, MR_ERR_UNSUPPORTED, path, "unknown output format");
+    }
+    if (st == MR_OK && (fflush(f) != 0 || ferror(f)))
+        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
+    if (fclose(f) != 0 && st == MR_OK)
+        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
+    free(buf);
+    if (st == MR_OK) {
+        /* mkstemp creates 0600; give the file the usual permissions. */
+        mode_t mask = umask(0);
+        umask(mask);
+        chmod(tmp, 0666 & ~mask);
+        if (rename(tmp, path) != 0)
+            st = mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(errno));
+    }
+    if (st != MR_OK)
+        unlink(tmp);
+    return st;
+}

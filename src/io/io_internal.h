@@ -1,0 +1,54 @@
+/*
+ * The contract between the format dispatcher (io.c) and the per-format
+ * readers and writers (obj.c, ply.c, stl.c, xyz.c).
+ *
+ * Readers:
+ *   - parse `size` bytes at `data` (not NUL-terminated; may be a memory
+ *     map), never reading outside [data, data + size);
+ *   - fill the empty `mesh`, which the caller frees on failure too (a
+ *     reader may leave partial arrays in it when it fails);
+ *   - report every problem through mr_fail with `name` and the 1-based line
+ *     (text) or byte offset (binary), and return its status;
+ *   - never allocate per line or per element: count first, then allocate
+ *     exact arrays (check counts announced by a header against the bytes
+ *     that remain before allocating);
+ *   - reject NaN and infinite coordinates, indices out of range, and files
+ *     that hold nothing (MR_ERR_EMPTY).
+ *   - `threads` is the resolved thread count (>= 1) a reader may use.
+ *
+ * Writers write to an open stdio stream; the dispatcher owns the temporary
+ * file, checks ferror() and fclose(), and renames it into place, so that a
+ * failed write leaves no partial file. `name` is the destination path for
+ * messages.
+ */
+#ifndef MR_IO_INTERNAL_H
+#define MR_IO_INTERNAL_H
+
+#include "../core/internal.h"
+
+#include <stdio.h>
+
+mr_status mr_read_obj(const char *data, size_t size, const char *name, int threads,
+                      mr_mesh *mesh, mr_error *err);
+mr_status mr_read_ply(const char *data, size_t size, const char *name, int threads,
+                      mr_mesh *mesh, mr_error *err);
+mr_status mr_read_stl(const char *data, size_t size, const char *name, int threads,
+                      mr_mesh *mesh, mr_error *err);
+mr_status mr_read_xyz(const char *data, size_t size, const char *name, int threads,
+                      mr_mesh *mesh, mr_error *err);
+
+mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
+                       const char *name, mr_error *err);
+mr_status mr_write_ply(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
+                       const char *name, mr_error *err);
+mr_status mr_write_stl(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
+                       const char *name, mr_error *err);
+mr_status mr_write_xyz(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
+                       const char *name, mr_error *err);
+
+/* Check that every coordinate of the mesh's positions is finite and every
+ * index is below vertex_count; on failure report the first bad element.
+ * Readers that cannot check while parsing call this at the end. */
+mr_status mr_validate_mesh(const mr_mesh *mesh, const char *name, mr_error *err);
+
+#endif /* MR_IO_INTERNAL_H */

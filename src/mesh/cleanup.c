@@ -1,0 +1,357 @@
+/*
+ * Cleanup passes on the owning mesh. Each keeps the relative order of what
+ * stays, works in O(n log n) on flat arrays, and validates the mesh first
+ * (an index out of range is MR_ERR_INVALID_ARGUMENT naming the triangle,
+ * and the mesh is left as it was).
+ *
+ * Welding: two vertices are equal when the bit patterns of their positions
+ * (and, with require_same_attributes, of every attribute array the mesh
+ * has) are equal, reading -0 as +0 (the two zeros compare equal as numbers;
+ * a writer may produce either). NaNs compare by their bits. The first
+ * vertex of each class stays, with its attributes; the later ones are
+ * removed from the vertex arrays whether triangles used them or not, and
+ * every other vertex, referenced or not, stays in order. Welding can make
+ * triangles degenerate (two of their corners welded); it does not remove
+ * them: that is mr_mesh_remove_degenerate's job.
+ *
+ * Degenerate and duplicate triangles: a triangle is degenerate when it uses
+ * a vertex twice; a duplicate is a non-degenerate triangle over the same
+ * three vertices as an earlier one, in any order or orientation. The count
+ * of duplicates matches mr_stats.duplicate_triangles.
+ */
+#include "adjacency.h"
+
+#define PARALLEL_MIN 65536
+
+static mr_status check_mesh(const mr_mesh *mesh, mr_error *err)
+{
+    if (!mesh)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "mesh is NULL");
+    if (mesh->vertex_count > 0 && !mesh->positions)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "mesh has %zu vertices but no positions", mesh->vertex_count);
+    if (mesh->triangle_count > 0 && !mesh->indices)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "mesh has %zu triangles but no indices", mesh->triangle_count);
+    return mr_check_indices(mesh->indices, mesh->triangle_count, mesh->vertex_count, err);
+}
+
+/*
+ * Drop the vertices with keep[v] == 0 and renumber the rest in order. On
+ * entry new_id[v] is the vertex that v becomes: itself for a kept vertex,
+ * an earlier kept vertex for a merged one (a dropped vertex that no
+ * triangle uses may point at itself). Triangles are remapped to the new
+ * numbering; attributes move with the positions.
+ */
+static void compact_vertices(mr_mesh *mesh, uint32_t *new_id, const uint8_t *keep)
+{
+    const size_t vc = mesh->vertex_count;
+    uint32_t next = 0;
+    for (size_t v = 0; v < vc; v++) {
+        if (keep[v])
+            new_id[v] = next++;
+        else
+            /* the target is <= v: its new id is already known, or it is
+             * v itself, unused */
+            new_id[v] = new_id[new_id[v]];
+    }
+    const size_t n = 3 * mesh->triangle_count;
+    uint32_t *idx = mesh->indices;
+#pragma omp parallel for schedule(static) if (n > PARALLEL_MIN)
+    for (size_t c = 0; c < n; c++)
+        idx[c] = new_id[idx[c]];
+    for (size_t v = 0; v < vc; v++)
+        if (!keep[v])
+            new_id[v] = UINT32_MAX;
+    mr_mesh_compact_vertices(mesh, new_id, next);
+}
+
+mr_status mr_mesh_remove_unreferenced(mr_mesh *mesh, size_t *removed, mr_error *err)
+{
+    if (removed)
+        *removed = 0;
+    mr_status st = check_mesh(mesh, err);
+    if (st != MR_OK)
+        return st;
+    const size_t vc = mesh->vertex_count;
+    if (mesh->triangle_count == 0 || vc == 0)
+        return MR_OK; /* a point cloud keeps all its points */
+
+    uint8_t *keep = mr_calloc_array(vc, 1);
+    uint32_t *new_id = mr_alloc_array(vc, sizeof *new_id);
+    if (!keep || !new_id) {
+        free(keep);
+        free(new_id);
+        return mr_fail_nomem(err, NULL, vc * 5);
+    }
+    const size_t n = 3 * mesh->triangle_count;
+    for (size_t c = 0; c < n; c++)
+        keep[mesh->indices[c]] = 1;
+    size_t dropped = 0;
+    for (size_t v = 0; v < vc; v++) {
+        new_id[v] = (uint32_t)v;
+        dropped += !keep[v];
+    }
+    if (dropped)
+        compact_vertices(mesh, new_id, keep);
+    free(keep);
+    free(new_id);
+    if (removed)
+        *removed = dropped;
+    return MR_OK;
+}
+
+/* ---- welding --------------------------------------------------------------- */
+
+/* The words that make up a vertex's identity for welding: the bit patterns
+ * of its position and (when asked) its attributes, with -0 read as +0 so
+ * that the two zeros, which compare equal as numbers, weld. */
+typedef struct weld_layout {
+    const float *arrays[4];
+    unsigned widths[4];
+    unsigned count;
+} weld_layout;
+
+static inline uint32_t float_word(float f)
+{
+    uint32_t w;
+    memcpy(&w, &f, sizeof w);
+    return w == UINT32_C(0x80000000) ? 0 : w;
+}
+
+static bool same_vertex(const weld_layout *l, uint32_t a, uint32_t b)
+{
+    for (unsigned k = 0; k < l->count; k++) {
+        const float *p = l->arrays[k] + (size_t)a * l->widths[k];
+        const float *q = l->arrays[k] + (size_t)b * l->widths[k];
+        for (unsigned j = 0; j < l->widths[k]; j++)
+            if (float_word(p[j]) != float_word(q[j]))
+                return false;
+    }
+    return true;
+}
+
+static inline uint64_t mix64(uint64_t h)
+{
+    h ^= h >> 30;
+    h *= UINT64_C(0xbf58476d1ce4e5b9);
+    h ^= h >> 27;
+    h *= UINT64_C(0x94d049bb133111eb);
+    h ^= h >> 31;
+    return h;
+}
+
+static uint64_t hash_vertex(const weld_layout *l, uint32_t v)
+{
+    uint64_t h = UINT64_C(0x9e3779b97f4a7c15);
+    for (unsigned k = 0; k < l->count; k++) {
+        const float *p = l->arrays[k] + (size_t)v * l->widths[k];
+        for (unsigned j = 0; j < l->widths[k]; j++)
+            h = mix64(h ^ float_word(p[j]));
+    }
+    return h;
+}
+
+/*
+ * For one run of vertices with equal hashes (in increasing id order), point
+ * each at the first vertex of the run with the same data. A run normally
+ * holds copies of one vertex, so the list of distinct representatives stays
+ * at one or two entries; only hash collisions make it longer.
+ */
+static void weld_run(const weld_layout *l, const uint32_t *ids, size_t k, uint32_t *target,
+                     uint8_t *keep, uint32_t *reps, size_t *merged)
+{
+    size_t nreps = 0;
+    for (size_t i = 0; i < k; i++) {
+        uint32_t v = ids[i];
+        size_t r = 0;
+        while (r < nreps && !same_vertex(l, reps[r], v))
+            r++;
+        if (r == nreps) {
+            reps[nreps++] = v;
+            target[v] = v;
+            keep[v] = 1;
+        } else {
+            target[v] = reps[r];
+            (*merged)++;
+        }
+    }
+}
+
+mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t *removed,
+                             mr_error *err)
+{
+    if (removed)
+        *removed = 0;
+    mr_status st = check_mesh(mesh, err);
+    if (st != MR_OK)
+        return st;
+    const size_t vc = mesh->vertex_count;
+    if (vc < 2)
+        return MR_OK;
+
+    weld_layout l = {{mesh->positions}, {3}, 1};
+    if (require_same_attributes) {
+        const float *arrays[3] = {mesh->normals, mesh->texcoords, mesh->colors};
+        const unsigned widths[3] = {3, 2, 4};
+        for (unsigned k = 0; k < 3; k++) {
+            if (arrays[k]) {
+                l.arrays[l.count] = arrays[k];
+                l.widths[l.count++] = widths[k];
+            }
+        }
+    }
+
+    uint64_t *keys = mr_alloc_array(vc, sizeof *keys);
+    uint32_t *ids = mr_alloc_array(vc, sizeof *ids);
+    uint32_t *target = mr_alloc_array(vc, sizeof *target);
+    uint32_t *reps = mr_alloc_array(vc, sizeof *reps);
+    uint8_t *keep = mr_calloc_array(vc, 1);
+    if (!keys || !ids || !target || !reps || !keep) {
+        st = mr_fail_nomem(err, NULL, vc * 21);
+        goto done;
+    }
+    /* Sort by a hash truncated to ~11 bits more than the vertex ids need:
+     * distinct vertices then rarely share a key, with fewer radix passes
+     * than a full 64-bit key. Equal vertices always share it. */
+    unsigned bits = mr_index_bits(vc) + 11;
+    if (bits > 64)
+        bits = 64;
+#pragma omp parallel for schedule(static) if (vc > PARALLEL_MIN)
+    for (size_t v = 0; v < vc; v++) {
+        keys[v] = hash_vertex(&l, (uint32_t)v) >> (64 - bits);
+        ids[v] = (uint32_t)v;
+    }
+    if ((st = mr_radix_sort_u64(keys, ids, vc, bits, err)) != MR_OK)
+        goto done;
+
+    size_t merged = 0;
+    for (size_t i = 0; i < vc;) {
+        size_t j = i + 1;
+        while (j < vc && keys[j] == keys[i])
+            j++;
+        weld_run(&l, ids + i, j - i, target, keep, reps, &merged);
+        i = j;
+    }
+    if (merged)
+        compact_vertices(mesh, target, keep);
+    if (removed)
+        *removed = merged;
+done:
+    free(keys);
+    free(ids);
+    free(target);
+    free(reps);
+    free(keep);
+    return st;
+}
+
+/* ---- degenerate and duplicate triangles ------------------------------------ */
+
+static inline void sort3(const uint32_t *tri, uint32_t s[3])
+{
+    uint32_t a = tri[0], b = tri[1], c = tri[2], t;
+    if (a > b) { t = a; a = b; b = t; }
+    if (b > c) { t = b; b = c; c = t; }
+    if (a > b) { t = a; a = b; b = t; }
+    s[0] = a;
+    s[1] = b;
+    s[2] = c;
+}
+
+/* Flag (drop[t] = 1) each non-degenerate triangle whose vertex set equals
+ * that of an earlier one: sort by the two smallest vertices, then settle
+ * the largest within each (short) run. */
+static mr_status flag_duplicates(const mr_mesh *mesh, uint8_t *drop, mr_error *err)
+{
+    const size_t tc = mesh->triangle_count;
+    const unsigned shift = mr_index_bits(mesh->vertex_count);
+    const unsigned key_bits = 2 * shift;
+    /* Degenerate triangles get the all-ones key, after every real pair. */
+    const uint64_t none = key_bits >= 64 ? UINT64_MAX : (UINT64_C(1) << key_bits) - 1;
+    uint64_t *keys = mr_alloc_array(tc, sizeof *keys);
+    uint32_t *ids = mr_alloc_array(tc, sizeof *ids);
+    uint64_t *pairs = NULL;
+    mr_status st = MR_OK;
+    if (!keys || !ids) {
+        st = mr_fail_nomem(err, NULL, tc * 12);
+        goto done;
+    }
+    const uint32_t *idx = mesh->indices;
+#pragma omp parallel for schedule(static) if (tc > PARALLEL_MIN)
+    for (size_t t = 0; t < tc; t++) {
+        uint32_t s[3];
+        sort3(idx + 3 * t, s);
+        keys[t] = drop[t] ? none : ((uint64_t)s[0] << shift) | s[1];
+        ids[t] = (uint32_t)t;
+    }
+    if ((st = mr_radix_sort_u64(keys, ids, tc, key_bits, err)) != MR_OK)
+        goto done;
+    size_t cap = 0;
+    for (size_t i = 0; i < tc && keys[i] != none;) {
+        size_t j = i + 1;
+        while (j < tc && keys[j] == keys[i])
+            j++;
+        size_t k = j - i;
+        if (k >= 2) {
+            if (k > cap) {
+                uint64_t *p = mr_realloc_array(pairs, k, sizeof *p);
+                if (!p) {
+                    st = mr_fail_nomem(err, NULL, k * sizeof *p);
+                    goto done;
+                }
+                pairs = p;
+                cap = k;
+            }
+            for (size_t m = 0; m < k; m++) {
+                uint32_t s[3];
+                sort3(idx + 3 * (size_t)ids[i + m], s);
+                pairs[m] = ((uint64_t)s[2] << 32) | ids[i + m];
+            }
+            mr_mark_repeats(pairs, k, drop);
+        }
+        i = j;
+    }
+done:
+    free(keys);
+    free(ids);
+    free(pairs);
+    return st;
+}
+
+mr_status mr_mesh_remove_degenerate(mr_mesh *mesh, int remove_duplicates, size_t *removed,
+                                    mr_error *err)
+{
+    if (removed)
+        *removed = 0;
+    mr_status st = check_mesh(mesh, err);
+    if (st != MR_OK)
+        return st;
+    const size_t tc = mesh->triangle_count;
+    if (tc == 0)
+        return MR_OK;
+    uint8_t *drop = mr_alloc_array(tc, 1);
+    if (!drop)
+        return mr_fail_nomem(err, NULL, tc);
+    uint32_t *idx = mesh->indices;
+#pragma omp parallel for schedule(static) if (tc > PARALLEL_MIN)
+    for (size_t t = 0; t < tc; t++)
+        drop[t] = mr_triangle_is_degenerate(idx + 3 * t);
+    if (remove_duplicates && (st = flag_duplicates(mesh, drop, err)) != MR_OK) {
+        free(drop);
+        return st;
+    }
+    size_t kept = 0;
+    for (size_t t = 0; t < tc; t++) {
+        if (drop[t])
+            continue;
+        if (kept != t)
+            memcpy(idx + 3 * kept, idx + 3 * t, 3 * sizeof *idx);
+        kept++;
+    }
+    free(drop);
+    mesh->triangle_count = kept;
+    if (removed)
+        *removed = tc - kept;
+    return MR_OK;
+}

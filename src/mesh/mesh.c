@@ -1,0 +1,102 @@
+/* The owning mesh container. */
+#include "../core/internal.h"
+
+void mr_mesh_init(mr_mesh *mesh)
+{
+    memset(mesh, 0, sizeof *mesh);
+}
+
+void mr_mesh_free(mr_mesh *mesh)
+{
+    if (!mesh)
+        return;
+    free(mesh->positions);
+    free(mesh->normals);
+    free(mesh->texcoords);
+    free(mesh->colors);
+    free(mesh->indices);
+    mr_mesh_init(mesh);
+}
+
+unsigned mr_mesh_attributes(const mr_mesh *mesh)
+{
+    unsigned f = 0;
+    if (mesh->normals)
+        f |= MR_ATTR_NORMALS;
+    if (mesh->texcoords)
+        f |= MR_ATTR_TEXCOORDS;
+    if (mesh->colors)
+        f |= MR_ATTR_COLORS;
+    return f;
+}
+
+mr_status mr_mesh_alloc(mr_mesh *mesh, size_t vertex_count, size_t triangle_count,
+                        unsigned attr_flags, mr_error *err)
+{
+    if (!mesh)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "mesh is NULL");
+    if (vertex_count > (size_t)UINT32_MAX - 1)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
+                             "%zu vertices exceed the 32-bit index limit", vertex_count);
+    if (triangle_count > SIZE_MAX / 12)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL, "%zu triangles are too many",
+                             triangle_count);
+
+    mr_mesh m;
+    mr_mesh_init(&m);
+    m.vertex_count = vertex_count;
+    m.triangle_count = triangle_count;
+    m.positions = mr_alloc_array(vertex_count * 3, sizeof(float));
+    m.indices = mr_alloc_array(triangle_count * 3, sizeof(uint32_t));
+    bool ok = m.positions && m.indices;
+    if (attr_flags & MR_ATTR_NORMALS)
+        ok = ok && (m.normals = mr_alloc_array(vertex_count * 3, sizeof(float)));
+    if (attr_flags & MR_ATTR_TEXCOORDS)
+        ok = ok && (m.texcoords = mr_alloc_array(vertex_count * 2, sizeof(float)));
+    if (attr_flags & MR_ATTR_COLORS)
+        ok = ok && (m.colors = mr_alloc_array(vertex_count * 4, sizeof(float)));
+    if (!ok) {
+        mr_mesh_free(&m);
+        return mr_fail_nomem(err, NULL, vertex_count * 48 + triangle_count * 12);
+    }
+    *mesh = m;
+    return MR_OK;
+}
+
+mr_status mr_mesh_copy(mr_mesh *dst, const mr_mesh *src, mr_error *err)
+{
+    mr_status st = mr_mesh_alloc(dst, src->vertex_count, src->triangle_count,
+                                 mr_mesh_attributes(src), err);
+    if (st != MR_OK)
+        return st;
+    size_t n = src->vertex_count;
+    memcpy(dst->positions, src->positions, n * 3 * sizeof(float));
+    if (src->normals)
+        memcpy(dst->normals, src->normals, n * 3 * sizeof(float));
+    if (src->texcoords)
+        memcpy(dst->texcoords, src->texcoords, n * 2 * sizeof(float));
+    if (src->colors)
+        memcpy(dst->colors, src->colors, n * 4 * sizeof(float));
+    memcpy(dst->indices, src->indices, src->triangle_count * 3 * sizeof(uint32_t));
+    return MR_OK;
+}
+
+void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_count)
+{
+    /* new index <= old index, so a forward pass moves every vertex down
+     * without overwriting one that is still to be read. */
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        uint32_t j = remap[i];
+        if (j == UINT32_MAX || j == i)
+            continue;
+        memcpy(mesh->positions + 3 * (size_t)j, mesh->positions + 3 * i, 3 * sizeof(float));
+        if (mesh->normals)
+            memcpy(mesh->normals + 3 * (size_t)j, mesh->normals + 3 * i, 3 * sizeof(float));
+        if (mesh->texcoords)
+            memcpy(mesh->texcoords + 2 * (size_t)j, mesh->texcoords + 2 * i,
+                   2 * sizeof(float));
+        if (mesh->colors)
+            memcpy(mesh->colors + 4 * (size_t)j, mesh->colors + 4 * i, 4 * sizeof(float));
+    }
+    mesh->vertex_count = new_count;
+}

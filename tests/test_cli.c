@@ -1,0 +1,185 @@
+/* The command-line tool end to end: exit statuses, messages, outputs. */
+#include "testutil.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static char cmd[4096];
+
+static const char *fmt(const char *f, ...)
+{
+    va_list ap;
+    va_start(ap, f);
+    vsnprintf(cmd, sizeof cmd, f, ap);
+    va_end(ap);
+    return cmd;
+}
+
+static void test_help_and_usage(void **state)
+{
+    (void)state;
+    char *out;
+    assert_int_equal(tu_run_cli("--help", &out), 0);
+    tu_assert_contains(out, "usage: meshreduce COMMAND");
+    free(out);
+    assert_int_equal(tu_run_cli("info --help", &out), 0);
+    tu_assert_contains(out, "usage: meshreduce info FILE");
+    free(out);
+    assert_int_equal(tu_run_cli("frobnicate", &out), 2);
+    tu_assert_contains(out, "unknown command 'frobnicate'");
+    free(out);
+    assert_int_equal(tu_run_cli("info --bogus x.obj", &out), 2);
+    tu_assert_contains(out, "unknown option '--bogus'");
+    free(out);
+    assert_int_equal(tu_run_cli("--threads -3 info x.obj", &out), 2);
+    tu_assert_contains(out, "--threads needs a count");
+    free(out);
+    assert_int_equal(tu_run_cli("--version", &out), 0);
+    tu_assert_contains(out, MR_VERSION_STRING);
+    free(out);
+}
+
+static void test_generate_info_json(void **state)
+{
+    (void)state;
+    const char *path = tu_tmp_path("cli-sphere.ply");
+    char *out;
+    assert_int_equal(tu_run_cli(fmt("generate sphere --triangles 2k -o '%s' -q", path), &out),
+                     0);
+    free(out);
+    assert_int_equal(tu_run_cli(fmt("info --json '%s'", path), &out), 0);
+    tu_assert_contains(out, "\"triangles\": 2000");
+    tu_assert_contains(out, "\"euler_characteristic\": 2");
+    tu_assert_contains(out, "\"closed\": true");
+    tu_assert_contains(out, "\"genus\": 0");
+    free(out);
+    assert_int_equal(tu_run_cli(fmt("info '%s'", path), &out), 0);
+    tu_assert_contains(out, "closed, manifold");
+    tu_assert_contains(out, "euler characteristic   2");
+    free(out);
+
+    /* same seed, same bytes; --threads does not change the result */
+    const char *again = tu_tmp_path("cli-sphere2.ply");
+    assert_int_equal(
+        tu_run_cli(fmt("--threads 1 generate sphere --triangles 2k -o '%s' -q", again), NULL), 0);
+    size_t n1, n2;
+    char *a = tu_read_file(path, &n1), *b = tu_read_file(again, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(a, b, n1);
+    free(a);
+    free(b);
+}
+
+static void test_torus_info(void **state)
+{
+    (void)state;
+    const char *path = tu_tmp_path("cli-torus.obj");
+    assert_int_equal(tu_run_cli(fmt("generate torus --triangles 5000 -o '%s' -q", path), NULL),
+                     0);
+    char *out;
+    assert_int_equal(tu_run_cli(fmt("info --json '%s'", path), &out), 0);
+    tu_assert_contains(out, "\"closed\": false");
+    tu_assert_contains(out, "\"manifold\": true");
+    free(out);
+}
+
+static void test_convert_and_clean(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("cli-in.obj");
+    const char *text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 0\nv 9 9 9\n"
+                       "f 1 2 3\nf 2 4 3\nf 3 2 4\nf 5 2 3\nf 1 1 2\n";
+    tu_write_file(in, text, strlen(text));
+    const char *ply = tu_tmp_path("cli-out.ply");
+    char *out;
+    assert_int_equal(tu_run_cli(fmt("convert '%s' '%s' --ascii", in, ply), &out), 0);
+    free(out);
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(mr_mesh_read(ply, NULL, &m, &err), MR_OK);
+    assert_int_equal(m.vertex_count, 6); /* convert keeps everything */
+    assert_int_equal(m.triangle_count, 5);
+    mr_mesh_free(&m);
+
+    const char *cleaned = tu_tmp_path("cli-clean.obj");
+    assert_int_equal(tu_run_cli(fmt("clean '%s' -o '%s'", in, cleaned), &out), 0);
+    tu_assert_contains(out, "1 vertices welded");
+    free(out);
+    assert_int_equal(mr_mesh_read(cleaned, NULL, &m, &err), MR_OK);
+    assert_int_equal(m.vertex_count, 4);   /* duplicate welded, (9,9,9) dropped */
+    assert_int_equal(m.triangle_count, 2); /* duplicates and the degenerate gone */
+    mr_mesh_free(&m);
+}
+
+static void test_bad_inputs_fail_cleanly(void **state)
+{
+    (void)state;
+    struct {
+        const char *name, *content, *message;
+    } cases[] = {
+        {"bad-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", "bad-index.obj:4:"},
+        {"bad-range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "bad-range.obj:4:"},
+        {"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "nan.obj:2:"},
+        {"empty.ply", "", "empty.ply: file is empty"},
+        {"text.stl", "hello there, not a mesh\n", "text.stl"},
+        {"format.ply", "ply\nformat fancy 1.0\nend_header\n", "format.ply:2:"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        const char *in = tu_tmp_path(cases[i].name);
+        tu_write_file(in, cases[i].content, strlen(cases[i].content));
+        const char *outp = tu_tmp_path("never-written.ply");
+        char *out;
+        assert_int_equal(tu_run_cli(fmt("convert '%s' '%s'", in, outp), &out), 1);
+        tu_assert_contains(out, "meshreduce: ");
+        tu_assert_contains(out, cases[i].message);
+        /* exactly one line of error */
+        assert_non_null(strchr(out, '\n'));
+        assert_null(strchr(strchr(out, '\n') + 1, '\n'));
+        free(out);
+        assert_false(tu_file_exists(outp));
+    }
+    char *out;
+    assert_int_equal(tu_run_cli("info /nonexistent/mesh.obj", &out), 1);
+    tu_assert_contains(out, "/nonexistent/mesh.obj: cannot open for reading");
+    free(out);
+    assert_int_equal(tu_run_cli(fmt("generate sphere -o '%s'", tu_tmp_path("x.unknown")), &out),
+                     2);
+    tu_assert_contains(out, "cannot tell the output format");
+    free(out);
+    assert_int_equal(tu_run_cli("generate cube -o x.obj", &out), 2);
+    tu_assert_contains(out, "unknown kind 'cube'");
+    free(out);
+    assert_int_equal(tu_run_cli("generate sphere --triangles 0 -o x.obj", &out), 2);
+    tu_assert_contains(out, "--triangles needs a positive count");
+    free(out);
+    assert_int_equal(
+        tu_run_cli("generate sphere --triangles 100 -o /nonexistent-dir/x.obj", &out), 1);
+    tu_assert_contains(out, "/nonexistent-dir/x.obj: cannot write");
+    free(out);
+}
+
+static void test_demo_small(void **state)
+{
+    (void)state;
+    char *out;
+    const char *dir = tu_tmp_path("demo");
+    assert_int_equal(tu_run_cli(fmt("demo --triangles 20000 --dir '%s'", dir), &out), 0);
+    tu_assert_contains(out, "generate scan");
+    tu_assert_contains(out, "identical to what was written");
+    tu_assert_contains(out, "closed, manifold, 1 component, euler 2");
+    free(out);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_help_and_usage),
+        cmocka_unit_test(test_generate_info_json),
+        cmocka_unit_test(test_torus_info),
+        cmocka_unit_test(test_convert_and_clean),
+        cmocka_unit_test(test_bad_inputs_fail_cleanly),
+        cmocka_unit_test(test_demo_small),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
