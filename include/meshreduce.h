@@ -177,9 +177,11 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
  * are left unchanged. */
 mr_status mr_mesh_remove_unreferenced(mr_mesh *mesh, size_t *removed, mr_error *err);
 
-/* Merge vertices whose positions are bitwise equal (and, when
- * require_same_attributes is set, whose attributes are equal too) into the
- * first of them; triangles are remapped. */
+/* Merge vertices whose positions are bitwise equal (-0 and +0 count as
+ * equal; and, when require_same_attributes is set, whose attributes are
+ * equal too) into the first of them: triangles are remapped and the later
+ * copies removed from the vertex arrays (in a point cloud too). Triangles
+ * that become degenerate stay; mr_mesh_remove_degenerate removes them. */
 mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes,
                              size_t *removed, mr_error *err);
 
@@ -200,7 +202,8 @@ typedef struct mr_stats {
     size_t triangle_count;
     size_t degenerate_triangles;    /* a vertex repeated */
     size_t duplicate_triangles;     /* same vertex set as an earlier triangle */
-    size_t edge_count;              /* distinct undirected edges */
+    size_t edge_count;              /* distinct undirected edges (degenerate
+                                       triangles contribute none) */
     size_t boundary_edges;          /* edges with one incident triangle */
     size_t nonmanifold_edges;       /* edges with three or more */
     size_t nonmanifold_vertices;    /* referenced vertices whose triangles form
@@ -211,8 +214,10 @@ typedef struct mr_stats {
                                        shared vertices (isolated vertices
                                        not counted) */
     long long euler_characteristic; /* V - E + F over referenced vertices */
-    int closed;                     /* no boundary edge, no non-manifold edge */
-    int manifold;                   /* no non-manifold edge or vertex */
+    int closed;                     /* no boundary edge, no non-manifold edge
+                                       (and at least one edge) */
+    int manifold;                   /* no non-manifold edge or vertex (and at
+                                       least one edge) */
     double bbox_min[3], bbox_max[3];/* over all vertices */
     double bbox_diagonal;
     double surface_area;

@@ -278,6 +278,7 @@ mr_status mr_vertex_triangles_build(mr_vertex_triangles *vt, const uint32_t *ind
     if (!offsets)
         return mr_fail_nomem(err, NULL, (vc + 1) * sizeof *offsets);
     const bool par = parallel_fill(tc);
+    (void)par; /* unused without OpenMP */
 
 #pragma omp parallel if (par)
     {
@@ -351,6 +352,7 @@ mr_status mr_edge_table_build(mr_edge_table *et, const uint32_t *indices,
     if (!offsets)
         return mr_fail_nomem(err, NULL, (vc + 1) * sizeof *offsets);
     const bool par = parallel_fill(tc);
+    (void)par; /* unused without OpenMP */
 
 #pragma omp parallel if (par)
     {
