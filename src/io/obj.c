@@ -891,15 +891,7 @@ static inline char *put_float(char *p, float v)
 
 static inline char *put_u64(char *p, uint64_t v)
 {
-    char tmp[20];
-    int n = 0;
-    do {
-        tmp[n++] = (char)('0' + v % 10);
-        v /= 10;
-    } while (v);
-    while (n)
-        *p++ = tmp[--n];
-    return p;
+    return p + mr_format_u64(p, v);
 }
 
 static size_t format_v(const obj_writer *w, size_t first, size_t count, char *out)

@@ -1519,15 +1519,7 @@ static size_t put_f32(char *out, float v, bool swap)
 
 static size_t put_uint(char *out, uint32_t v)
 {
-    char tmp[10];
-    size_t n = 0;
-    do {
-        tmp[n++] = (char)('0' + v % 10);
-        v /= 10;
-    } while (v);
-    for (size_t i = 0; i < n; i++)
-        out[i] = tmp[n - 1 - i];
-    return n;
+    return (size_t)mr_format_u64(out, v);
 }
 
 /* Floats of one vertex in file order (x y z [nx ny nz] [s t]). */

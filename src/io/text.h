@@ -193,6 +193,20 @@ static inline bool mr_parse_float(const char **p, const char *end, float *out)
     return true;
 }
 
+/* Write the decimal digits of v (no terminator); returns their count. */
+static inline int mr_format_u64(char *buf, uint64_t v)
+{
+    char tmp[20];
+    int n = 0;
+    do {
+        tmp[n++] = (char)('0' + v % 10);
+        v /= 10;
+    } while (v);
+    for (int i = 0; i < n; i++)
+        buf[i] = tmp[n - 1 - i];
+    return n;
+}
+
 /* A token ends at end of buffer, a blank or a newline. */
 static inline bool mr_at_token_end(const char *p, const char *end)
 {
