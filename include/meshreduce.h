@@ -257,6 +257,145 @@ const char *mr_generator_name(mr_generator kind);
 mr_status mr_generate(mr_generator kind, size_t triangles, uint64_t seed,
                       mr_mesh *mesh, mr_error *err);
 
+/* ------------------------------------------------------------------------ */
+/* Simplification: greedy quadric-error edge collapse                       */
+/* ------------------------------------------------------------------------ */
+
+typedef enum mr_collapse_kind {
+    MR_COLLAPSE_FULL = 0, /* both ends move to the quadric-optimal position
+                             (the quality default) */
+    MR_COLLAPSE_HALF      /* one end moves onto the other's position; a
+                             vertex's priority is its best outgoing collapse */
+} mr_collapse_kind;
+
+typedef void (*mr_progress_fn)(double fraction_done, void *user);
+
+typedef struct mr_simplify_options {
+    /* Targets: simplification stops at the first one reached. 0 = unused.
+     * At least one target (or max_error) must be set. Vertex counts and
+     * ratios count referenced vertices only. */
+    double target_ratio;        /* fraction of vertices to keep, (0, 1] */
+    size_t target_vertices;
+    size_t target_triangles;
+    double max_error;           /* stop before a collapse whose error (a
+                                   distance) exceeds this; 0 = no limit */
+    int error_absolute;         /* max_error is absolute (1) or relative to
+                                   the bounding-box diagonal (0, default) */
+
+    mr_collapse_kind collapse;  /* MR_COLLAPSE_FULL by default */
+    double boundary_weight;     /* weight of the perpendicular-plane quadrics
+                                   that hold open boundaries and attribute
+                                   seams in place (default 1; 0 = none) */
+    double max_normal_turn;     /* radians: refuse collapses that turn a
+                                   triangle's normal by more than this
+                                   (default 60 degrees); flips are always
+                                   refused */
+    int lock_border;            /* never move boundary vertices */
+    const uint8_t *vertex_lock; /* optional, one byte per input vertex:
+                                   nonzero = this vertex never moves */
+    int threads;                /* 0 = all cores (parallel algorithms) */
+    mr_progress_fn progress;    /* optional, called from the calling thread */
+    void *progress_user;
+} mr_simplify_options;
+
+void mr_simplify_options_default(mr_simplify_options *options);
+
+/* What a simplification produced and how long each phase took. */
+typedef struct mr_simplify_stats {
+    size_t input_vertices;      /* referenced input vertices */
+    size_t input_triangles;
+    size_t output_vertices;
+    size_t output_triangles;
+    size_t collapses;
+    double max_error;           /* largest collapse error, as a distance */
+    double seconds_setup;       /* adjacency, quadrics, queue */
+    double seconds_collapse;
+    double seconds_output;      /* compaction */
+} mr_simplify_stats;
+
+/* The result of a simplification on flat arrays: malloc'd arrays that
+ * mr_simplified_free releases. origin[i] is the input vertex that output
+ * vertex i descends from (the vertex it kept: for a collapse of u into v,
+ * v's origin). */
+typedef struct mr_simplified {
+    size_t vertex_count;
+    size_t triangle_count;
+    float *positions;           /* 3 * vertex_count */
+    uint32_t *indices;          /* 3 * triangle_count */
+    uint32_t *origin;           /* vertex_count input vertex ids */
+    mr_simplify_stats stats;
+} mr_simplified;
+
+void mr_simplified_free(mr_simplified *result);
+
+/* Simplify a triangle mesh given as flat arrays (stride: bytes between
+ * positions, 0 = packed). Deterministic. Unreferenced input vertices do
+ * not appear in the output. `out` is filled on success; on failure it is
+ * left empty. */
+mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count,
+                      const uint32_t *indices, size_t triangle_count,
+                      const mr_simplify_options *options, mr_simplified *out,
+                      mr_error *err);
+
+/* Simplify an owning mesh, carrying normals, texture coordinates and
+ * colors through (attribute seams -- vertices split at one position -- are
+ * kept). `out` must be empty; `origin` (optional) receives a malloc'd array
+ * of out->vertex_count input vertex ids; `stats` (optional) the figures. */
+mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options,
+                           mr_mesh *out, uint32_t **origin, mr_simplify_stats *stats,
+                           mr_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* Error metrics                                                            */
+/* ------------------------------------------------------------------------ */
+
+typedef struct mr_compare_options {
+    size_t samples;      /* area-uniform surface samples per mesh, besides
+                            its vertices (default 1,000,000; 0 = vertices
+                            only) */
+    uint64_t seed;       /* sampling seed (fixed default: same figures for
+                            the same meshes) */
+    int threads;         /* 0 = all cores */
+} mr_compare_options;
+
+void mr_compare_options_default(mr_compare_options *options);
+
+/* Surface distances between a reference and a test mesh, Metro-style:
+ * points on each surface (its vertices plus area-uniform samples), the
+ * exact distance from each to the nearest point of the other surface.
+ * Every distance is also given relative to the reference bounding-box
+ * diagonal (the *_rel fields). */
+typedef struct mr_compare_result {
+    double hausdorff;          /* max of both one-sided maxima */
+    double rms;                /* RMS over the points of both directions */
+    double mean;               /* mean over the points of both directions */
+    double ref_to_test_max, test_to_ref_max;
+    double ref_to_test_rms, test_to_ref_rms;
+    double hausdorff_rel, rms_rel, mean_rel;
+    double modified_hausdorff; /* RMS over the reference's vertices of the
+                                  distance to the nearest test vertex (the
+                                  filter-queue paper's formula (3)) */
+    double modified_hausdorff_rel;
+    double diagonal;           /* reference bounding-box diagonal */
+    size_t ref_points, test_points;
+} mr_compare_result;
+
+/* Compare two triangle meshes (flat arrays, packed positions). */
+mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
+                     const uint32_t *ref_indices, size_t ref_triangle_count,
+                     const float *test_positions, size_t test_vertex_count,
+                     const uint32_t *test_indices, size_t test_triangle_count,
+                     const mr_compare_options *options, mr_compare_result *result,
+                     mr_error *err);
+
+/* Vertex similarity of two reductions of the same mesh: the share of
+ * output vertices of `a` for which `b` has an output vertex descending from
+ * the same input vertex at the same position (bitwise). origin arrays as
+ * produced by mr_simplify. Returns a fraction in [0, 1] of a's vertices. */
+double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
+                            size_t a_vertex_count, const float *b_positions,
+                            const uint32_t *b_origin, size_t b_vertex_count);
+
 #ifdef __cplusplus
 }
 #endif
