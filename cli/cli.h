@@ -20,6 +20,7 @@ typedef struct cli_command {
 
 extern const cli_command cli_cmd_info, cli_cmd_convert, cli_cmd_generate, cli_cmd_clean,
     cli_cmd_demo;
+extern const cli_command cli_cmd_compare, cli_cmd_simplify;
 
 /* Print "meshreduce: <message>" to stderr and return CLI_FAIL. */
 int cli_fail(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
@@ -56,6 +57,23 @@ unsigned long long cli_file_size(const char *path);
 
 /* Print a JSON string literal (with escapes). */
 void cli_json_string(FILE *f, const char *s);
+
+/* Output options shared by every command that writes a mesh. */
+#define CLI_OUTPUT_OPTIONS_HELP                                                 \
+    "output options:\n"                                                         \
+    "  --ascii          text encoding for PLY and STL\n"                        \
+    "  --binary         binary little-endian PLY/STL (the default)\n"           \
+    "  --big-endian     binary big-endian PLY\n"                                \
+    "  --no-normals     drop vertex normals\n"                                  \
+    "  --no-texcoords   drop texture coordinates\n"                             \
+    "  --no-colors      drop vertex colors\n"
+
+/* Match one output option at argv[*i]; returns true when it was one. */
+bool cli_output_option(int argc, char **argv, int *i, mr_write_options *w);
+
+/* Usage error unless the output path names a format (checked before any
+ * work is done). */
+int cli_check_output_path(const char *cmd, const char *out);
 
 /* Format name for messages. */
 const char *cli_format_name(mr_format f);

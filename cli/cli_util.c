@@ -187,3 +187,30 @@ const char *cli_format_name(mr_format f)
     default: return "unknown";
     }
 }
+
+bool cli_output_option(int argc, char **argv, int *i, mr_write_options *w)
+{
+    if (cli_flag(argc, argv, i, "--ascii"))
+        w->encoding = MR_ENCODING_ASCII;
+    else if (cli_flag(argc, argv, i, "--binary"))
+        w->encoding = MR_ENCODING_BINARY_LE;
+    else if (cli_flag(argc, argv, i, "--big-endian"))
+        w->encoding = MR_ENCODING_BINARY_BE;
+    else if (cli_flag(argc, argv, i, "--no-normals"))
+        w->write_normals = 0;
+    else if (cli_flag(argc, argv, i, "--no-texcoords"))
+        w->write_texcoords = 0;
+    else if (cli_flag(argc, argv, i, "--no-colors"))
+        w->write_colors = 0;
+    else
+        return false;
+    return true;
+}
+
+int cli_check_output_path(const char *cmd, const char *out)
+{
+    if (mr_format_from_path(out) == MR_FORMAT_AUTO)
+        return cli_usage_error(cmd, "cannot tell the output format of '%s' "
+                                    "(use .obj, .ply, .stl or .xyz)", out);
+    return CLI_OK;
+}

@@ -3,45 +3,6 @@
 
 #include <string.h>
 
-/* Output options shared by every command that writes a mesh. */
-#define OUTPUT_OPTIONS_HELP                                                     \
-    "output options:\n"                                                         \
-    "  --ascii          text encoding for PLY and STL\n"                        \
-    "  --binary         binary little-endian PLY/STL (the default)\n"           \
-    "  --big-endian     binary big-endian PLY\n"                                \
-    "  --no-normals     drop vertex normals\n"                                  \
-    "  --no-texcoords   drop texture coordinates\n"                             \
-    "  --no-colors      drop vertex colors\n"
-
-/* Match one output option at argv[*i]; returns true when it was one. */
-static bool output_option(int argc, char **argv, int *i, mr_write_options *w)
-{
-    if (cli_flag(argc, argv, i, "--ascii"))
-        w->encoding = MR_ENCODING_ASCII;
-    else if (cli_flag(argc, argv, i, "--binary"))
-        w->encoding = MR_ENCODING_BINARY_LE;
-    else if (cli_flag(argc, argv, i, "--big-endian"))
-        w->encoding = MR_ENCODING_BINARY_BE;
-    else if (cli_flag(argc, argv, i, "--no-normals"))
-        w->write_normals = 0;
-    else if (cli_flag(argc, argv, i, "--no-texcoords"))
-        w->write_texcoords = 0;
-    else if (cli_flag(argc, argv, i, "--no-colors"))
-        w->write_colors = 0;
-    else
-        return false;
-    return true;
-}
-
-/* Check the output path names a format before any work is done. */
-static int check_output_path(const char *cmd, const char *out)
-{
-    if (mr_format_from_path(out) == MR_FORMAT_AUTO)
-        return cli_usage_error(cmd, "cannot tell the output format of '%s' "
-                                    "(use .obj, .ply, .stl or .xyz)", out);
-    return CLI_OK;
-}
-
 /* The cleanup steps, in the order that makes each one's result final. */
 typedef struct clean_steps {
     bool weld, weld_attributes, keep_degenerate, keep_duplicates, keep_unreferenced;
@@ -99,7 +60,7 @@ static const char convert_usage[] =
     "\n"
     "Convert a mesh or point cloud between OBJ, PLY, STL and XYZ (formats by\n"
     "extension). Vertex order and triangles are kept as read.\n"
-    "\n" OUTPUT_OPTIONS_HELP
+    "\n" CLI_OUTPUT_OPTIONS_HELP
     "  --clean          also weld exact duplicates and remove degenerate,\n"
     "                   duplicate triangles and unreferenced vertices\n"
     "  -q, --quiet      print nothing on success\n";
@@ -112,7 +73,7 @@ static int run_convert(int argc, char **argv)
     mr_write_options w;
     mr_write_options_default(&w);
     for (int i = 1; i < argc;) {
-        if (output_option(argc, argv, &i, &w))
+        if (cli_output_option(argc, argv, &i, &w))
             continue;
         if (cli_flag(argc, argv, &i, "--clean"))
             clean = true;
@@ -127,7 +88,7 @@ static int run_convert(int argc, char **argv)
     }
     if (npaths < 2)
         return cli_usage_error("convert", "needs an input and an output file");
-    int rc = check_output_path("convert", paths[1]);
+    int rc = cli_check_output_path("convert", paths[1]);
     if (rc != CLI_OK)
         return rc;
     clean_steps steps = {.weld = true};
@@ -149,7 +110,7 @@ static const char clean_usage[] =
     "  --keep-degenerate       keep triangles that repeat a vertex\n"
     "  --keep-unreferenced     keep unreferenced vertices\n"
     "  -q, --quiet             print nothing on success\n"
-    "\n" OUTPUT_OPTIONS_HELP;
+    "\n" CLI_OUTPUT_OPTIONS_HELP;
 
 static int run_clean(int argc, char **argv)
 {
@@ -160,7 +121,7 @@ static int run_clean(int argc, char **argv)
     mr_write_options_default(&w);
     for (int i = 1; i < argc;) {
         const char *v;
-        if (output_option(argc, argv, &i, &w))
+        if (cli_output_option(argc, argv, &i, &w))
             continue;
         if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
             if (!v)
@@ -189,7 +150,7 @@ static int run_clean(int argc, char **argv)
         return cli_usage_error("clean", "no input file given");
     if (!out)
         return cli_usage_error("clean", "no output file given (-o FILE)");
-    int rc = check_output_path("clean", out);
+    int rc = cli_check_output_path("clean", out);
     if (rc != CLI_OK)
         return rc;
     return read_clean_write(in, out, &w, &c, quiet);

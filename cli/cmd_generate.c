@@ -60,9 +60,9 @@ static int run(int argc, char **argv)
                                kind_name);
     if (!out)
         return cli_usage_error("generate", "no output file given (-o FILE)");
-    if (mr_format_from_path(out) == MR_FORMAT_AUTO)
-        return cli_usage_error("generate", "cannot tell the output format of '%s' "
-                                           "(use .obj, .ply, .stl or .xyz)", out);
+    int rc = cli_check_output_path("generate", out);
+    if (rc != CLI_OK)
+        return rc;
 
     mr_mesh mesh;
     mr_error err;

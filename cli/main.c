@@ -10,6 +10,7 @@
 
 static const cli_command *const commands[] = {
     &cli_cmd_info, &cli_cmd_convert, &cli_cmd_clean, &cli_cmd_generate, &cli_cmd_demo,
+    &cli_cmd_simplify, &cli_cmd_compare,
 };
 enum { N_COMMANDS = sizeof commands / sizeof *commands };
 

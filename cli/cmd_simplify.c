@@ -1,0 +1,241 @@
+/* meshreduce simplify IN -o OUT: greedy quadric-error edge collapse. */
+#include "cli.h"
+
+#include <math.h>
+#include <string.h>
+#include <unistd.h>
+
+static const char usage[] =
+    "usage: meshreduce simplify IN -o OUT TARGET [options]\n"
+    "\n"
+    "Reduce a triangle mesh by greedy quadric-error edge collapse (Garland-Heckbert),\n"
+    "keeping it manifold, its boundaries and attribute seams in place. Normals,\n"
+    "texture coordinates and colors are carried through.\n"
+    "\n"
+    "targets (the first one reached stops; at least one is needed):\n"
+    "  --ratio R             keep this fraction of the vertices: 0.1 or 10%\n"
+    "  --vertices N          keep N vertices\n"
+    "  --triangles N         keep N triangles\n"
+    "  --max-error E         stop before a collapse moves the surface by more than E,\n"
+    "                        relative to the bounding-box diagonal (0.001 = 0.1%)\n"
+    "  --absolute            --max-error is in model units\n"
+    "\n"
+    "options:\n"
+    "  -o, --output FILE     output file (required)\n"
+    "  --collapse full|half  full: both ends move to the optimal position (default);\n"
+    "                        half: one end moves onto the other\n"
+    "  --lock-border         never move boundary vertices\n"
+    "  --boundary-weight W   weight of the quadrics that hold boundaries and seams\n"
+    "                        (default 1, 0 = none)\n"
+    "  --max-normal-turn D   refuse collapses that turn a triangle by more than D\n"
+    "                        degrees (default 60)\n"
+    "  --stats               print counts, largest error and time per phase\n"
+    "  --json                print them as one JSON object on stdout\n"
+    "  -q, --quiet           print nothing on success\n"
+    "\n" CLI_OUTPUT_OPTIONS_HELP;
+
+/* A progress bar on stderr, only when it is a terminal and the work has
+ * taken more than a second. */
+typedef struct progress {
+    double start;
+    int shown;
+    int last_percent;
+} progress;
+
+static void show_progress(double fraction, void *user)
+{
+    progress *p = user;
+    if (cli_now() - p->start < 1.0)
+        return;
+    int percent = (int)(fraction * 100.0 + 0.5);
+    if (percent == p->last_percent)
+        return;
+    p->last_percent = percent;
+    p->shown = 1;
+    char bar[41];
+    int fill = percent * 40 / 100;
+    for (int i = 0; i < 40; i++)
+        bar[i] = i < fill ? '#' : ' ';
+    bar[40] = '\0';
+    fprintf(stderr, "\rsimplifying [%s] %3d%%", bar, percent);
+    fflush(stderr);
+}
+
+/* "0.1" or "10%" -> 0.1 */
+static bool parse_ratio(const char *s, double *out)
+{
+    if (!s)
+        return false;
+    char buf[64];
+    size_t n = strlen(s);
+    if (n == 0 || n >= sizeof buf)
+        return false;
+    memcpy(buf, s, n + 1);
+    double scale = 1.0;
+    if (buf[n - 1] == '%') {
+        buf[n - 1] = '\0';
+        scale = 0.01;
+    }
+    double v;
+    if (!cli_parse_double(buf, &v))
+        return false;
+    *out = v * scale;
+    return true;
+}
+
+static void print_stats(const mr_simplify_stats *s, double t_read, double t_write)
+{
+    char a[32], b[32], c[32], d[32];
+    fprintf(stderr, "vertices   %s -> %s\n", cli_count(a, sizeof a, s->input_vertices),
+            cli_count(b, sizeof b, s->output_vertices));
+    fprintf(stderr, "triangles  %s -> %s\n", cli_count(c, sizeof c, s->input_triangles),
+            cli_count(d, sizeof d, s->output_triangles));
+    fprintf(stderr, "collapses  %s, largest error %.6g\n", cli_count(a, sizeof a, s->collapses),
+            s->max_error);
+    fprintf(stderr, "time       read %.3f s, setup %.3f s, collapse %.3f s, output %.3f s, "
+                    "write %.3f s\n",
+            t_read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t_write);
+}
+
+static void print_json(const char *in, const char *out, const mr_simplify_stats *s,
+                       double t_read, double t_write)
+{
+    printf("{\"input\": ");
+    cli_json_string(stdout, in);
+    printf(", \"output\": ");
+    cli_json_string(stdout, out);
+    printf(", \"input_vertices\": %zu, \"input_triangles\": %zu, \"output_vertices\": %zu, "
+           "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
+           "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
+           "\"output\": %.6f, \"write\": %.6f}}\n",
+           s->input_vertices, s->input_triangles, s->output_vertices, s->output_triangles,
+           s->collapses, s->max_error, t_read, s->seconds_setup, s->seconds_collapse,
+           s->seconds_output, t_write);
+}
+
+static int run(int argc, char **argv)
+{
+    const char *in = NULL, *out = NULL;
+    bool stats = false, json = false, quiet = false;
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    mr_write_options w;
+    mr_write_options_default(&w);
+    for (int i = 1; i < argc;) {
+        const char *v;
+        uint64_t n;
+        double x;
+        if (cli_output_option(argc, argv, &i, &w))
+            continue;
+        if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
+            if (!v)
+                return cli_usage_error("simplify", "-o needs a file name");
+            out = v;
+        } else if (cli_value(argc, argv, &i, "--ratio", &v)) {
+            if (!parse_ratio(v, &x) || !(x > 0.0 && x <= 1.0))
+                return cli_usage_error("simplify", "--ratio needs a fraction in (0, 1] or a "
+                                                   "percentage in (0%%, 100%%], got '%s'",
+                                       v ? v : "");
+            o.target_ratio = x;
+        } else if (cli_value(argc, argv, &i, "--vertices", &v)) {
+            if (!cli_parse_count(v, &n) || n == 0)
+                return cli_usage_error("simplify", "--vertices needs a positive count");
+            o.target_vertices = (size_t)n;
+        } else if (cli_value(argc, argv, &i, "--triangles", &v)) {
+            if (!cli_parse_count(v, &n) || n == 0)
+                return cli_usage_error("simplify", "--triangles needs a positive count");
+            o.target_triangles = (size_t)n;
+        } else if (cli_value(argc, argv, &i, "--max-error", &v)) {
+            if (!cli_parse_double(v, &x) || !(x > 0))
+                return cli_usage_error("simplify", "--max-error needs a positive number");
+            o.max_error = x;
+        } else if (cli_flag(argc, argv, &i, "--absolute")) {
+            o.error_absolute = 1;
+        } else if (cli_value(argc, argv, &i, "--collapse", &v)) {
+            if (v && !strcmp(v, "full"))
+                o.collapse = MR_COLLAPSE_FULL;
+            else if (v && !strcmp(v, "half"))
+                o.collapse = MR_COLLAPSE_HALF;
+            else
+                return cli_usage_error("simplify", "--collapse is full or half");
+        } else if (cli_flag(argc, argv, &i, "--lock-border")) {
+            o.lock_border = 1;
+        } else if (cli_value(argc, argv, &i, "--boundary-weight", &v)) {
+            if (!cli_parse_double(v, &x) || x < 0)
+                return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
+            o.boundary_weight = x;
+        } else if (cli_value(argc, argv, &i, "--max-normal-turn", &v)) {
+            if (!cli_parse_double(v, &x) || !(x > 0 && x <= 180))
+                return cli_usage_error("simplify", "--max-normal-turn needs degrees in "
+                                                   "(0, 180]");
+            o.max_normal_turn = x * 3.14159265358979323846 / 180.0;
+        } else if (cli_flag(argc, argv, &i, "--stats")) {
+            stats = true;
+        } else if (cli_flag(argc, argv, &i, "--json")) {
+            json = true;
+        } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
+            quiet = true;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            return cli_usage_error("simplify", "unknown option '%s'", argv[i]);
+        } else if (in) {
+            return cli_usage_error("simplify", "one input file at a time (use -o for the "
+                                               "output)");
+        } else {
+            in = argv[i++];
+        }
+    }
+    if (!in)
+        return cli_usage_error("simplify", "no input file given");
+    if (!out)
+        return cli_usage_error("simplify", "no output file given (-o FILE)");
+    if (o.target_ratio == 0 && o.target_vertices == 0 && o.target_triangles == 0 &&
+        o.max_error == 0)
+        return cli_usage_error("simplify", "no target given (--ratio, --vertices, "
+                                           "--triangles or --max-error)");
+    int rc = cli_check_output_path("simplify", out);
+    if (rc != CLI_OK)
+        return rc;
+
+    mr_mesh mesh, result;
+    mr_error err;
+    double t0 = cli_now();
+    if (mr_mesh_read(in, NULL, &mesh, &err) != MR_OK)
+        return cli_fail_err(&err);
+    double t_read = cli_now() - t0;
+
+    progress prog = {cli_now(), 0, -1};
+    if (!quiet && isatty(STDERR_FILENO)) {
+        o.progress = show_progress;
+        o.progress_user = &prog;
+    }
+    mr_simplify_stats s;
+    mr_status st = mr_mesh_simplify(&mesh, &o, &result, NULL, &s, &err);
+    if (prog.shown)
+        fprintf(stderr, "\r%60s\r", "");
+    mr_mesh_free(&mesh);
+    if (st != MR_OK)
+        return cli_fail_err(&err);
+
+    t0 = cli_now();
+    st = mr_mesh_write(out, &result, &w, &err);
+    double t_write = cli_now() - t0;
+    mr_mesh_free(&result);
+    if (st != MR_OK)
+        return cli_fail_err(&err);
+
+    if (json)
+        print_json(in, out, &s, t_read, t_write);
+    if (stats)
+        print_stats(&s, t_read, t_write);
+    else if (!quiet && !json) {
+        char a[32], b[32];
+        fprintf(stderr, "%s: %s vertices, %s triangles (simplified in %.3f s)\n", out,
+                cli_count(a, sizeof a, s.output_vertices),
+                cli_count(b, sizeof b, s.output_triangles),
+                s.seconds_setup + s.seconds_collapse + s.seconds_output);
+    }
+    return CLI_OK;
+}
+
+const cli_command cli_cmd_simplify = {"simplify", "reduce a mesh by quadric-error edge collapse",
+                                      run, usage};

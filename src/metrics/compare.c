@@ -1,0 +1,508 @@
+/*
+ * Surface distances between two meshes (mr_compare) and the vertex
+ * similarity of two reductions (mr_vertex_similarity).
+ *
+ * mr_compare, Metro-style. The points of a surface are its referenced
+ * vertices (in index order) followed by `samples` area-uniform samples.
+ * Sampling is stratified along the cumulative area: sample j takes the
+ * area position (j + u) / samples * total_area with u uniform in [0, 1),
+ * finds its triangle by binary search in the prefix sums of the triangle
+ * areas, and a uniform point in that triangle (the square-root trick).
+ * Each sample is still uniformly distributed over its stratum, so the set
+ * is area-uniform, with less clumping than independent draws, and --
+ * which matters for speed -- consecutive samples lie on the same or
+ * neighbouring triangles, so the nearest triangle found for one is a tight
+ * starting bound (the hint) for the next.
+ *
+ * The random numbers are a hash of (seed, sample index), not a sequential
+ * generator, and the points are processed in fixed blocks of BLOCK
+ * queries whose partial results (max, sum of squares, sum) are combined
+ * in block order. Hints only carry within a block. So every figure is
+ * bitwise the same for every thread count and schedule.
+ *
+ * Conventions: a mesh whose triangles all have zero area gets no samples
+ * (only its vertices); the reference bounding box covers its referenced
+ * vertices (those on the surface); a *_rel value is 0 when the diagonal
+ * is 0. Referenced vertices must have finite coordinates.
+ */
+#include "distance.h"
+#include "../mesh/adjacency.h"
+
+#include <math.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#define BLOCK 4096              /* queries per unit of work */
+#define AREA_BLOCK 8192         /* triangles per block of the prefix sums */
+#define DEFAULT_SAMPLES 1000000
+#define DEFAULT_SEED 1
+
+void mr_compare_options_default(mr_compare_options *options)
+{
+    if (!options)
+        return;
+    memset(options, 0, sizeof *options);
+    options->samples = DEFAULT_SAMPLES;
+    options->seed = DEFAULT_SEED;
+    options->threads = 0;
+}
+
+/* ---- counter-based random numbers ------------------------------------------- */
+
+/* splitmix64's finaliser: a bijective 64-bit mix. */
+static inline uint64_t mix64(uint64_t x)
+{
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ull;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebull;
+    x ^= x >> 31;
+    return x;
+}
+
+/* The k-th uniform number in [0, 1) of item i in the stream `seed`. */
+static inline double unit_random(uint64_t seed, uint64_t i, unsigned k)
+{
+    uint64_t h = mix64(seed + 0x9e3779b97f4a7c15ull * (4 * i + k + 1));
+    return (double)(h >> 11) * 0x1p-53;
+}
+
+/* ---- one surface ------------------------------------------------------------ */
+
+typedef struct surface {
+    const char *name; /* "reference mesh", "test mesh": for messages */
+    const float *pos;
+    size_t vertex_count;
+    const uint32_t *idx;
+    size_t triangle_count;
+    uint32_t *verts;  /* referenced vertex ids, increasing */
+    size_t vert_count;
+    double *prefix;   /* triangle_count + 1 cumulative areas */
+    double area;
+    uint32_t last_positive; /* last triangle with a positive area */
+    size_t samples;   /* 0 when the area is 0 */
+    uint64_t seed;
+    double diagonal;  /* of the referenced vertices' box */
+} surface;
+
+static void surface_free(surface *s)
+{
+    free(s->verts);
+    free(s->prefix);
+    s->verts = NULL;
+    s->prefix = NULL;
+}
+
+static inline void load(const float *pos, uint32_t v, double p[3])
+{
+    p[0] = pos[3 * (size_t)v];
+    p[1] = pos[3 * (size_t)v + 1];
+    p[2] = pos[3 * (size_t)v + 2];
+}
+
+static mr_status check_surface(const surface *s, mr_error *err)
+{
+    if (s->vertex_count > 0 && !s->pos)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, s->name,
+                             "positions are NULL for %zu vertices", s->vertex_count);
+    if (s->triangle_count > 0 && !s->idx)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, s->name,
+                             "indices are NULL for %zu triangles", s->triangle_count);
+    if (s->triangle_count == 0)
+        return mr_fail_plain(err, MR_ERR_EMPTY, NULL,
+                             "%s has no triangles: distances need a surface", s->name);
+    mr_error e;
+    mr_status st = mr_check_indices(s->idx, s->triangle_count, s->vertex_count, &e);
+    if (st != MR_OK)
+        return mr_fail_plain(err, st, s->name, "%s", e.message);
+    return MR_OK;
+}
+
+/* The referenced vertices in increasing order; checks that they are
+ * finite and measures their box. */
+static mr_status collect_vertices(surface *s, mr_error *err)
+{
+    uint8_t *used = mr_calloc_array(s->vertex_count, 1);
+    if (!used)
+        return mr_fail_nomem(err, s->name, s->vertex_count);
+    for (size_t c = 0; c < 3 * s->triangle_count; c++)
+        used[s->idx[c]] = 1;
+    size_t n = 0;
+    for (size_t v = 0; v < s->vertex_count; v++)
+        n += used[v];
+    s->verts = mr_alloc_array(n, sizeof *s->verts);
+    if (!s->verts) {
+        free(used);
+        return mr_fail_nomem(err, s->name, n * sizeof *s->verts);
+    }
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    size_t k = 0;
+    for (size_t v = 0; v < s->vertex_count; v++) {
+        if (!used[v])
+            continue;
+        double p[3];
+        load(s->pos, (uint32_t)v, p);
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
+            free(used);
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, s->name,
+                                 "vertex %zu has a non-finite coordinate", v);
+        }
+        for (int a = 0; a < 3; a++) {
+            lo[a] = p[a] < lo[a] ? p[a] : lo[a];
+            hi[a] = p[a] > hi[a] ? p[a] : hi[a];
+        }
+        s->verts[k++] = (uint32_t)v;
+    }
+    free(used);
+    s->vert_count = n;
+    double d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    s->diagonal = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return MR_OK;
+}
+
+static double triangle_area(const float *pos, const uint32_t *tri)
+{
+    double a[3], b[3], c[3];
+    load(pos, tri[0], a);
+    load(pos, tri[1], b);
+    load(pos, tri[2], c);
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double x = u[1] * v[2] - u[2] * v[1];
+    double y = u[2] * v[0] - u[0] * v[2];
+    double z = u[0] * v[1] - u[1] * v[0];
+    return 0.5 * sqrt(x * x + y * y + z * z);
+}
+
+/* prefix[t] = area of the triangles before t. Each fixed block of
+ * triangles gets a local running sum, the block totals are added in order
+ * into offsets, and each prefix is offset + local sum. The last prefix of a
+ * block is then exactly the next block's offset, so the array is
+ * non-decreasing, and it has the same bits for every thread count. */
+static mr_status area_prefix(surface *s, int nt, mr_error *err)
+{
+    const size_t tc = s->triangle_count, nb = (tc + AREA_BLOCK - 1) / AREA_BLOCK;
+    s->prefix = mr_alloc_array(tc + 1, sizeof *s->prefix);
+    double *offset = mr_alloc_array(nb + 1, sizeof *offset);
+    if (!s->prefix || !offset) {
+        free(offset);
+        return mr_fail_nomem(err, s->name, (tc + nb + 2) * sizeof *offset);
+    }
+    double *prefix = s->prefix;
+#pragma omp parallel for schedule(static) num_threads(nt) if (tc > 65536)
+    for (size_t b = 0; b < nb; b++) {
+        const size_t end = (b + 1) * AREA_BLOCK < tc ? (b + 1) * AREA_BLOCK : tc;
+        double sum = 0;
+        for (size_t t = b * AREA_BLOCK; t < end; t++) {
+            sum += triangle_area(s->pos, s->idx + 3 * t);
+            prefix[t + 1] = sum;
+        }
+        offset[b + 1] = sum;
+    }
+    offset[0] = 0;
+    for (size_t b = 0; b < nb; b++)
+        offset[b + 1] += offset[b];
+#pragma omp parallel for schedule(static) num_threads(nt) if (tc > 65536)
+    for (size_t b = 0; b < nb; b++) {
+        const size_t end = (b + 1) * AREA_BLOCK < tc ? (b + 1) * AREA_BLOCK : tc;
+        for (size_t t = b * AREA_BLOCK; t < end; t++)
+            prefix[t + 1] = offset[b] + prefix[t + 1];
+    }
+    prefix[0] = 0;
+    s->area = prefix[tc];
+    free(offset);
+    s->last_positive = 0;
+    for (size_t t = tc; t-- > 0;)
+        if (prefix[t + 1] > prefix[t]) {
+            s->last_positive = (uint32_t)t;
+            break;
+        }
+    return MR_OK;
+}
+
+/* The triangle holding area position `a`: prefix[t] <= a < prefix[t + 1]
+ * (so never a zero-area triangle). */
+static uint32_t find_triangle(const surface *s, double a)
+{
+    size_t lo = 0, hi = s->triangle_count + 1; /* first prefix > a lies in [lo, hi) */
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (s->prefix[mid] > a)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    if (lo == 0 || lo > s->triangle_count) /* rounding at the very ends */
+        return lo == 0 ? 0 : s->last_positive;
+    return (uint32_t)(lo - 1);
+}
+
+/* Point q of the surface: a vertex for q < vert_count, else a sample. */
+static inline uint32_t surface_point(const surface *s, size_t q, double p[3])
+{
+    if (q < s->vert_count) {
+        load(s->pos, s->verts[q], p);
+        return MR_NO_HINT;
+    }
+    const uint64_t j = q - s->vert_count;
+    const double a = ((double)j + unit_random(s->seed, j, 0)) * (s->area / (double)s->samples);
+    const uint32_t t = find_triangle(s, a);
+    const uint32_t *tri = s->idx + 3 * (size_t)t;
+    double va[3], vb[3], vc[3];
+    load(s->pos, tri[0], va);
+    load(s->pos, tri[1], vb);
+    load(s->pos, tri[2], vc);
+    const double r1 = sqrt(unit_random(s->seed, j, 1)), r2 = unit_random(s->seed, j, 2);
+    const double wa = 1 - r1, wb = r1 * (1 - r2), wc = r1 * r2;
+    for (int k = 0; k < 3; k++)
+        p[k] = wa * va[k] + wb * vb[k] + wc * vc[k];
+    return t;
+}
+
+/* ---- blocks of queries ------------------------------------------------------- */
+
+typedef struct partial {
+    double max, sum2, sum;
+} partial;
+
+/* Distances from points [begin, end) of `src` to the surface in `dst`. */
+static partial surface_block(const surface *src, const mr_tri_bvh *dst, size_t begin,
+                             size_t end)
+{
+    partial r = {0, 0, 0};
+    uint32_t hint = MR_NO_HINT;
+    for (size_t q = begin; q < end; q++) {
+        double p[3];
+        surface_point(src, q, p);
+        const double d = sqrt(mr_tri_bvh_nearest(dst, p, hint, &hint, NULL));
+        r.max = d > r.max ? d : r.max;
+        r.sum2 += d * d;
+        r.sum += d;
+    }
+    return r;
+}
+
+/* Distances from the reference's vertices [begin, end) to the nearest test
+ * vertex (the modified Hausdorff distance). */
+static partial vertex_block(const surface *src, const mr_point_bvh *dst, size_t begin,
+                            size_t end)
+{
+    partial r = {0, 0, 0};
+    uint32_t hint = MR_NO_HINT;
+    for (size_t q = begin; q < end; q++) {
+        double p[3];
+        load(src->pos, src->verts[q], p);
+        const double d2 = mr_point_bvh_nearest(dst, p, hint, &hint);
+        const double d = sqrt(d2);
+        r.max = d > r.max ? d : r.max;
+        r.sum2 += d2;
+        r.sum += d;
+    }
+    return r;
+}
+
+/* The three kinds of work, as one list of blocks so that the threads stay
+ * busy to the end. */
+enum { REF_TO_TEST, TEST_TO_REF, REF_VERTICES, KINDS };
+
+typedef struct job {
+    const surface *surf[2];
+    const mr_tri_bvh *tree[2];
+    const mr_point_bvh *points; /* over the test's referenced vertices */
+    size_t count[KINDS];        /* queries of each kind */
+    size_t blocks[KINDS + 1];   /* first block of each kind, then the total */
+} job;
+
+static partial run_block(const job *jb, size_t b)
+{
+    int kind = 0;
+    while (b >= jb->blocks[kind + 1])
+        kind++;
+    const size_t begin = (b - jb->blocks[kind]) * BLOCK;
+    const size_t end = begin + BLOCK < jb->count[kind] ? begin + BLOCK : jb->count[kind];
+    if (kind == REF_VERTICES)
+        return vertex_block(jb->surf[0], jb->points, begin, end);
+    return surface_block(jb->surf[kind], jb->tree[1 - kind], begin, end);
+}
+
+/* Combine the block results of each kind in block order. */
+static void combine(const job *jb, const partial *part, partial total[KINDS])
+{
+    for (int k = 0; k < KINDS; k++) {
+        partial t = {0, 0, 0};
+        for (size_t b = jb->blocks[k]; b < jb->blocks[k + 1]; b++) {
+            t.max = part[b].max > t.max ? part[b].max : t.max;
+            t.sum2 += part[b].sum2;
+            t.sum += part[b].sum;
+        }
+        total[k] = t;
+    }
+}
+
+static mr_status run_queries(job *jb, int nt, partial total[KINDS], mr_error *err)
+{
+    jb->count[REF_TO_TEST] = jb->surf[0]->vert_count + jb->surf[0]->samples;
+    jb->count[TEST_TO_REF] = jb->surf[1]->vert_count + jb->surf[1]->samples;
+    jb->count[REF_VERTICES] = jb->surf[0]->vert_count;
+    jb->blocks[0] = 0;
+    for (int k = 0; k < KINDS; k++)
+        jb->blocks[k + 1] = jb->blocks[k] + (jb->count[k] + BLOCK - 1) / BLOCK;
+    const size_t nb = jb->blocks[KINDS];
+    partial *part = mr_alloc_array(nb, sizeof *part);
+    if (!part)
+        return mr_fail_nomem(err, NULL, nb * sizeof *part);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+    for (size_t b = 0; b < nb; b++)
+        part[b] = run_block(jb, b);
+    combine(jb, part, total);
+    free(part);
+    return MR_OK;
+}
+
+/* ---- mr_compare -------------------------------------------------------------- */
+
+static mr_status prepare(surface *s, int nt, mr_error *err)
+{
+    mr_status st = check_surface(s, err);
+    if (st == MR_OK)
+        st = collect_vertices(s, err);
+    if (st == MR_OK)
+        st = area_prefix(s, nt, err);
+    if (st == MR_OK && s->area <= 0)
+        s->samples = 0; /* nothing to sample: vertices only */
+    return st;
+}
+
+static inline double relative(double v, double diagonal)
+{
+    return diagonal > 0 ? v / diagonal : 0;
+}
+
+static void fill_result(const surface *ref, const surface *test, const partial t[KINDS],
+                        mr_compare_result *r)
+{
+    memset(r, 0, sizeof *r);
+    const size_t n0 = ref->vert_count + ref->samples, n1 = test->vert_count + test->samples;
+    r->ref_points = n0;
+    r->test_points = n1;
+    r->ref_to_test_max = t[REF_TO_TEST].max;
+    r->test_to_ref_max = t[TEST_TO_REF].max;
+    r->ref_to_test_rms = sqrt(t[REF_TO_TEST].sum2 / (double)n0);
+    r->test_to_ref_rms = sqrt(t[TEST_TO_REF].sum2 / (double)n1);
+    r->hausdorff = r->ref_to_test_max > r->test_to_ref_max ? r->ref_to_test_max
+                                                           : r->test_to_ref_max;
+    r->rms = sqrt((t[REF_TO_TEST].sum2 + t[TEST_TO_REF].sum2) / (double)(n0 + n1));
+    r->mean = (t[REF_TO_TEST].sum + t[TEST_TO_REF].sum) / (double)(n0 + n1);
+    r->modified_hausdorff = sqrt(t[REF_VERTICES].sum2 / (double)ref->vert_count);
+    r->diagonal = ref->diagonal;
+    r->hausdorff_rel = relative(r->hausdorff, r->diagonal);
+    r->rms_rel = relative(r->rms, r->diagonal);
+    r->mean_rel = relative(r->mean, r->diagonal);
+    r->modified_hausdorff_rel = relative(r->modified_hausdorff, r->diagonal);
+}
+
+mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
+                     const uint32_t *ref_indices, size_t ref_triangle_count,
+                     const float *test_positions, size_t test_vertex_count,
+                     const uint32_t *test_indices, size_t test_triangle_count,
+                     const mr_compare_options *options, mr_compare_result *result,
+                     mr_error *err)
+{
+    if (!result)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "result is NULL");
+    memset(result, 0, sizeof *result);
+    mr_compare_options opt;
+    mr_compare_options_default(&opt);
+    if (options)
+        opt = *options;
+    const int nt = mr_thread_count(opt.threads);
+
+    surface s[2];
+    memset(s, 0, sizeof s);
+    s[0] = (surface){.name = "reference mesh", .pos = ref_positions,
+                     .vertex_count = ref_vertex_count, .idx = ref_indices,
+                     .triangle_count = ref_triangle_count, .samples = opt.samples,
+                     .seed = mix64(opt.seed ^ 0x7265666572656e63ull)};
+    s[1] = (surface){.name = "test mesh", .pos = test_positions,
+                     .vertex_count = test_vertex_count, .idx = test_indices,
+                     .triangle_count = test_triangle_count, .samples = opt.samples,
+                     .seed = mix64(opt.seed ^ 0x746573746d657368ull)};
+    mr_tri_bvh tree[2];
+    mr_point_bvh points;
+    memset(tree, 0, sizeof tree);
+    memset(&points, 0, sizeof points);
+
+    mr_status st = MR_OK;
+    for (int i = 0; i < 2 && st == MR_OK; i++)
+        st = prepare(&s[i], nt, err);
+    for (int i = 0; i < 2 && st == MR_OK; i++)
+        st = mr_tri_bvh_build(&tree[i], s[i].pos, s[i].idx, s[i].triangle_count, nt, err);
+    if (st == MR_OK)
+        st = mr_point_bvh_build(&points, s[1].pos, s[1].verts, s[1].vert_count, nt, err);
+    partial total[KINDS];
+    if (st == MR_OK) {
+        job jb = {{&s[0], &s[1]}, {&tree[0], &tree[1]}, &points, {0}, {0}};
+        st = run_queries(&jb, nt, total, err);
+    }
+    if (st == MR_OK)
+        fill_result(&s[0], &s[1], total, result);
+    mr_point_bvh_free(&points);
+    mr_tri_bvh_free(&tree[0]);
+    mr_tri_bvh_free(&tree[1]);
+    surface_free(&s[0]);
+    surface_free(&s[1]);
+    return st;
+}
+
+/* ---- vertex similarity ------------------------------------------------------- */
+
+/*
+ * b's vertices sorted by origin ((origin << 32) | index keys), then one
+ * binary search per vertex of a. Conventions: an empty `a` is 1 when `b`
+ * is empty too and 0 otherwise; NULL arrays with a non-zero count, and a
+ * failed allocation, give NaN (the signature has no error channel).
+ */
+double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
+                            size_t a_vertex_count, const float *b_positions,
+                            const uint32_t *b_origin, size_t b_vertex_count)
+{
+    if ((a_vertex_count && (!a_positions || !a_origin)) ||
+        (b_vertex_count && (!b_positions || !b_origin)) || b_vertex_count > UINT32_MAX)
+        return NAN;
+    if (a_vertex_count == 0)
+        return b_vertex_count == 0 ? 1.0 : 0.0;
+    uint64_t *keys = mr_alloc_array(b_vertex_count, sizeof *keys);
+    if (!keys)
+        return NAN;
+    for (size_t i = 0; i < b_vertex_count; i++)
+        keys[i] = ((uint64_t)b_origin[i] << 32) | i;
+    if (mr_radix_sort_u64(keys, NULL, b_vertex_count, 64, NULL) != MR_OK) {
+        free(keys);
+        return NAN;
+    }
+    size_t same = 0;
+    const size_t nb = b_vertex_count;
+#pragma omp parallel for schedule(static) reduction(+ : same) if (a_vertex_count > 65536)
+    for (size_t i = 0; i < a_vertex_count; i++) {
+        const uint64_t origin = a_origin[i];
+        size_t lo = 0, hi = nb; /* first key with origin >= a's */
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (keys[mid] >> 32 < origin)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        for (size_t k = lo; k < nb && keys[k] >> 32 == origin; k++) {
+            const size_t j = (uint32_t)keys[k];
+            if (memcmp(a_positions + 3 * i, b_positions + 3 * j, 3 * sizeof(float)) == 0) {
+                same++;
+                break;
+            }
+        }
+    }
+    free(keys);
+    return (double)same / (double)a_vertex_count;
+}

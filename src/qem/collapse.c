@@ -1,0 +1,432 @@
+/* The working mesh of the edge-collapse simplifiers: see collapse.h. */
+#include "collapse.h"
+
+#include "../mesh/adjacency.h"
+#include "quadric.h"
+
+#include <math.h>
+
+/* Marks a list's first entry during compaction; triangle ids stay below it
+ * (3 * triangle_count fits in 32 bits). */
+#define LIST_TAG 0x80000000u
+
+static inline bool tri_has(const uint32_t *t, uint32_t x)
+{
+    return t[0] == x || t[1] == x || t[2] == x;
+}
+
+/* The vertex of triangle t after / before v. */
+static inline uint32_t tri_next(const uint32_t *t, uint32_t v)
+{
+    return t[0] == v ? t[1] : t[1] == v ? t[2] : t[0];
+}
+static inline uint32_t tri_prev(const uint32_t *t, uint32_t v)
+{
+    return t[0] == v ? t[2] : t[1] == v ? t[0] : t[1];
+}
+
+uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint32_t w)
+{
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < m->count[v]; i++)
+        n += tri_has(m->tris + 3 * (size_t)list[i], w);
+    return n;
+}
+
+/* ---- classification ------------------------------------------------------ */
+
+/* The triangle of v's list other than `not` that holds w, or NONE. */
+static uint32_t other_triangle(const mr_collapse_mesh *m, uint32_t v, uint32_t w, uint32_t not)
+{
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    for (uint32_t i = 0; i < m->count[v]; i++)
+        if (list[i] != not && tri_has(m->tris + 3 * (size_t)list[i], w))
+            return list[i];
+    return MR_COLLAPSE_NONE;
+}
+
+/* Walk v's fan from t0 across the edge to the vertex after v (forward) or
+ * before it, until a boundary edge or back at t0. Returns the number of
+ * triangles stepped onto (t0 not counted) and whether it closed. */
+static uint32_t walk_fan(const mr_collapse_mesh *m, uint32_t v, uint32_t t0, bool forward,
+                         bool *closed)
+{
+    uint32_t t = t0, steps = 0;
+    *closed = false;
+    for (uint32_t guard = 0; guard <= m->count[v]; guard++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)t;
+        uint32_t w = forward ? tri_next(tri, v) : tri_prev(tri, v);
+        uint32_t s = other_triangle(m, v, w, t);
+        if (s == MR_COLLAPSE_NONE)
+            return steps;
+        if (s == t0) {
+            *closed = true;
+            return steps;
+        }
+        t = s;
+        steps++;
+    }
+    return steps;
+}
+
+/* MR_VF_BOUNDARY, MR_VF_NONMANIFOLD | MR_VF_LOCKED, or 0 for an inner
+ * manifold vertex. */
+static uint8_t classify_vertex(const mr_collapse_mesh *m, uint32_t v)
+{
+    const uint32_t n = m->count[v];
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    uint32_t boundary_edges = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        /* Edge v -> a of this triangle; each edge at v is seen once from
+         * each side, so look at the forward ones and at the backward ones
+         * that are boundary edges. */
+        const uint32_t ends[2] = {tri_next(tri, v), tri_prev(tri, v)};
+        for (int k = 0; k < 2; k++) {
+            uint32_t w = ends[k];
+            uint32_t c = mr_collapse_edge_triangles(m, v, w);
+            if (c > 2)
+                return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
+            if (c == 1) {
+                boundary_edges++;
+                continue;
+            }
+            /* Two triangles: they must run along the edge in opposite
+             * directions (consistent orientation). */
+            uint32_t s = other_triangle(m, v, w, list[i]);
+            const uint32_t *o = m->tris + 3 * (size_t)s;
+            bool here_forward = k == 0;
+            bool there_forward = tri_next(o, v) == w;
+            if (here_forward == there_forward)
+                return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
+        }
+    }
+    if (boundary_edges != 0 && boundary_edges != 2)
+        return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
+    bool closed;
+    uint32_t seen = 1 + walk_fan(m, v, list[0], true, &closed);
+    if (!closed)
+        seen += walk_fan(m, v, list[0], false, &closed);
+    if (seen != n)
+        return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* several fans */
+    return boundary_edges ? MR_VF_BOUNDARY : 0;
+}
+
+/* ---- setup ---------------------------------------------------------------- */
+
+void mr_collapse_mesh_free(mr_collapse_mesh *m)
+{
+    if (!m)
+        return;
+    free(m->pos);
+    free(m->tris);
+    free(m->start);
+    free(m->count);
+    free(m->refs);
+    free(m->flags);
+    memset(m, 0, sizeof *m);
+}
+
+mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, size_t stride,
+                                size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const double centre[3], double scale,
+                                mr_error *err)
+{
+    memset(m, 0, sizeof *m);
+    const size_t vc = vertex_count, tc = triangle_count;
+    if (vc >= LIST_TAG || tc > UINT32_MAX / 3)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
+                             "%zu vertices, %zu triangles exceed the simplifier's limits", vc,
+                             tc);
+    if (stride == 0)
+        stride = 3 * sizeof(float);
+
+    /* Lists first, while nothing else is allocated: growing the triangle
+     * array of the table to refs' capacity may copy it. */
+    mr_vertex_triangles vt;
+    mr_status st = mr_vertex_triangles_build(&vt, indices, tc, vc, err);
+    if (st != MR_OK)
+        return st;
+    const size_t total = vt.offsets[vc];
+    const size_t capacity = total + total / 2 + 64;
+    uint32_t *refs = mr_realloc_array(vt.triangles, capacity, sizeof *refs);
+    if (!refs) {
+        mr_vertex_triangles_free(&vt);
+        return mr_fail_nomem(err, NULL, capacity * sizeof *refs);
+    }
+    m->refs = refs;
+    m->refs_capacity = capacity;
+    m->refs_size = total;
+    m->start = vt.offsets; /* vc + 1 entries; the last is unused */
+    m->vertex_count = vc;
+    m->triangle_count = tc;
+    m->count = mr_alloc_array(vc, sizeof *m->count);
+    m->pos = mr_alloc_array(3 * vc, sizeof *m->pos);
+    m->tris = mr_alloc_array(3 * tc, sizeof *m->tris);
+    m->flags = mr_calloc_array(vc, sizeof *m->flags);
+    if (!m->count || !m->pos || !m->tris || !m->flags) {
+        mr_collapse_mesh_free(m);
+        return mr_fail_nomem(err, NULL, vc * 20 + tc * 12);
+    }
+
+    size_t live_tris = 0;
+    for (size_t t = 0; t < tc; t++) {
+        const uint32_t *src = indices + 3 * t;
+        uint32_t *dst = m->tris + 3 * t;
+        if (mr_triangle_is_degenerate(src)) {
+            dst[0] = dst[1] = dst[2] = MR_COLLAPSE_NONE;
+            continue;
+        }
+        dst[0] = src[0];
+        dst[1] = src[1];
+        dst[2] = src[2];
+        live_tris++;
+    }
+    m->live_triangles = live_tris;
+
+    /* Drop the degenerate triangles from the lists (the gaps they leave
+     * are garbage that compaction reclaims). */
+    size_t live_vertices = 0;
+    for (size_t v = 0; v < vc; v++) {
+        const uint32_t s = m->start[v], e = m->start[v + 1];
+        uint32_t n = 0;
+        for (uint32_t i = s; i < e; i++)
+            if (m->tris[3 * (size_t)refs[i]] != MR_COLLAPSE_NONE)
+                refs[s + n++] = refs[i];
+        m->count[v] = n;
+        live_vertices += n > 0;
+        float p[3];
+        memcpy(p, (const char *)positions + v * stride, sizeof p);
+        for (int k = 0; k < 3; k++)
+            m->pos[3 * v + k] = (float)((p[k] - centre[k]) * scale);
+    }
+    m->live_vertices = live_vertices;
+    for (size_t v = 0; v < vc; v++)
+        m->flags[v] = m->count[v] ? classify_vertex(m, (uint32_t)v) : MR_VF_REMOVED;
+    return MR_OK;
+}
+
+/* ---- validity -------------------------------------------------------------- */
+
+/* Does triangle (a, b, c) -- with the vertex at corner `moved` replaced
+ * by `to` -- keep its normal within the limit, and its area? */
+static bool triangle_ok(const mr_collapse_mesh *m, const uint32_t *tri, uint32_t moved,
+                        const double to[3], double min_cos)
+{
+    double p[3][3], q[3][3];
+    for (int k = 0; k < 3; k++) {
+        mr_collapse_load(m, tri[k], p[k]);
+        if (tri[k] == moved) {
+            q[k][0] = to[0];
+            q[k][1] = to[1];
+            q[k][2] = to[2];
+        } else {
+            q[k][0] = p[k][0];
+            q[k][1] = p[k][1];
+            q[k][2] = p[k][2];
+        }
+    }
+    double n0[3], n1[3];
+    double a0 = mr_triangle_normal(p[0], p[1], p[2], n0);
+    double a1 = mr_triangle_normal(q[0], q[1], q[2], n1);
+    /* Unit normals; a degenerate one is 0 and fails the test below. */
+    double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
+    if (!(d > min_cos))
+        return false;
+    /* Near-degenerate afterwards: a relative collapse of the area. */
+    return a1 > 1e-6 * a0;
+}
+
+bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                       const double target[3], const mr_collapse_limits *limits)
+{
+    const uint8_t fu = m->flags[u], fv = m->flags[v];
+    if ((fu | fv) & MR_VF_REMOVED || u == v)
+        return false;
+    /* The target as it will be stored. */
+    const double t[3] = {(float)target[0], (float)target[1], (float)target[2]};
+    const bool u_stays = t[0] == m->pos[3 * u] && t[1] == m->pos[3 * u + 1] &&
+                         t[2] == m->pos[3 * u + 2];
+    const bool v_stays = t[0] == m->pos[3 * v] && t[1] == m->pos[3 * v + 1] &&
+                         t[2] == m->pos[3 * v + 2];
+    if ((fu & MR_VF_LOCKED && !u_stays) || (fv & MR_VF_LOCKED && !v_stays))
+        return false;
+    if (limits->half_edge) {
+        const uint8_t keep = MR_VF_BOUNDARY | MR_VF_SEAM;
+        if ((fu & keep) & ~(fv & keep))
+            return false;
+    }
+    const uint32_t nu = m->count[u], nv = m->count[v];
+    if (nu > MR_COLLAPSE_MAX_DEGREE || nv > MR_COLLAPSE_MAX_DEGREE)
+        return false;
+    const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
+
+    /* The triangles on the edge and their opposite vertices. */
+    uint32_t opp[2] = {MR_COLLAPSE_NONE, MR_COLLAPSE_NONE}, ne = 0;
+    for (uint32_t i = 0; i < nu; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)lu[i];
+        if (!tri_has(tri, v))
+            continue;
+        if (ne == 2)
+            return false; /* non-manifold edge */
+        opp[ne++] = tri[0] != u && tri[0] != v ? tri[0] : tri[1] != u && tri[1] != v ? tri[1]
+                                                                                      : tri[2];
+    }
+    if (ne == 0 || (ne == 2 && opp[0] == opp[1]))
+        return false;
+    /* (4) two boundary vertices joined through the inside would pinch the
+     * surface; and the last triangles of a component must stay. */
+    if (ne == 2 && (fu & MR_VF_BOUNDARY) && (fv & MR_VF_BOUNDARY))
+        return false;
+    if (nu == ne && nv == ne)
+        return false;
+
+    /* (1) the link condition: a neighbour of u other than the opposite
+     * vertices must not be a neighbour of v. */
+    uint32_t nbv[2 * MR_COLLAPSE_MAX_DEGREE];
+    uint32_t nn = 0;
+    for (uint32_t i = 0; i < nv; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)lv[i];
+        nbv[nn++] = tri_next(tri, v);
+        nbv[nn++] = tri_prev(tri, v);
+    }
+    for (uint32_t i = 0; i < nu; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)lu[i];
+        if (tri_has(tri, v))
+            continue;
+        const uint32_t a = tri_next(tri, u), b = tri_prev(tri, u);
+        for (uint32_t j = 0; j < nn; j++) {
+            const uint32_t x = nbv[j];
+            if ((x == a || x == b) && x != opp[0] && x != opp[1])
+                return false;
+        }
+        /* (3) u's triangle (u, c, d) over both opposite vertices would
+         * duplicate a triangle (v, c, d) of v: a tetrahedron-like pocket. */
+        if (ne == 2 && ((a == opp[0] && b == opp[1]) || (a == opp[1] && b == opp[0]))) {
+            for (uint32_t j = 0; j < nv; j++) {
+                const uint32_t *o = m->tris + 3 * (size_t)lv[j];
+                if (tri_has(o, a) && tri_has(o, b))
+                    return false;
+            }
+        }
+        /* (2) the triangle's normal under the move of u. */
+        if (!triangle_ok(m, tri, u, t, limits->min_cos_turn))
+            return false;
+    }
+    if (!v_stays) {
+        for (uint32_t i = 0; i < nv; i++) {
+            const uint32_t *tri = m->tris + 3 * (size_t)lv[i];
+            if (!tri_has(tri, u) && !triangle_ok(m, tri, v, t, limits->min_cos_turn))
+                return false;
+        }
+    }
+    return true;
+}
+
+/* ---- apply ------------------------------------------------------------------ */
+
+/* Compact refs in place: every live list moves down, in the order the lists
+ * lie in the array. The first entry of each live list is swapped for a tag
+ * naming its vertex, so one forward scan finds the lists among the garbage;
+ * the displaced entry waits in start[v]. */
+static void compact_refs(mr_collapse_mesh *m)
+{
+    uint32_t *refs = m->refs;
+    for (size_t v = 0; v < m->vertex_count; v++) {
+        if (!m->count[v])
+            continue;
+        const uint32_t s = m->start[v];
+        m->start[v] = refs[s];
+        refs[s] = (uint32_t)v | LIST_TAG;
+    }
+    size_t w = 0;
+    for (size_t r = 0; r < m->refs_size;) {
+        const uint32_t x = refs[r];
+        if (!(x & LIST_TAG)) {
+            r++;
+            continue;
+        }
+        const uint32_t v = x & ~LIST_TAG, n = m->count[v];
+        refs[w] = m->start[v];
+        memmove(refs + w + 1, refs + r + 1, (size_t)(n - 1) * sizeof *refs);
+        m->start[v] = (uint32_t)w;
+        w += n;
+        r += n;
+    }
+    m->refs_size = w;
+}
+
+void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
+{
+    if (m->refs_size + m->count[u] + m->count[v] > m->refs_capacity)
+        compact_refs(m);
+}
+
+/* Take triangle t out of vertex c's list (order does not matter). */
+static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t t)
+{
+    uint32_t *list = m->refs + m->start[c];
+    const uint32_t n = m->count[c];
+    for (uint32_t i = 0; i < n; i++) {
+        if (list[i] == t) {
+            list[i] = list[n - 1];
+            m->count[c] = n - 1;
+            return;
+        }
+    }
+}
+
+unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                           const double target[3])
+{
+    const uint32_t nu = m->count[u], nv = m->count[v];
+    const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
+    unsigned deleted = 0;
+    for (uint32_t i = 0; i < nu; i++) {
+        uint32_t *tri = m->tris + 3 * (size_t)lu[i];
+        if (tri_has(tri, v)) {
+            const uint32_t c = tri[0] != u && tri[0] != v ? tri[0]
+                               : tri[1] != u && tri[1] != v ? tri[1]
+                                                            : tri[2];
+            list_remove(m, c, lu[i]);
+            if (m->count[c] == 0) { /* an ear's tip: now unreferenced */
+                m->flags[c] |= MR_VF_REMOVED;
+                m->live_vertices--;
+            }
+            tri[0] = tri[1] = tri[2] = MR_COLLAPSE_NONE;
+            deleted++;
+        } else {
+            for (int k = 0; k < 3; k++)
+                if (tri[k] == u)
+                    tri[k] = v;
+        }
+    }
+    /* v's merged list, at the end of refs: v's surviving triangles, then
+     * u's. */
+    uint32_t *out = m->refs + m->refs_size;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < nv; i++)
+        if (m->tris[3 * (size_t)lv[i]] != MR_COLLAPSE_NONE)
+            out[n++] = lv[i];
+    for (uint32_t i = 0; i < nu; i++)
+        if (m->tris[3 * (size_t)lu[i]] != MR_COLLAPSE_NONE)
+            out[n++] = lu[i];
+    m->start[v] = (uint32_t)m->refs_size;
+    m->count[v] = n;
+    m->refs_size += n;
+    m->count[u] = 0;
+
+    float t[3] = {(float)target[0], (float)target[1], (float)target[2]};
+    float *pv = m->pos + 3 * (size_t)v;
+    if (t[0] != pv[0] || t[1] != pv[1] || t[2] != pv[2])
+        m->flags[v] |= MR_VF_MOVED;
+    pv[0] = t[0];
+    pv[1] = t[1];
+    pv[2] = t[2];
+    m->flags[v] |= m->flags[u] & (MR_VF_BOUNDARY | MR_VF_SEAM);
+    m->flags[u] |= MR_VF_REMOVED;
+    m->live_vertices--;
+    m->live_triangles -= deleted;
+    return deleted;
+}

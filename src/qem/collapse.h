@@ -1,0 +1,125 @@
+/*
+ * The working mesh of the edge-collapse simplifiers, on flat arrays, and the
+ * two operations every simplifier (sequential, or parallel on a locked
+ * neighbourhood) is built from: is a collapse valid, and apply it.
+ * Internal, not part of the API.
+ *
+ * Storage, all flat and allocated once:
+ *   - pos: float positions in normalised coordinates (see simplify.c);
+ *   - tris: 3 vertex ids per triangle; a deleted triangle has
+ *     tris[3t] == MR_COLLAPSE_NONE (degenerate input triangles start so);
+ *   - per vertex the list of its live triangles: refs[start[v] ..
+ *     start[v] + count[v]). A collapse u -> v writes v's merged list at the
+ *     end of refs (the old lists of u and v become garbage) and removes the
+ *     deleted triangles from the lists of their third vertices in place. When
+ *     refs is full, mr_collapse_reserve compacts it in place (no extra
+ *     memory): the array is sized at 1.5 times the initial lists, so that
+ *     happens every few hundred thousand collapses;
+ *   - per vertex flags (MR_VF_*).
+ *
+ * Topology classification (mr_collapse_mesh_init): a vertex whose edges all
+ * have one or two consistently oriented triangles and whose triangles form
+ * one fan is manifold (interior, or boundary when the fan is open); any
+ * other referenced vertex -- on an edge of three or more triangles, on an
+ * edge whose two triangles disagree in orientation, or with several fans
+ * (bowtie) -- is flagged NONMANIFOLD and LOCKED and never collapses.
+ * Unreferenced vertices are flagged REMOVED from the start.
+ */
+#ifndef MR_COLLAPSE_H
+#define MR_COLLAPSE_H
+
+#include "../core/internal.h"
+
+#define MR_COLLAPSE_NONE UINT32_MAX
+
+/* Collapses around a vertex with more triangles than this are refused (the
+ * validity check works on stack arrays of this size). */
+#define MR_COLLAPSE_MAX_DEGREE 128
+
+enum {
+    MR_VF_BOUNDARY = 1u << 0,    /* on an open boundary */
+    MR_VF_LOCKED = 1u << 1,      /* never moves (lock_border, vertex_lock,
+                                    non-manifold) */
+    MR_VF_SEAM = 1u << 2,        /* on an attribute seam (mr_mesh_simplify) */
+    MR_VF_REMOVED = 1u << 3,     /* collapsed away, or never referenced */
+    MR_VF_MOVED = 1u << 4,       /* position differs from the input's */
+    MR_VF_NONMANIFOLD = 1u << 5
+};
+
+typedef struct mr_collapse_mesh {
+    size_t vertex_count, triangle_count;
+    float *pos;          /* 3 * vertex_count, normalised coordinates */
+    uint32_t *tris;      /* 3 * triangle_count */
+    uint32_t *start;     /* vertex_count */
+    uint32_t *count;     /* vertex_count */
+    uint32_t *refs;      /* refs_capacity */
+    size_t refs_size, refs_capacity;
+    uint8_t *flags;      /* vertex_count, MR_VF_* */
+    size_t live_vertices;  /* referenced, not removed */
+    size_t live_triangles;
+} mr_collapse_mesh;
+
+/* Limits of mr_collapse_valid. */
+typedef struct mr_collapse_limits {
+    double min_cos_turn; /* a triangle's normal may turn by an angle whose
+                            cosine is at least this (>= 0: flips are
+                            always refused) */
+    int half_edge;       /* half-edge collapse: u may not leave the
+                            boundary (or a seam) for an inner vertex */
+} mr_collapse_limits;
+
+/* Build the working mesh: positions are normalised as (p - centre) *
+ * scale and stored as float. Indices must be in range. On failure the mesh
+ * is left empty (safe to free). */
+mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, size_t stride,
+                                size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const double centre[3], double scale,
+                                mr_error *err);
+void mr_collapse_mesh_free(mr_collapse_mesh *m);
+
+static inline const uint32_t *mr_collapse_vertex_tris(const mr_collapse_mesh *m, uint32_t v)
+{
+    return m->refs + m->start[v];
+}
+
+static inline void mr_collapse_load(const mr_collapse_mesh *m, uint32_t v, double p[3])
+{
+    p[0] = m->pos[3 * v];
+    p[1] = m->pos[3 * v + 1];
+    p[2] = m->pos[3 * v + 2];
+}
+
+/* Number of live triangles with both vertices v and w (from v's list). */
+uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint32_t w);
+
+/*
+ * May edge (u, v) collapse, u removed and v kept at `target` (normalised
+ * coordinates)? True only when the mesh stays a valid 2-manifold of the
+ * same topology: (1) the link condition (the common neighbours of u and v
+ * are exactly the opposite vertices of the one or two triangles on the
+ * edge); (2) no other triangle around u (or around v when v moves) flips,
+ * turns by more than the limit, or degenerates; (3) no duplicate
+ * triangle arises; (4) two boundary vertices only collapse along a
+ * boundary edge, and the last triangles of a component never vanish;
+ * (5) a LOCKED vertex never moves. Reads only the triangles of u and v and
+ * the flags and positions of their vertices.
+ */
+bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                       const double target[3], const mr_collapse_limits *limits);
+
+/* Room for one more collapse of u and v in refs: compacts refs when
+ * needed. Needs exclusive access to the whole mesh. */
+void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v);
+
+/*
+ * Collapse u into v, v moving to `target`: the triangles on the edge are
+ * deleted, u's other triangles now use v, v's list becomes the merged one,
+ * u is flagged REMOVED and v inherits u's BOUNDARY and SEAM flags. The
+ * collapse must be valid and mr_collapse_reserve called before. Writes
+ * only u, v, their triangles, the lists of the opposite vertices, and the
+ * end of refs. Returns the number of deleted triangles (1 or 2).
+ */
+unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                           const double target[3]);
+
+#endif /* MR_COLLAPSE_H */

@@ -1,0 +1,127 @@
+/* Indexed binary min-heap: see heap.h. */
+#include "heap.h"
+
+#include <math.h>
+
+mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err)
+{
+    memset(h, 0, sizeof *h);
+    if (capacity >= UINT32_MAX)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL, "heap of %zu ids", capacity);
+    h->items = mr_alloc_array(capacity, sizeof *h->items);
+    h->slot = mr_alloc_array(capacity, sizeof *h->slot);
+    if (!h->items || !h->slot) {
+        mr_heap_free(h);
+        return mr_fail_nomem(err, NULL, capacity * 12);
+    }
+    memset(h->slot, 0xff, capacity * sizeof *h->slot); /* MR_HEAP_NONE */
+    h->capacity = (uint32_t)capacity;
+    return MR_OK;
+}
+
+void mr_heap_free(mr_heap *h)
+{
+    if (!h)
+        return;
+    free(h->items);
+    free(h->slot);
+    memset(h, 0, sizeof *h);
+}
+
+static inline uint64_t pack(uint32_t id, float key)
+{
+    return ((uint64_t)mr_heap_key_bits(key) << 32) | id;
+}
+
+/* Move the item at slot i up to its place; the hole moves, the item is
+ * written once at the end. */
+static void sift_up(mr_heap *h, uint32_t i)
+{
+    const uint64_t item = h->items[i];
+    while (i > 0) {
+        uint32_t parent = (i - 1) / 2;
+        uint64_t p = h->items[parent];
+        if (p <= item)
+            break;
+        h->items[i] = p;
+        h->slot[(uint32_t)p] = i;
+        i = parent;
+    }
+    h->items[i] = item;
+    h->slot[(uint32_t)item] = i;
+}
+
+static void sift_down(mr_heap *h, uint32_t i)
+{
+    const uint64_t item = h->items[i];
+    const uint32_t n = h->size;
+    for (;;) {
+        uint32_t child = 2 * i + 1;
+        if (child >= n)
+            break;
+        uint64_t c = h->items[child];
+        if (child + 1 < n && h->items[child + 1] < c)
+            c = h->items[++child];
+        if (item <= c)
+            break;
+        h->items[i] = c;
+        h->slot[(uint32_t)c] = i;
+        i = child;
+    }
+    h->items[i] = item;
+    h->slot[(uint32_t)item] = i;
+}
+
+void mr_heap_push(mr_heap *h, uint32_t id, float key)
+{
+    uint32_t i = h->size++;
+    h->items[i] = pack(id, key);
+    sift_up(h, i);
+}
+
+/* Take the item out of slot i: the last item fills the hole and moves up or
+ * down. */
+static void remove_slot(mr_heap *h, uint32_t i)
+{
+    const uint32_t id = (uint32_t)h->items[i];
+    h->slot[id] = MR_HEAP_NONE;
+    const uint32_t last = --h->size;
+    if (i == last)
+        return;
+    const uint64_t moved = h->items[last];
+    const uint64_t old = h->items[i];
+    h->items[i] = moved;
+    if (moved < old)
+        sift_up(h, i);
+    else
+        sift_down(h, i);
+}
+
+uint32_t mr_heap_pop(mr_heap *h)
+{
+    const uint32_t id = (uint32_t)h->items[0];
+    remove_slot(h, 0);
+    return id;
+}
+
+void mr_heap_update(mr_heap *h, uint32_t id, float key)
+{
+    const uint32_t i = h->slot[id];
+    if (i == MR_HEAP_NONE) {
+        mr_heap_push(h, id, key);
+        return;
+    }
+    const uint64_t old = h->items[i], item = pack(id, key);
+    h->items[i] = item;
+    if (item < old)
+        sift_up(h, i);
+    else if (item > old)
+        sift_down(h, i);
+}
+
+void mr_heap_remove(mr_heap *h, uint32_t id)
+{
+    const uint32_t i = h->slot[id];
+    if (i != MR_HEAP_NONE)
+        remove_slot(h, i);
+}

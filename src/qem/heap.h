@@ -1,0 +1,86 @@
+/*
+ * Indexed binary min-heap with mutable priorities. Internal.
+ *
+ * Elements are ids 0 .. capacity - 1, each at most once in the heap, with a
+ * float key. A position table id -> slot lets update() and remove() find
+ * an element in O(1) and restore the heap order in O(log n).
+ *
+ * Order: by key, and among equal keys by id (smaller first), so the pop
+ * order -- and everything built on it -- is deterministic. Both are packed
+ * into one 64-bit word (the key's bits made order-preserving as an
+ * unsigned integer in the high half, the id in the low half), so a
+ * comparison is a single integer compare. NaN keys are stored as +inf.
+ * Memory: 12 bytes per id (8 per slot, 4 per position).
+ */
+#ifndef MR_HEAP_H
+#define MR_HEAP_H
+
+#include "../core/internal.h"
+
+#include <math.h>
+
+#define MR_HEAP_NONE UINT32_MAX
+
+typedef struct mr_heap {
+    uint64_t *items;  /* slots 0 .. size - 1: (key bits << 32) | id */
+    uint32_t *slot;   /* id -> slot, MR_HEAP_NONE when absent */
+    uint32_t size;
+    uint32_t capacity;
+} mr_heap;
+
+/* An empty heap for ids below capacity. On failure the heap is empty (safe
+ * to free). */
+mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err);
+void mr_heap_free(mr_heap *h);
+
+/* Keys <-> order-preserving unsigned bits (-0 < +0 is harmless). */
+static inline uint32_t mr_heap_key_bits(float key)
+{
+    uint32_t b;
+    if (key != key)
+        key = INFINITY;
+    memcpy(&b, &key, sizeof b);
+    return (b & 0x80000000u) ? ~b : (b | 0x80000000u);
+}
+
+static inline float mr_heap_bits_key(uint32_t b)
+{
+    b = (b & 0x80000000u) ? (b & 0x7fffffffu) : ~b;
+    float key;
+    memcpy(&key, &b, sizeof key);
+    return key;
+}
+
+static inline bool mr_heap_contains(const mr_heap *h, uint32_t id)
+{
+    return h->slot[id] != MR_HEAP_NONE;
+}
+
+static inline bool mr_heap_empty(const mr_heap *h) { return h->size == 0; }
+
+/* Key of an element in the heap. */
+static inline float mr_heap_key(const mr_heap *h, uint32_t id)
+{
+    return mr_heap_bits_key((uint32_t)(h->items[h->slot[id]] >> 32));
+}
+
+/* The smallest element without removing it; the heap must not be empty. */
+static inline uint32_t mr_heap_top(const mr_heap *h) { return (uint32_t)h->items[0]; }
+static inline float mr_heap_top_key(const mr_heap *h)
+{
+    return mr_heap_bits_key((uint32_t)(h->items[0] >> 32));
+}
+
+/* Insert id (not in the heap) with a key. */
+void mr_heap_push(mr_heap *h, uint32_t id, float key);
+
+/* Remove and return the smallest element; the heap must not be empty. */
+uint32_t mr_heap_pop(mr_heap *h);
+
+/* Change the key of id, inserting it when absent. */
+void mr_heap_update(mr_heap *h, uint32_t id, float key);
+
+/* Remove id when present. */
+void mr_heap_remove(mr_heap *h, uint32_t id);
+
+#endif /* MR_HEAP_H */

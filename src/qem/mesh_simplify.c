@@ -1,0 +1,433 @@
+/*
+ * mr_mesh_simplify: simplification that carries normals, texture
+ * coordinates and colors.
+ *
+ * The geometry is simplified on the position-welded topology: attribute
+ * vertices at bitwise-equal positions are one geometric vertex, so a UV
+ * seam or a hard edge is no boundary to the simplifier. Each triangle
+ * corner remembers its attribute vertex (its "wedge"). A geometric vertex
+ * with two wedges is a seam vertex:
+ *   - seam edges (whose two triangles use different wedges at both ends)
+ *     get the perpendicular constraint quadrics that boundaries get;
+ *   - a seam vertex only collapses along a seam edge into another seam
+ *     vertex; each of its wedges then maps onto the survivor's wedge on the
+ *     same side of the seam; a non-seam vertex may collapse into a seam
+ *     vertex, whose position then stays (full collapses pin seam ends);
+ *   - seam vertices with more than two wedges, other than two seam edges,
+ *     or on an open boundary (seams meeting, corners) are locked.
+ * On a full collapse the survivor's wedges take the attributes
+ * interpolated along the edge at the target's projection parameter
+ * (normals renormalised). The output keeps the split: one output vertex
+ * per surviving wedge.
+ */
+#include "simplify_internal.h"
+
+#include <math.h>
+#include <time.h>
+
+#define NONE MR_COLLAPSE_NONE
+
+typedef struct attr_ctx {
+    uint32_t *corner;   /* 3 * triangle_count: the wedge of each corner */
+    float *normals, *texcoords, *colors; /* working copies, or NULL */
+    double seam_weight;
+} attr_ctx;
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- welding ------------------------------------------------------------- */
+
+static inline uint32_t bits_of(float f)
+{
+    if (f == 0)
+        f = 0; /* -0 and +0 weld */
+    uint32_t b;
+    memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+/* geo[v] = the first vertex with v's position (bitwise). */
+static mr_status weld(const float *pos, size_t vc, uint32_t *geo, mr_error *err)
+{
+    size_t cap = 16;
+    while (cap < 2 * vc)
+        cap *= 2;
+    uint32_t *table = mr_alloc_array(cap, sizeof *table);
+    if (!table)
+        return mr_fail_nomem(err, NULL, cap * 4);
+    memset(table, 0xff, cap * sizeof *table);
+    for (size_t v = 0; v < vc; v++) {
+        const uint32_t b[3] = {bits_of(pos[3 * v]), bits_of(pos[3 * v + 1]),
+                               bits_of(pos[3 * v + 2])};
+        uint64_t h = (b[0] * 73856093ull) ^ (b[1] * 19349663ull) ^ (b[2] * 83492791ull);
+        h ^= h >> 29;
+        h *= 0x9e3779b97f4a7c15ull;
+        size_t i = (size_t)(h >> 20) & (cap - 1);
+        for (;; i = (i + 1) & (cap - 1)) {
+            const uint32_t o = table[i];
+            if (o == NONE) {
+                table[i] = (uint32_t)v;
+                geo[v] = (uint32_t)v;
+                break;
+            }
+            if (bits_of(pos[3 * o]) == b[0] && bits_of(pos[3 * o + 1]) == b[1] &&
+                bits_of(pos[3 * o + 2]) == b[2]) {
+                geo[v] = o;
+                break;
+            }
+        }
+    }
+    free(table);
+    return MR_OK;
+}
+
+/* ---- wedges ------------------------------------------------------------------ */
+
+static inline uint32_t wedge_at(const mr_simplifier *s, uint32_t t, uint32_t x)
+{
+    const attr_ctx *a = s->attr;
+    const uint32_t *tri = s->m.tris + 3 * (size_t)t;
+    const uint32_t k = tri[0] == x ? 0 : tri[1] == x ? 1 : 2;
+    return a->corner[3 * (size_t)t + k];
+}
+
+/* The (one or two) triangles on edge (r, k), from r's list. */
+static uint32_t edge_tris(const mr_simplifier *s, uint32_t r, uint32_t k, uint32_t et[2])
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, r);
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < m->count[r] && n < 2; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        if (tri[0] == k || tri[1] == k || tri[2] == k)
+            et[n++] = list[i];
+    }
+    return n;
+}
+
+static bool seam_edge(const mr_simplifier *s, uint32_t a, uint32_t b, const uint32_t et[2])
+{
+    return wedge_at(s, et[0], a) != wedge_at(s, et[1], a) &&
+           wedge_at(s, et[0], b) != wedge_at(s, et[1], b);
+}
+
+static bool attr_valid(mr_simplifier *s, uint32_t r, uint32_t k)
+{
+    uint32_t et[2];
+    uint32_t n = edge_tris(s, r, k, et);
+    if (n != 2)
+        return !(s->m.flags[r] & MR_VF_SEAM) || n == 1;
+    if (s->m.flags[r] & MR_VF_SEAM)
+        return (s->m.flags[k] & MR_VF_SEAM) && seam_edge(s, r, k, et);
+    /* r has one wedge: the survivor's must be the same on both sides. */
+    return wedge_at(s, et[0], k) == wedge_at(s, et[1], k);
+}
+
+static void lerp_attr(float *a, const float *b, int n, double t, bool normalise)
+{
+    double len = 0;
+    for (int i = 0; i < n; i++) {
+        a[i] = (float)((1 - t) * a[i] + t * b[i]);
+        len += (double)a[i] * a[i];
+    }
+    if (normalise && len > 0) {
+        len = sqrt(len);
+        for (int i = 0; i < n; i++)
+            a[i] = (float)(a[i] / len);
+    }
+}
+
+static void attr_apply(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
+{
+    attr_ctx *a = s->attr;
+    const mr_collapse_mesh *m = &s->m;
+    uint32_t et[2];
+    uint32_t n = edge_tris(s, r, k, et);
+    uint32_t from[2], to[2];
+    for (uint32_t j = 0; j < n; j++) {
+        from[j] = wedge_at(s, et[j], r);
+        to[j] = wedge_at(s, et[j], k);
+    }
+    /* Interpolate the survivor's wedges at the target's place on the edge. */
+    double pk[3], pr[3];
+    mr_collapse_load(m, k, pk);
+    mr_collapse_load(m, r, pr);
+    const double d[3] = {pr[0] - pk[0], pr[1] - pk[1], pr[2] - pk[2]};
+    const double len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    double t = len2 > 0 ? ((target[0] - pk[0]) * d[0] + (target[1] - pk[1]) * d[1] +
+                           (target[2] - pk[2]) * d[2]) / len2
+                        : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    if (t > 0) {
+        for (uint32_t j = 0; j < n; j++) {
+            if (j == 1 && to[1] == to[0])
+                break;
+            if (a->normals)
+                lerp_attr(a->normals + 3 * (size_t)to[j], a->normals + 3 * (size_t)from[j],
+                          3, t, true);
+            if (a->texcoords)
+                lerp_attr(a->texcoords + 2 * (size_t)to[j],
+                          a->texcoords + 2 * (size_t)from[j], 2, t, false);
+            if (a->colors)
+                lerp_attr(a->colors + 4 * (size_t)to[j], a->colors + 4 * (size_t)from[j], 4,
+                          t, false);
+        }
+    }
+    /* r's corners take the survivor's wedge on their side. */
+    const uint32_t *list = mr_collapse_vertex_tris(m, r);
+    for (uint32_t i = 0; i < m->count[r]; i++) {
+        const uint32_t tt = list[i];
+        const uint32_t *tri = m->tris + 3 * (size_t)tt;
+        if (tri[0] == k || tri[1] == k || tri[2] == k)
+            continue;
+        const uint32_t c = 3 * tt + (tri[0] == r ? 0 : tri[1] == r ? 1 : 2);
+        const uint32_t w = a->corner[c];
+        a->corner[c] = (n == 2 && w == from[1] && w != from[0]) ? to[1] : to[0];
+    }
+}
+
+/* ---- seam setup ---------------------------------------------------------------- */
+
+/* Flag seam vertices, lock the complex ones, add the seam edges'
+ * constraint quadrics. */
+static void setup_seams(mr_simplifier *s)
+{
+    mr_collapse_mesh *m = &s->m;
+    attr_ctx *a = s->attr;
+    for (size_t vi = 0; vi < m->vertex_count; vi++) {
+        const uint32_t v = (uint32_t)vi;
+        if (m->flags[v] & (MR_VF_REMOVED | MR_VF_NONMANIFOLD))
+            continue;
+        const uint32_t *list = mr_collapse_vertex_tris(m, v);
+        uint32_t w0 = wedge_at(s, list[0], v), w1 = NONE;
+        bool many = false;
+        for (uint32_t i = 1; i < m->count[v]; i++) {
+            uint32_t w = wedge_at(s, list[i], v);
+            if (w == w0 || w == w1)
+                continue;
+            if (w1 == NONE)
+                w1 = w;
+            else
+                many = true;
+        }
+        if (w1 == NONE)
+            continue;
+        m->flags[v] |= MR_VF_SEAM;
+        /* Count seam edges and add their constraint planes. */
+        uint32_t seams = 0, loose = 0;
+        mr_quadric q;
+        mr_quadric_load(&q, &s->q[v]);
+        double pv[3];
+        mr_collapse_load(m, v, pv);
+        for (uint32_t i = 0; i < m->count[v]; i++) {
+            const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+            const uint32_t k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+            const uint32_t x = tri[(k + 1) % 3]; /* each inner edge once */
+            uint32_t et[2];
+            if (edge_tris(s, v, x, et) != 2)
+                continue;
+            bool at_v = wedge_at(s, et[0], v) != wedge_at(s, et[1], v);
+            bool at_x = wedge_at(s, et[0], x) != wedge_at(s, et[1], x);
+            if (at_v && at_x) {
+                seams++;
+                double p[3][3], n[3], b[3];
+                for (int j = 0; j < 3; j++)
+                    mr_collapse_load(m, tri[j], p[j]);
+                mr_triangle_normal(p[0], p[1], p[2], n);
+                mr_collapse_load(m, x, b);
+                for (int j = 0; j < 3; j++)
+                    b[j] -= pv[j];
+                const double o[3] = {0, 0, 0};
+                mr_quadric_add_edge_constraint(&q, o, b, n, a->seam_weight);
+            } else if (at_v != at_x) {
+                loose++; /* a seam that ends here in one wedge only */
+            }
+        }
+        mr_quadric_store(&s->q[v], &q);
+        if (many || seams != 2 || loose || (m->flags[v] & MR_VF_BOUNDARY))
+            m->flags[v] |= MR_VF_LOCKED;
+    }
+}
+
+/* ---- the call ---------------------------------------------------------------------- */
+
+static void free_ctx(attr_ctx *a)
+{
+    free(a->corner);
+    free(a->normals);
+    free(a->texcoords);
+    free(a->colors);
+}
+
+static float *dup_floats(const float *src, size_t n)
+{
+    if (!src)
+        return NULL;
+    float *d = mr_alloc_array(n, sizeof *d);
+    if (d)
+        memcpy(d, src, n * sizeof *d);
+    return d;
+}
+
+mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options, mr_mesh *out,
+                           uint32_t **origin, mr_simplify_stats *stats, mr_error *err)
+{
+    if (origin)
+        *origin = NULL;
+    if (!in || !out)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: NULL mesh");
+    if (in->triangle_count == 0)
+        return mr_fail_plain(err, MR_ERR_EMPTY, NULL, "simplify: the mesh has no triangles");
+    const double t0 = now_seconds();
+    const size_t vc = in->vertex_count, tc = in->triangle_count;
+    mr_status st = mr_check_indices(in->indices, tc, vc, err);
+    if (st != MR_OK)
+        return st;
+    attr_ctx a;
+    memset(&a, 0, sizeof a);
+    uint32_t *geo = mr_alloc_array(vc, sizeof *geo);
+    uint32_t *gidx = mr_alloc_array(3 * tc, sizeof *gidx);
+    a.corner = mr_alloc_array(3 * tc, sizeof *a.corner);
+    a.normals = dup_floats(in->normals, 3 * vc);
+    a.texcoords = dup_floats(in->texcoords, 2 * vc);
+    a.colors = dup_floats(in->colors, 4 * vc);
+    if (!geo || !gidx || !a.corner || (in->normals && !a.normals) ||
+        (in->texcoords && !a.texcoords) || (in->colors && !a.colors)) {
+        free(geo);
+        free(gidx);
+        free_ctx(&a);
+        return mr_fail_nomem(err, NULL, vc * 40 + tc * 24);
+    }
+    st = weld(in->positions, vc, geo, err);
+    if (st != MR_OK) {
+        free(geo);
+        free(gidx);
+        free_ctx(&a);
+        return st;
+    }
+    for (size_t c = 0; c < 3 * tc; c++) {
+        gidx[c] = geo[in->indices[c]];
+        a.corner[c] = in->indices[c];
+    }
+    a.seam_weight = options ? options->boundary_weight : 0;
+
+    /* A vertex lock on any wedge locks the geometric vertex. */
+    mr_simplify_options o;
+    if (options)
+        o = *options;
+    uint8_t *lock = NULL;
+    if (options && options->vertex_lock) {
+        lock = mr_calloc_array(vc, 1);
+        if (!lock) {
+            free(geo);
+            free(gidx);
+            free_ctx(&a);
+            return mr_fail_nomem(err, NULL, vc);
+        }
+        for (size_t v = 0; v < vc; v++)
+            if (options->vertex_lock[v])
+                lock[geo[v]] = MR_VF_LOCKED;
+        o.vertex_lock = NULL;
+    }
+    mr_simplifier s;
+    st = mr_simplifier_init(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, lock, err);
+    free(lock);
+    free(gidx);
+    if (st != MR_OK) {
+        free(geo);
+        free_ctx(&a);
+        return st;
+    }
+    s.attr = &a;
+    s.attr_valid = attr_valid;
+    s.attr_apply = attr_apply;
+    s.pin_flags = MR_VF_SEAM;
+    setup_seams(&s);
+    mr_simplifier_fill_queue(&s);
+    const double t1 = now_seconds();
+    double max_error;
+    size_t collapses = mr_simplifier_run(&s, &o, &max_error);
+    const double t2 = now_seconds();
+
+    /* Output: one vertex per surviving wedge, in input order. */
+    const mr_collapse_mesh *m = &s.m;
+    uint32_t *remap = geo; /* reused: wedge -> output vertex */
+    for (size_t v = 0; v < vc; v++)
+        remap[v] = NONE;
+    size_t nt = 0;
+    for (size_t t = 0; t < tc; t++) {
+        if (m->tris[3 * t] == NONE)
+            continue;
+        nt++;
+        for (int k = 0; k < 3; k++)
+            remap[a.corner[3 * t + k]] = 0;
+    }
+    size_t nv = 0;
+    for (size_t v = 0; v < vc; v++)
+        if (remap[v] != NONE)
+            remap[v] = (uint32_t)nv++;
+    mr_mesh_init(out);
+    st = mr_mesh_alloc(out, nv, nt, mr_mesh_attributes(in), err);
+    uint32_t *org = NULL;
+    if (st == MR_OK && origin) {
+        org = mr_alloc_array(nv, sizeof *org);
+        if (!org) {
+            mr_mesh_free(out);
+            st = mr_fail_nomem(err, NULL, nv * 4);
+        }
+    }
+    if (st == MR_OK) {
+        size_t t2i = 0;
+        for (size_t t = 0; t < tc; t++) {
+            const uint32_t *tri = m->tris + 3 * t;
+            if (tri[0] == NONE)
+                continue;
+            for (int k = 0; k < 3; k++) {
+                const uint32_t w = a.corner[3 * t + k], o_ = remap[w];
+                out->indices[3 * t2i + k] = o_;
+                /* position of the corner's geometric vertex */
+                const uint32_t g = tri[k];
+                float *p = out->positions + 3 * (size_t)o_;
+                if (m->flags[g] & MR_VF_MOVED)
+                    for (int j = 0; j < 3; j++)
+                        p[j] = (float)((double)m->pos[3 * g + j] * s.diagonal + s.centre[j]);
+                else
+                    memcpy(p, in->positions + 3 * (size_t)w, 3 * sizeof(float));
+                if (a.normals)
+                    memcpy(out->normals + 3 * (size_t)o_, a.normals + 3 * (size_t)w, 12);
+                if (a.texcoords)
+                    memcpy(out->texcoords + 2 * (size_t)o_, a.texcoords + 2 * (size_t)w, 8);
+                if (a.colors)
+                    memcpy(out->colors + 4 * (size_t)o_, a.colors + 4 * (size_t)w, 16);
+                if (org)
+                    org[o_] = w;
+            }
+            t2i++;
+        }
+    }
+    const size_t input_vertices = s.input_vertices;
+    mr_simplifier_free(&s);
+    free(geo);
+    free_ctx(&a);
+    if (st != MR_OK)
+        return st;
+    if (origin)
+        *origin = org;
+    if (stats) {
+        stats->input_vertices = input_vertices;
+        stats->input_triangles = tc;
+        stats->output_vertices = nv;
+        stats->output_triangles = nt;
+        stats->collapses = collapses;
+        stats->max_error = max_error;
+        stats->seconds_setup = t1 - t0;
+        stats->seconds_collapse = t2 - t1;
+        stats->seconds_output = now_seconds() - t2;
+    }
+    return MR_OK;
+}

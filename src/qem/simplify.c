@@ -1,0 +1,677 @@
+/*
+ * Sequential greedy quadric-error simplification (Garland & Heckbert 1997),
+ * with full-edge collapses to the quadric-optimal position or half-edge
+ * collapses as in the filter-priority-queue paper (and OpenMesh's
+ * decimater).
+ *
+ * The queue holds one entry per VERTEX: its cheapest collapse (best[v], the
+ * other end, and its cost as the key). A collapse r -> s (r removed, s
+ * kept) changes only the quadric and position of s, so afterwards:
+ *   - s's candidates are all evaluated anew;
+ *   - for every neighbour w of s only the edge (w, s) changed: when it beats
+ *     w's cached best, it becomes w's best; when w's cached best pointed at
+ *     r or s (whose cost changed) or w had no valid collapse, w's best is
+ *     recomputed over all its edges.
+ * Validity is checked lazily, when a vertex reaches the top: if its best
+ * collapse is invalid there, its best VALID collapse is looked for and the
+ * vertex goes back into the queue with that (higher) cost, or leaves the
+ * queue until its neighbourhood changes.
+ *
+ * Geometry is normalised (centre of the referenced vertices' bounding box
+ * at the origin, diagonal 1), so a cost is the squared RMS distance to the
+ * planes the merged vertex stands for (quadric.h), relative to the
+ * diagonal; max_error and stats.max_error are its square root, scaled to
+ * world units when error_absolute is set.
+ */
+#include "simplify_internal.h"
+
+#include <math.h>
+#include <time.h>
+
+#define NONE MR_COLLAPSE_NONE
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void mr_simplify_options_default(mr_simplify_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->collapse = MR_COLLAPSE_FULL;
+    o->boundary_weight = 1.0;
+    o->max_normal_turn = 60.0 * 3.14159265358979323846 / 180.0;
+}
+
+void mr_simplified_free(mr_simplified *r)
+{
+    if (!r)
+        return;
+    free(r->positions);
+    free(r->indices);
+    free(r->origin);
+    memset(r, 0, sizeof *r);
+}
+
+/* ---- costs ---------------------------------------------------------------- */
+
+static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *q)
+{
+    mr_quadric_load(q, &s->q[v]);
+}
+
+/*
+ * The full collapse of edge (u, w): the merged quadric relative to w's
+ * position, the target relative to w (x) and the cost. Locked (or, with
+ * attributes, seam) ends pin the target.
+ */
+static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint8_t fu = m->flags[u], fw = m->flags[w];
+    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
+    if ((fu & pin) && (fw & pin) && (fu & MR_VF_LOCKED || fw & MR_VF_LOCKED))
+        return INFINITY;
+    mr_quadric qu, qw;
+    load_quadric(s, u, &qu);
+    load_quadric(s, w, &qw);
+    double pu[3], pw[3];
+    mr_collapse_load(m, u, pu);
+    mr_collapse_load(m, w, pw);
+    const double d[3] = {pu[0] - pw[0], pu[1] - pw[1], pu[2] - pw[2]};
+    /* qu measured from pw: qu(x'') = old qu(x'' + pw - pu) */
+    const double back[3] = {-d[0], -d[1], -d[2]};
+    mr_quadric_shift(&qu, back);
+    mr_quadric_add(&qu, &qw);
+    if ((fu & pin) && !(fw & pin)) {
+        x[0] = d[0];
+        x[1] = d[1];
+        x[2] = d[2];
+    } else if ((fw & pin) && !(fu & pin)) {
+        x[0] = x[1] = x[2] = 0;
+    } else if ((fu & pin) && (fw & pin)) {
+        /* two seam (not locked) ends: stay on the seam's edge */
+        const double zero[3] = {0, 0, 0};
+        mr_quadric_segment_optimum(&qu, zero, d, x);
+    } else {
+        const double len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        bool ok = mr_quadric_optimum(&qu, x);
+        if (ok) {
+            /* An optimum far from the edge comes from a barely conditioned
+             * system: do not trust it. */
+            const double e[3] = {x[0] - 0.5 * d[0], x[1] - 0.5 * d[1], x[2] - 0.5 * d[2]};
+            ok = e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= 4 * len2;
+        }
+        if (!ok) {
+            const double zero[3] = {0, 0, 0};
+            mr_quadric_segment_optimum(&qu, zero, d, x);
+        }
+    }
+    double err = mr_quadric_eval(&qu, x);
+    err = qu.w > 0 ? err / qu.w : 0;
+    return err > 0 ? err : 0;
+}
+
+/* The half-edge collapse u -> w: u moves onto w. */
+static double half_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint8_t fu = m->flags[u], fw = m->flags[w];
+    if (fu & MR_VF_LOCKED)
+        return INFINITY;
+    const uint8_t keep = MR_VF_BOUNDARY | MR_VF_SEAM;
+    if ((fu & keep) & ~(fw & keep))
+        return INFINITY;
+    mr_quadric qu, qw;
+    load_quadric(s, u, &qu);
+    load_quadric(s, w, &qw);
+    const double d[3] = {(double)m->pos[3 * w] - m->pos[3 * u],
+                         (double)m->pos[3 * w + 1] - m->pos[3 * u + 1],
+                         (double)m->pos[3 * w + 2] - m->pos[3 * u + 2]};
+    const double wsum = qu.w + qw.w;
+    double err = mr_quadric_eval(&qu, d) + qw.c;
+    err = wsum > 0 ? err / wsum : 0;
+    return err > 0 ? err : 0;
+}
+
+/* Cost of collapsing u along edge (u, w) for u's queue entry. */
+static inline double edge_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
+{
+    double x[3];
+    return s->half ? half_cost(s, u, w) : full_cost(s, u, w, x);
+}
+
+/* ---- candidates ------------------------------------------------------------ */
+
+/*
+ * Calls visit(w) for every neighbour w of u: the vertex after u in each of
+ * its triangles, which covers every inner edge once; plus the vertex before
+ * u when both ends are on a boundary (a boundary edge is seen from one
+ * side only). Some edges may be visited twice, which is harmless.
+ */
+#define FOR_EACH_NEIGHBOUR(s, u, w, ...)                                             \
+    do {                                                                              \
+        const mr_collapse_mesh *m_ = &(s)->m;                                         \
+        const uint32_t *list_ = mr_collapse_vertex_tris(m_, (u));                     \
+        const uint32_t n_ = m_->count[(u)];                                           \
+        const bool ub_ = (m_->flags[(u)] & (MR_VF_BOUNDARY | MR_VF_SEAM)) != 0;       \
+        for (uint32_t i_ = 0; i_ < n_; i_++) {                                        \
+            const uint32_t *t_ = m_->tris + 3 * (size_t)list_[i_];                    \
+            const uint32_t k_ = t_[0] == (u) ? 0 : t_[1] == (u) ? 1 : 2;              \
+            {                                                                         \
+                const uint32_t w = t_[k_ == 2 ? 0 : k_ + 1];                          \
+                __VA_ARGS__                                                           \
+            }                                                                         \
+            if (ub_) {                                                                \
+                const uint32_t w = t_[k_ == 0 ? 2 : k_ - 1];                          \
+                if (m_->flags[w] & (MR_VF_BOUNDARY | MR_VF_SEAM)) {                   \
+                    __VA_ARGS__                                                       \
+                }                                                                     \
+            }                                                                         \
+        }                                                                             \
+    } while (0)
+
+/* u's cheapest collapse (only valid ones when check_valid). Ties go to the
+ * smaller neighbour id. */
+static double best_collapse(mr_simplifier *s, uint32_t u, bool check_valid, uint32_t *best)
+{
+    double best_cost = INFINITY;
+    uint32_t best_w = NONE;
+    FOR_EACH_NEIGHBOUR(s, u, w, {
+        double c = edge_cost(s, u, w);
+        if (c < best_cost || (c == best_cost && c < INFINITY && w < best_w)) {
+            if (!check_valid || mr_simplifier_valid(s, u, w, NULL)) {
+                best_cost = c;
+                best_w = w;
+            }
+        }
+    });
+    *best = best_w;
+    return best_cost;
+}
+
+static void requeue(mr_simplifier *s, uint32_t u, bool check_valid)
+{
+    s->stale[u] = 0;
+    uint32_t w;
+    double c = best_collapse(s, u, check_valid, &w);
+    s->best[u] = w;
+    if (w == NONE)
+        mr_heap_remove(&s->heap, u);
+    else
+        mr_heap_update(&s->heap, u, (float)c);
+}
+
+/* ---- one collapse ---------------------------------------------------------- */
+
+/*
+ * The collapse behind u's queue entry (u, w): which end goes (*r), which
+ * stays (*k) and where it goes (target, normalised). For full collapses a
+ * pinned end stays; else u goes.
+ */
+static double plan(const mr_simplifier *s, uint32_t u, uint32_t w, uint32_t *r, uint32_t *k,
+                   double target[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    if (s->half) {
+        *r = u;
+        *k = w;
+        mr_collapse_load(m, w, target);
+        return half_cost(s, u, w);
+    }
+    double x[3];
+    double c = full_cost(s, u, w, x);
+    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
+    double pw[3];
+    mr_collapse_load(m, w, pw);
+    target[0] = pw[0] + x[0];
+    target[1] = pw[1] + x[1];
+    target[2] = pw[2] + x[2];
+    if ((m->flags[u] & pin) && !(m->flags[w] & pin)) {
+        *r = w;
+        *k = u;
+        mr_collapse_load(m, u, target); /* exactly u's position */
+    } else {
+        *r = u;
+        *k = w;
+    }
+    return c;
+}
+
+bool mr_simplifier_valid(mr_simplifier *s, uint32_t u, uint32_t w, double *cost)
+{
+    uint32_t r, k;
+    double target[3];
+    double c = plan(s, u, w, &r, &k, target);
+    if (cost)
+        *cost = c;
+    if (!(c < INFINITY))
+        return false;
+    if (!mr_collapse_valid(&s->m, r, k, target, &s->limits))
+        return false;
+    return !s->attr_valid || s->attr_valid(s, r, k);
+}
+
+/* Merge r's quadric into k's, both moved to the target's origin. */
+static void merge_quadrics(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    mr_quadric qr, qk;
+    load_quadric(s, r, &qr);
+    load_quadric(s, k, &qk);
+    /* Stored positions are floats: measure from the target as stored. */
+    const double t[3] = {(float)target[0], (float)target[1], (float)target[2]};
+    const double dr[3] = {t[0] - m->pos[3 * r], t[1] - m->pos[3 * r + 1],
+                          t[2] - m->pos[3 * r + 2]};
+    const double dk[3] = {t[0] - m->pos[3 * k], t[1] - m->pos[3 * k + 1],
+                          t[2] - m->pos[3 * k + 2]};
+    mr_quadric_shift(&qr, dr);
+    mr_quadric_shift(&qk, dk);
+    mr_quadric_add(&qk, &qr);
+    mr_quadric_store(&s->q[k], &qk);
+}
+
+/* Refresh the queue around k after a collapse of r into it. */
+static void update_around(mr_simplifier *s, uint32_t r, uint32_t k)
+{
+    mr_heap_remove(&s->heap, r);
+    s->best[r] = NONE;
+    double kbest = INFINITY;
+    uint32_t kw = NONE;
+    const mr_collapse_mesh *m = &s->m;
+    FOR_EACH_NEIGHBOUR(s, k, w, {
+        double x[3];
+        double c, cw;
+        if (s->half) {
+            c = half_cost(s, k, w);
+            cw = half_cost(s, w, k);
+        } else {
+            c = full_cost(s, k, w, x);
+            cw = c;
+        }
+        if (c < kbest || (c == kbest && c < INFINITY && w < kw)) {
+            kbest = c;
+            kw = w;
+        }
+        /* w's other edges are unchanged, so its old key is a lower bound
+         * of them: when the new edge (w, k) beats it, it is w's best;
+         * when w's best was r or k and the new edge costs more, w keeps
+         * its old key as a lower bound and is marked stale -- it is
+         * recomputed only if it reaches the top of the queue, which most
+         * never do before their neighbourhood changes again. */
+        const uint32_t b = s->best[w];
+        if (m->flags[w] & MR_VF_REMOVED) {
+            /* nothing */
+        } else if (b == NONE) {
+            if (cw < INFINITY) {
+                s->best[w] = k;
+                s->stale[w] = 1;
+                mr_heap_update(&s->heap, w, (float)cw);
+            }
+        } else {
+            const float old = mr_heap_key(&s->heap, w);
+            if ((float)cw < old || ((float)cw == old && k < b)) {
+                s->best[w] = k;
+                mr_heap_update(&s->heap, w, (float)cw);
+            } else if (b == r || b == k) {
+                s->stale[w] = 1;
+            }
+        }
+    });
+    s->best[k] = kw;
+    if (kw == NONE)
+        mr_heap_remove(&s->heap, k);
+    else
+        mr_heap_update(&s->heap, k, (float)kbest);
+}
+
+/* ---- setup ----------------------------------------------------------------- */
+
+/* Initial quadric of v, relative to v's position: the planes of its
+ * triangles (all through v) and the constraint planes of its boundary
+ * edges. */
+static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight)
+{
+    const mr_collapse_mesh *m = &s->m;
+    mr_quadric q;
+    mr_quadric_zero(&q);
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    double pv[3];
+    mr_collapse_load(m, v, pv);
+    const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
+    for (uint32_t i = 0; i < m->count[v]; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        double p[3][3], n[3];
+        for (int k = 0; k < 3; k++)
+            mr_collapse_load(m, tri[k], p[k]);
+        const double area = mr_triangle_normal(p[0], p[1], p[2], n);
+        mr_quadric_add_plane_through_origin(&q, n, area);
+        if (!border)
+            continue;
+        const uint32_t k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+        const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
+        for (int e = 0; e < 2; e++) {
+            if (mr_collapse_edge_triangles(m, v, ends[e]) != 1)
+                continue;
+            const double o[3] = {0, 0, 0};
+            double b[3];
+            mr_collapse_load(m, ends[e], b);
+            b[0] -= pv[0];
+            b[1] -= pv[1];
+            b[2] -= pv[2];
+            mr_quadric_add_edge_constraint(&q, o, b, n, boundary_weight);
+        }
+    }
+    mr_quadric_store(&s->q[v], &q);
+}
+
+void mr_simplifier_free(mr_simplifier *s)
+{
+    mr_collapse_mesh_free(&s->m);
+    mr_heap_free(&s->heap);
+    free(s->q);
+    free(s->best);
+    free(s->stale);
+    memset(s, 0, sizeof *s);
+}
+
+static bool is_finite(double x) { return x == x && x - x == 0; }
+
+mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
+                                    size_t input_triangles, mr_error *err)
+{
+    if (!o)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: options are required (a target must be set)");
+    if (!is_finite(o->target_ratio) || o->target_ratio < 0 || o->target_ratio > 1)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target ratio %g is not in (0, 1]", o->target_ratio);
+    if (!is_finite(o->max_error) || o->max_error < 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: max error %g must be a finite distance >= 0",
+                             o->max_error);
+    if (!is_finite(o->boundary_weight) || o->boundary_weight < 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: boundary weight %g must be finite and >= 0",
+                             o->boundary_weight);
+    if (!is_finite(o->max_normal_turn) || o->max_normal_turn <= 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: max normal turn %g must be a positive angle (radians)",
+                             o->max_normal_turn);
+    if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: unknown collapse kind %d", (int)o->collapse);
+    if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
+        o->max_error == 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: no target: set a target ratio, vertex or triangle "
+                             "count, or a max error");
+    if (o->target_triangles > input_triangles)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target of %zu triangles exceeds the input's %zu",
+                             o->target_triangles, input_triangles);
+    if (o->target_vertices > input_vertices)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target of %zu vertices exceeds the input's %zu "
+                             "referenced vertices",
+                             o->target_vertices, input_vertices);
+    return MR_OK;
+}
+
+mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
+                             size_t vertex_count, const uint32_t *indices,
+                             size_t triangle_count, const mr_simplify_options *o,
+                             const uint8_t *extra_flags, mr_error *err)
+{
+    memset(s, 0, sizeof *s);
+    if (!positions && vertex_count)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: positions are NULL");
+    if (!indices && triangle_count)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: indices are NULL");
+    if (stride == 0)
+        stride = 3 * sizeof(float);
+    if (stride < 3 * sizeof(float))
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: stride %zu is below 12 bytes", stride);
+    if (triangle_count == 0)
+        return mr_fail_plain(err, MR_ERR_EMPTY, NULL, "simplify: the mesh has no triangles");
+    mr_status st = mr_check_indices(indices, triangle_count, vertex_count, err);
+    if (st != MR_OK)
+        return st;
+
+    /* Bounding box of the referenced vertices. */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < 3 * triangle_count; i++) {
+        float p[3];
+        memcpy(p, (const char *)positions + (size_t)indices[i] * stride, sizeof p);
+        for (int k = 0; k < 3; k++) {
+            if (!is_finite(p[k]))
+                return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                                     "simplify: vertex %u has a non-finite coordinate",
+                                     indices[i]);
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
+    }
+    double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                       (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!(diag > 0))
+        diag = 1; /* every vertex at one point */
+    for (int k = 0; k < 3; k++)
+        s->centre[k] = 0.5 * (lo[k] + hi[k]);
+    s->diagonal = diag;
+    s->scale = 1.0 / diag;
+
+    st = mr_collapse_mesh_init(&s->m, positions, stride, vertex_count, indices, triangle_count,
+                               s->centre, s->scale, err);
+    if (st != MR_OK)
+        return st;
+    mr_collapse_mesh *m = &s->m;
+    s->input_vertices = m->live_vertices;
+    st = mr_simplify_check_options(o, m->live_vertices, triangle_count, err);
+    if (st != MR_OK) {
+        mr_simplifier_free(s);
+        return st;
+    }
+    s->half = o->collapse == MR_COLLAPSE_HALF;
+    s->limits.half_edge = s->half;
+    double c = cos(o->max_normal_turn);
+    s->limits.min_cos_turn = c > 0 ? c : 0;
+    for (size_t v = 0; v < vertex_count; v++) {
+        if (o->lock_border && (m->flags[v] & MR_VF_BOUNDARY))
+            m->flags[v] |= MR_VF_LOCKED;
+        if (o->vertex_lock && o->vertex_lock[v])
+            m->flags[v] |= MR_VF_LOCKED;
+        if (extra_flags)
+            m->flags[v] |= extra_flags[v];
+    }
+
+    s->q = mr_alloc_array(vertex_count, sizeof *s->q);
+    s->best = mr_alloc_array(vertex_count, sizeof *s->best);
+    s->stale = mr_calloc_array(vertex_count, 1);
+    if (!s->q || !s->best || !s->stale) {
+        mr_simplifier_free(s);
+        return mr_fail_nomem(err, NULL, vertex_count * (sizeof *s->q + 4));
+    }
+    st = mr_heap_init(&s->heap, vertex_count, err);
+    if (st != MR_OK) {
+        mr_simplifier_free(s);
+        return st;
+    }
+    for (size_t v = 0; v < vertex_count; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED))
+            initial_quadric(s, (uint32_t)v, o->boundary_weight);
+    return MR_OK;
+}
+
+/* Fill the queue: every vertex with its best collapse. Pushed in id order,
+ * so the heap -- and everything after -- is deterministic. */
+void mr_simplifier_fill_queue(mr_simplifier *s)
+{
+    for (size_t v = 0; v < s->m.vertex_count; v++) {
+        s->best[v] = NONE;
+        if (s->m.flags[v] & MR_VF_REMOVED)
+            continue;
+        uint32_t w;
+        double c = best_collapse(s, (uint32_t)v, false, &w);
+        s->best[v] = w;
+        if (w != NONE)
+            mr_heap_push(&s->heap, (uint32_t)v, (float)c);
+    }
+}
+
+/* ---- the loop -------------------------------------------------------------- */
+
+size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+{
+    mr_collapse_mesh *m = &s->m;
+    size_t target_v = 0, target_t = 0;
+    if (o->target_ratio > 0)
+        target_v = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
+    if (o->target_vertices > target_v)
+        target_v = o->target_vertices;
+    if (o->target_vertices && o->target_vertices < target_v)
+        target_v = o->target_vertices;
+    if (o->target_ratio > 0 && o->target_vertices) {
+        size_t a = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
+        target_v = a > o->target_vertices ? a : o->target_vertices; /* first reached */
+    }
+    target_t = o->target_triangles;
+    double limit = INFINITY;
+    if (o->max_error > 0) {
+        double rel = o->error_absolute ? o->max_error / s->diagonal : o->max_error;
+        limit = rel * rel;
+    }
+    /* Progress: the share of the collapses the vertex target needs. */
+    size_t planned = m->live_vertices > target_v ? m->live_vertices - target_v : 0;
+    if (target_t && (m->live_triangles - target_t) / 2 < planned)
+        planned = (m->live_triangles - target_t) / 2;
+    size_t next_report = planned / 100 + 1, done = 0;
+    double worst = 0;
+
+    while (!mr_heap_empty(&s->heap)) {
+        if (m->live_vertices <= target_v || (target_t && m->live_triangles <= target_t))
+            break;
+        const uint32_t u = mr_heap_top(&s->heap);
+        if (s->stale[u]) {
+            requeue(s, u, false);
+            continue;
+        }
+        const uint32_t w = s->best[u];
+        uint32_t r, k;
+        double target[3];
+        const double cost = plan(s, u, w, &r, &k, target);
+        if (cost > limit)
+            break;
+        if (!mr_collapse_valid(m, r, k, target, &s->limits) ||
+            (s->attr_valid && !s->attr_valid(s, r, k))) {
+            requeue(s, u, true);
+            continue;
+        }
+        if (s->attr_apply)
+            s->attr_apply(s, r, k, target);
+        merge_quadrics(s, r, k, target);
+        mr_collapse_reserve(m, r, k);
+        mr_collapse_apply(m, r, k, target);
+        update_around(s, r, k);
+        worst = cost > worst ? cost : worst;
+        done++;
+        if (o->progress && done >= next_report) {
+            o->progress(planned ? (double)done / (double)planned : 1.0, o->progress_user);
+            next_report += planned / 100 + 1;
+        }
+    }
+    if (o->progress)
+        o->progress(1.0, o->progress_user);
+    double e = sqrt(worst);
+    *max_error = o->error_absolute ? e * s->diagonal : e;
+    return done;
+}
+
+/* ---- output ---------------------------------------------------------------- */
+
+mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
+                               mr_simplified *out, mr_error *err)
+{
+    const mr_collapse_mesh *m = &s->m;
+    if (stride == 0)
+        stride = 3 * sizeof(float);
+    const size_t vc = m->vertex_count, nv = m->live_vertices, nt = m->live_triangles;
+    uint32_t *remap = mr_alloc_array(vc, sizeof *remap);
+    out->positions = mr_alloc_array(3 * nv, sizeof *out->positions);
+    out->indices = mr_alloc_array(3 * nt, sizeof *out->indices);
+    out->origin = mr_alloc_array(nv, sizeof *out->origin);
+    if (!remap || !out->positions || !out->indices || !out->origin) {
+        free(remap);
+        mr_simplified_free(out);
+        return mr_fail_nomem(err, NULL, nv * 16 + nt * 12);
+    }
+    size_t n = 0;
+    for (size_t v = 0; v < vc; v++) {
+        remap[v] = NONE;
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        remap[v] = (uint32_t)n;
+        out->origin[n] = (uint32_t)v;
+        float *p = out->positions + 3 * n;
+        if (m->flags[v] & MR_VF_MOVED) {
+            for (int k = 0; k < 3; k++)
+                p[k] = (float)((double)m->pos[3 * v + k] * s->diagonal + s->centre[k]);
+        } else {
+            memcpy(p, (const char *)positions + v * stride, 3 * sizeof(float));
+        }
+        n++;
+    }
+    size_t t = 0;
+    for (size_t i = 0; i < m->triangle_count; i++) {
+        const uint32_t *tri = m->tris + 3 * i;
+        if (tri[0] == NONE)
+            continue;
+        for (int k = 0; k < 3; k++)
+            out->indices[3 * t + k] = remap[tri[k]];
+        t++;
+    }
+    free(remap);
+    out->vertex_count = n;
+    out->triangle_count = t;
+    return MR_OK;
+}
+
+mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count,
+                      const uint32_t *indices, size_t triangle_count,
+                      const mr_simplify_options *options, mr_simplified *out, mr_error *err)
+{
+    if (!out)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: no output");
+    memset(out, 0, sizeof *out);
+    const double t0 = now_seconds();
+    mr_simplifier s;
+    mr_status st = mr_simplifier_init(&s, positions, stride, vertex_count, indices,
+                                      triangle_count, options, NULL, err);
+    if (st != MR_OK)
+        return st;
+    mr_simplifier_fill_queue(&s);
+    const double t1 = now_seconds();
+    double max_error;
+    size_t collapses = mr_simplifier_run(&s, options, &max_error);
+    const double t2 = now_seconds();
+    st = mr_simplifier_output(&s, positions, stride, out, err);
+    const size_t input_vertices = s.input_vertices;
+    mr_simplifier_free(&s);
+    if (st != MR_OK)
+        return st;
+    const double t3 = now_seconds();
+    mr_simplify_stats *stats = &out->stats;
+    stats->input_vertices = input_vertices;
+    stats->input_triangles = triangle_count;
+    stats->output_vertices = out->vertex_count;
+    stats->output_triangles = out->triangle_count;
+    stats->collapses = collapses;
+    stats->max_error = max_error;
+    stats->seconds_setup = t1 - t0;
+    stats->seconds_collapse = t2 - t1;
+    stats->seconds_output = t3 - t2;
+    return MR_OK;
+}

@@ -1,0 +1,117 @@
+/* The indexed min-heap against a brute-force model. */
+#include "testutil.h"
+#include "qem/heap.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static uint64_t rng_state = 88172645463325252ull;
+static uint32_t rnd(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (uint32_t)rng_state;
+}
+
+/* The model's minimum: smallest key, then smallest id. */
+static uint32_t model_min(const float *key, const uint8_t *in, uint32_t n)
+{
+    uint32_t best = MR_HEAP_NONE;
+    for (uint32_t i = 0; i < n; i++)
+        if (in[i] && (best == MR_HEAP_NONE || key[i] < key[best]))
+            best = i;
+    return best;
+}
+
+static void check_invariant(const mr_heap *h)
+{
+    for (uint32_t i = 1; i < h->size; i++)
+        assert_true(h->items[(i - 1) / 2] <= h->items[i]);
+    for (uint32_t i = 0; i < h->size; i++)
+        assert_int_equal(h->slot[(uint32_t)h->items[i]], i);
+}
+
+static void test_random_operations(void **state)
+{
+    (void)state;
+    enum { N = 2000, OPS = 100000 };
+    mr_heap h;
+    assert_int_equal(mr_heap_init(&h, N, NULL), MR_OK);
+    float key[N];
+    uint8_t in[N] = {0};
+    uint32_t count = 0;
+    for (int op = 0; op < OPS; op++) {
+        uint32_t id = rnd() % N;
+        /* few distinct keys, so ties are common */
+        float k = (float)(rnd() % 64) * 0.25f;
+        switch (rnd() % 4) {
+        case 0:
+            if (!in[id]) {
+                mr_heap_push(&h, id, k);
+                in[id] = 1;
+                key[id] = k;
+                count++;
+            }
+            break;
+        case 1:
+            count += !in[id];
+            mr_heap_update(&h, id, k);
+            in[id] = 1;
+            key[id] = k;
+            break;
+        case 2:
+            count -= in[id];
+            mr_heap_remove(&h, id);
+            in[id] = 0;
+            break;
+        default:
+            if (count) {
+                uint32_t want = model_min(key, in, N);
+                assert_int_equal(mr_heap_top(&h), want);
+                assert_true(mr_heap_top_key(&h) == key[want]);
+                assert_int_equal(mr_heap_pop(&h), want);
+                in[want] = 0;
+                count--;
+            }
+        }
+        assert_int_equal(h.size, count);
+        assert_int_equal(mr_heap_contains(&h, id), in[id]);
+        if (in[id])
+            assert_true(mr_heap_key(&h, id) == key[id]);
+        if (op % 997 == 0)
+            check_invariant(&h);
+    }
+    /* Drain: the order is by key, then id. */
+    float last_key = -INFINITY;
+    uint32_t last_id = 0;
+    while (!mr_heap_empty(&h)) {
+        float k = mr_heap_top_key(&h);
+        uint32_t id = mr_heap_pop(&h);
+        assert_true(k > last_key || (k == last_key && id > last_id));
+        last_key = k;
+        last_id = id;
+    }
+    mr_heap_free(&h);
+}
+
+static void test_key_order(void **state)
+{
+    (void)state;
+    const float keys[] = {-INFINITY, -3.5f, -0.0f, 0.0f, 1e-30f, 2.0f, 1e30f, INFINITY};
+    for (size_t i = 1; i < sizeof keys / sizeof *keys; i++)
+        assert_true(mr_heap_key_bits(keys[i - 1]) <= mr_heap_key_bits(keys[i]));
+    for (size_t i = 0; i < sizeof keys / sizeof *keys; i++)
+        assert_true(mr_heap_bits_key(mr_heap_key_bits(keys[i])) == keys[i]);
+    /* NaN sorts as +inf */
+    assert_true(mr_heap_key_bits(NAN) == mr_heap_key_bits(INFINITY));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_random_operations),
+        cmocka_unit_test(test_key_order),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,577 @@
+/* Error metrics: point-triangle distance, the hierarchies, mr_compare,
+ * mr_vertex_similarity and the compare command. */
+#include "testutil.h"
+#include "metrics/distance.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+static char cmd[4096];
+
+static const char *fmt(const char *f, ...)
+{
+    va_list ap;
+    va_start(ap, f);
+    vsnprintf(cmd, sizeof cmd, f, ap);
+    va_end(ap);
+    return cmd;
+}
+
+static void assert_near(double got, double want, double tol)
+{
+    if (!(fabs(got - want) <= tol)) {
+        print_error("got %.17g, want %.17g (tolerance %.3g)\n", got, want, tol);
+        fail();
+    }
+}
+
+static mr_mesh generated(mr_generator kind, size_t triangles, uint64_t seed)
+{
+    mr_mesh m;
+    mr_error err;
+    mr_mesh_init(&m);
+    if (mr_generate(kind, triangles, seed, &m, &err) != MR_OK) {
+        print_error("mr_generate: %s\n", err.message);
+        fail();
+    }
+    return m;
+}
+
+static mr_compare_result compare_meshes(const mr_mesh *a, const mr_mesh *b, size_t samples,
+                                        int threads)
+{
+    mr_compare_options o;
+    mr_compare_options_default(&o);
+    o.samples = samples;
+    o.threads = threads;
+    mr_compare_result r;
+    mr_error err;
+    if (mr_compare(a->positions, a->vertex_count, a->indices, a->triangle_count, b->positions,
+                   b->vertex_count, b->indices, b->triangle_count, &o, &r, &err) != MR_OK) {
+        print_error("mr_compare: %s\n", err.message);
+        fail();
+    }
+    return r;
+}
+
+/* Deterministic uniform numbers for the tests. */
+static double test_random(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(*state >> 11) * 0x1p-53;
+}
+
+/* ---- point to triangle ---------------------------------------------------- */
+
+typedef struct tri_case {
+    double p[3], q[3], d2;
+} tri_case;
+
+static void check_case(const double a[3], const double b[3], const double c[3],
+                       const tri_case *tc)
+{
+    double q[3];
+    double d2 = mr_point_triangle_dist2(tc->p, a, b, c, q);
+    assert_near(d2, tc->d2, 1e-12);
+    for (int k = 0; k < 3; k++)
+        assert_near(q[k], tc->q[k], 1e-12);
+    /* NULL closest is allowed and gives the same distance */
+    assert_true(mr_point_triangle_dist2(tc->p, a, b, c, NULL) == d2);
+}
+
+static void test_point_triangle_regions(void **state)
+{
+    (void)state;
+    const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    const tri_case cases[] = {
+        {{-1, -1, 0}, {0, 0, 0}, 2},         /* vertex a */
+        {{2, -1, 1}, {1, 0, 0}, 3},          /* vertex b */
+        {{-0.5, 2, 3}, {0, 1, 0}, 10.25},    /* vertex c */
+        {{0.5, -1, 2}, {0.5, 0, 0}, 5},      /* edge ab */
+        {{-1, 0.5, -2}, {0, 0.5, 0}, 5},     /* edge ac */
+        {{1, 1, 1}, {0.5, 0.5, 0}, 1.5},     /* edge bc */
+        {{0.25, 0.25, -3}, {0.25, 0.25, 0}, 9}, /* face, below */
+        {{0.2, 0.3, 0}, {0.2, 0.3, 0}, 0},   /* in the face */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        check_case(a, b, c, &cases[i]);
+        /* the same answers whatever corner comes first */
+        check_case(b, c, a, &cases[i]);
+        check_case(c, a, b, &cases[i]);
+        check_case(a, c, b, &cases[i]);
+    }
+    /* a vertex is exactly at distance 0 from its triangle */
+    assert_true(mr_point_triangle_dist2(b, a, b, c, NULL) == 0);
+    assert_true(mr_point_triangle_dist2(c, a, b, c, NULL) == 0);
+}
+
+static void test_point_triangle_degenerate(void **state)
+{
+    (void)state;
+    /* collinear, with the middle point last: the segment a b */
+    const double a[3] = {0, 0, 0}, b[3] = {2, 0, 0}, c[3] = {1, 0, 0};
+    const tri_case line[] = {
+        {{1, 1, 0}, {1, 0, 0}, 1},
+        {{1.5, 0, -2}, {1.5, 0, 0}, 4},
+        {{3, 0, 0}, {2, 0, 0}, 1},
+        {{-1, 1, 0}, {0, 0, 0}, 2},
+    };
+    for (size_t i = 0; i < sizeof line / sizeof *line; i++) {
+        check_case(a, b, c, &line[i]);
+        check_case(c, a, b, &line[i]);
+    }
+    /* two coincident corners: the segment to the third */
+    const double s0[3] = {0, 0, 0}, s1[3] = {0, 0, 2};
+    const tri_case seg = {{1, 0, 1}, {0, 0, 1}, 1};
+    check_case(s0, s0, s1, &seg);
+    check_case(s0, s1, s0, &seg);
+    check_case(s1, s0, s0, &seg);
+    /* all three coincident: a point */
+    const double pt[3] = {1, 1, 1};
+    const tri_case point = {{1, 1, 3}, {1, 1, 1}, 4};
+    check_case(pt, pt, pt, &point);
+    /* segment helper */
+    double q[3];
+    assert_near(mr_point_segment_dist2((double[3]){0, 5, 0}, s0, s0, q), 25, 0);
+}
+
+/* ---- hierarchies against brute force --------------------------------------- */
+
+static double brute_triangle(const mr_mesh *m, const double p[3])
+{
+    double best = INFINITY;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        double v[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                v[k][j] = m->positions[3 * m->indices[3 * t + k] + j];
+        double d = mr_point_triangle_dist2(p, v[0], v[1], v[2], NULL);
+        best = d < best ? d : best;
+    }
+    return best;
+}
+
+static void random_point(uint64_t *rng, double p[3], double extent)
+{
+    for (int k = 0; k < 3; k++)
+        p[k] = (2 * test_random(rng) - 1) * extent;
+}
+
+static void test_bvh_vs_brute_force(void **state)
+{
+    (void)state;
+    mr_mesh m = generated(MR_GEN_TORUS, 3000, 7);
+    mr_tri_bvh t;
+    mr_error err;
+    assert_int_equal(mr_tri_bvh_build(&t, m.positions, m.indices, m.triangle_count, 0, &err),
+                     MR_OK);
+    uint64_t rng = 12345;
+    uint32_t hint = MR_NO_HINT;
+    for (int i = 0; i < 10000; i++) {
+        double p[3], q[3];
+        /* mostly near the surface, some far away */
+        random_point(&rng, p, i % 10 == 0 ? 5.0 : 1.5);
+        uint32_t tri;
+        /* alternate: no hint, the previous answer, a random triangle */
+        uint32_t h = i % 3 == 0   ? MR_NO_HINT
+                     : i % 3 == 1 ? hint
+                                  : (uint32_t)(test_random(&rng) * m.triangle_count);
+        double d = mr_tri_bvh_nearest(&t, p, h, &tri, q);
+        double want = brute_triangle(&m, p);
+        assert_near(d, want, 1e-12 * (1 + want));
+        assert_true(tri < m.triangle_count);
+        /* the reported triangle and closest point agree with the distance */
+        double v[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                v[k][j] = m.positions[3 * m.indices[3 * tri + k] + j];
+        assert_true(mr_point_triangle_dist2(p, v[0], v[1], v[2], NULL) == d);
+        double dq = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                    (p[2] - q[2]) * (p[2] - q[2]);
+        assert_near(dq, d, 1e-12 * (1 + d));
+        hint = tri;
+    }
+    mr_tri_bvh_free(&t);
+
+    /* nearest vertex, over the odd vertices only (ids map through the list) */
+    size_t n = m.vertex_count / 2;
+    uint32_t *ids = malloc(n * sizeof *ids);
+    for (size_t i = 0; i < n; i++)
+        ids[i] = (uint32_t)(2 * i + 1);
+    mr_point_bvh pb;
+    assert_int_equal(mr_point_bvh_build(&pb, m.positions, ids, n, 1, &err), MR_OK);
+    for (int i = 0; i < 10000; i++) {
+        double p[3];
+        random_point(&rng, p, i % 10 == 0 ? 5.0 : 1.5);
+        double want = INFINITY;
+        for (size_t j = 0; j < n; j++) {
+            const float *f = m.positions + 3 * ids[j];
+            double d = (p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1]) +
+                       (p[2] - f[2]) * (p[2] - f[2]);
+            want = d < want ? d : want;
+        }
+        uint32_t id;
+        double d = mr_point_bvh_nearest(&pb, p, i % 2 ? (uint32_t)(i % n) : MR_NO_HINT, &id);
+        assert_true(d == want);
+        assert_true(id < n);
+    }
+    mr_point_bvh_free(&pb);
+    free(ids);
+    mr_mesh_free(&m);
+}
+
+static void test_bvh_tiny_and_flat(void **state)
+{
+    (void)state;
+    /* one triangle; and many identical triangles (no split possible) */
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    uint32_t idx[3 * 100];
+    for (int i = 0; i < 300; i++)
+        idx[i] = (uint32_t)(i % 3);
+    mr_error err;
+    for (size_t n = 1; n <= 100; n += 99) {
+        mr_tri_bvh t;
+        assert_int_equal(mr_tri_bvh_build(&t, pos, idx, n, 0, &err), MR_OK);
+        uint32_t tri;
+        double d = mr_tri_bvh_nearest(&t, (double[3]){0.25, 0.25, 2}, MR_NO_HINT, &tri, NULL);
+        assert_near(d, 4, 0);
+        assert_true(tri < n);
+        mr_tri_bvh_free(&t);
+    }
+    mr_bvh b;
+    assert_int_equal(mr_bvh_build(&b, pos, pos, 0, 0, &err), MR_ERR_INVALID_ARGUMENT);
+}
+
+/* ---- mr_compare ------------------------------------------------------------- */
+
+/* Two squares [-1, 1]^2, at z = 0 and z = d. */
+static void test_parallel_planes(void **state)
+{
+    (void)state;
+    const double d = 0.375;
+    float a[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    float b[12];
+    memcpy(b, a, sizeof a);
+    for (int i = 0; i < 4; i++)
+        b[3 * i + 2] = (float)d;
+    uint32_t idx[] = {0, 1, 2, 0, 2, 3};
+    mr_compare_options o;
+    mr_compare_options_default(&o);
+    o.samples = 20000;
+    mr_compare_result r;
+    mr_error err;
+    assert_int_equal(mr_compare(a, 4, idx, 2, b, 4, idx, 2, &o, &r, &err), MR_OK);
+    const double diag = sqrt(8.0);
+    assert_near(r.hausdorff, d, 1e-6 * d);
+    assert_near(r.rms, d, 1e-6 * d);
+    assert_near(r.mean, d, 1e-6 * d);
+    assert_near(r.ref_to_test_max, d, 1e-6 * d);
+    assert_near(r.test_to_ref_rms, d, 1e-6 * d);
+    assert_near(r.modified_hausdorff, d, 1e-6 * d);
+    assert_near(r.diagonal, diag, 1e-12);
+    assert_near(r.hausdorff_rel, d / diag, 1e-6 * d / diag);
+    assert_near(r.rms_rel, d / diag, 1e-6 * d / diag);
+    assert_near(r.mean_rel, d / diag, 1e-6 * d / diag);
+    assert_near(r.modified_hausdorff_rel, d / diag, 1e-6 * d / diag);
+    assert_int_equal(r.ref_points, 4 + 20000);
+    assert_int_equal(r.test_points, 4 + 20000);
+}
+
+/*
+ * A mesh against itself. Vertices are at distance exactly 0 (the region
+ * tests return the corner itself). A sample is computed in double from
+ * its triangle's corners and lies on that triangle up to rounding, so its
+ * distance is not exactly 0 but within 1e-9 of the diagonal (in practice
+ * ~1e-16): that is what is asserted.
+ */
+static void test_self_compare(void **state)
+{
+    (void)state;
+    mr_mesh m = generated(MR_GEN_SCAN, 20000, 3);
+    mr_compare_result r = compare_meshes(&m, &m, 0, 0);
+    assert_true(r.hausdorff == 0 && r.rms == 0 && r.mean == 0);
+    assert_true(r.modified_hausdorff == 0);
+    r = compare_meshes(&m, &m, 200000, 0);
+    assert_true(r.hausdorff <= 1e-9 * r.diagonal);
+    assert_true(r.rms <= 1e-9 * r.diagonal);
+    assert_true(r.modified_hausdorff == 0);
+    assert_true(r.diagonal > 50);
+    mr_mesh_free(&m);
+}
+
+static void test_concentric_spheres(void **state)
+{
+    (void)state;
+    mr_mesh a = generated(MR_GEN_SPHERE, 20000, 0);
+    mr_mesh b;
+    mr_error err;
+    mr_mesh_init(&b);
+    assert_int_equal(mr_mesh_copy(&b, &a, &err), MR_OK);
+    for (size_t i = 0; i < 3 * b.vertex_count; i++)
+        b.positions[i] *= 1.1f;
+    mr_compare_result r = compare_meshes(&a, &b, 100000, 0);
+    /* the chords of a 20k-triangle unit sphere sag by about 1e-4 */
+    assert_near(r.hausdorff, 0.1, 2e-3);
+    assert_near(r.rms, 0.1, 2e-3);
+    assert_true(r.ref_to_test_max <= 0.1 + 1e-6);
+    /* nearest vertices: each vertex's scaled copy, 0.1 away */
+    assert_near(r.modified_hausdorff, 0.1, 1e-5);
+    mr_mesh_free(&a);
+    mr_mesh_free(&b);
+}
+
+static void test_thread_determinism(void **state)
+{
+    (void)state;
+    mr_mesh a = generated(MR_GEN_SCAN, 30000, 1);
+    mr_mesh b = generated(MR_GEN_SCAN, 8000, 1);
+    mr_compare_result r1 = compare_meshes(&a, &b, 100000, 1);
+    mr_compare_result r3 = compare_meshes(&a, &b, 100000, 3);
+#ifdef _OPENMP
+    int saved = omp_get_max_threads();
+    omp_set_num_threads(2);
+    mr_compare_result r2 = compare_meshes(&a, &b, 100000, 0);
+    omp_set_num_threads(1);
+    mr_compare_result r0 = compare_meshes(&a, &b, 100000, 0);
+    omp_set_num_threads(saved);
+    assert_memory_equal(&r1, &r2, sizeof r1);
+    assert_memory_equal(&r1, &r0, sizeof r1);
+#endif
+    assert_memory_equal(&r1, &r3, sizeof r1);
+    assert_true(r1.hausdorff > 0 && r1.rms > 0 && r1.rms <= r1.hausdorff);
+    assert_true(r1.mean <= r1.rms);
+    /* another seed gives other samples, hence (slightly) other figures */
+    mr_compare_options o;
+    mr_compare_options_default(&o);
+    assert_int_equal(o.samples, 1000000);
+    o.samples = 100000;
+    o.seed = 99;
+    mr_compare_result rs;
+    mr_error err;
+    assert_int_equal(mr_compare(a.positions, a.vertex_count, a.indices, a.triangle_count,
+                                b.positions, b.vertex_count, b.indices, b.triangle_count, &o,
+                                &rs, &err),
+                     MR_OK);
+    assert_true(rs.rms != r1.rms);
+    assert_near(rs.rms, r1.rms, 0.05 * r1.rms);
+    mr_mesh_free(&a);
+    mr_mesh_free(&b);
+}
+
+static void test_modified_hausdorff_translation(void **state)
+{
+    (void)state;
+    mr_mesh a = generated(MR_GEN_SPHERE, 5000, 0);
+    mr_mesh b;
+    mr_error err;
+    mr_mesh_init(&b);
+    assert_int_equal(mr_mesh_copy(&b, &a, &err), MR_OK);
+    const float shift[3] = {0.006f, -0.008f, 0}; /* length 0.01; edges are ~0.05 */
+    for (size_t i = 0; i < b.vertex_count; i++)
+        for (int k = 0; k < 3; k++)
+            b.positions[3 * i + k] += shift[k];
+    mr_compare_result r = compare_meshes(&a, &b, 1000, 0);
+    assert_near(r.modified_hausdorff, 0.01, 1e-4 * 0.01);
+    assert_near(r.modified_hausdorff_rel, 0.01 / r.diagonal, 1e-4 * 0.01 / r.diagonal);
+    /* the surfaces are closer than the vertices */
+    assert_true(r.hausdorff <= 0.01 + 1e-6);
+    mr_mesh_free(&a);
+    mr_mesh_free(&b);
+}
+
+static void test_compare_bad_input(void **state)
+{
+    (void)state;
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    uint32_t idx[] = {0, 1, 2};
+    uint32_t bad[] = {0, 1, 2, 0, 3, 1};
+    mr_compare_result r;
+    mr_error err;
+    assert_int_equal(mr_compare(pos, 3, idx, 1, pos, 3, idx, 1, NULL, NULL, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    assert_int_equal(mr_compare(NULL, 3, idx, 1, pos, 3, idx, 1, NULL, &r, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "reference mesh");
+    assert_int_equal(mr_compare(pos, 3, idx, 1, pos, 3, NULL, 1, NULL, &r, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "test mesh");
+    assert_int_equal(mr_compare(pos, 3, idx, 0, pos, 3, idx, 1, NULL, &r, &err), MR_ERR_EMPTY);
+    tu_assert_contains(err.message, "reference mesh has no triangles");
+    assert_int_equal(mr_compare(pos, 3, idx, 1, pos, 3, idx, 0, NULL, &r, &err), MR_ERR_EMPTY);
+    tu_assert_contains(err.message, "test mesh has no triangles");
+    assert_int_equal(mr_compare(pos, 3, idx, 1, pos, 3, bad, 2, NULL, &r, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "test mesh: triangle 1: vertex index 3 is out of range");
+    float nan_pos[9];
+    memcpy(nan_pos, pos, sizeof pos);
+    nan_pos[4] = NAN;
+    assert_int_equal(mr_compare(nan_pos, 3, idx, 1, pos, 3, idx, 1, NULL, &r, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "reference mesh: vertex 1 has a non-finite coordinate");
+    /* NULL err is fine */
+    assert_int_equal(mr_compare(pos, 3, idx, 0, pos, 3, idx, 1, NULL, &r, NULL), MR_ERR_EMPTY);
+    /* all-degenerate triangles: no area, vertices only; an unreferenced
+     * far vertex does not count */
+    float flat[] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 100, 100, 100};
+    mr_compare_options o;
+    mr_compare_options_default(&o);
+    o.samples = 1000;
+    assert_int_equal(mr_compare(flat, 4, idx, 1, pos, 3, idx, 1, &o, &r, &err), MR_OK);
+    assert_int_equal(r.ref_points, 3);
+    assert_int_equal(r.test_points, 3 + 1000);
+    assert_near(r.diagonal, 2, 0);
+    assert_near(r.ref_to_test_max, 1, 1e-12); /* (2, 0, 0) to the triangle */
+}
+
+/* ---- vertex similarity -------------------------------------------------------- */
+
+static void test_vertex_similarity(void **state)
+{
+    (void)state;
+    const float pa[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const uint32_t oa[] = {10, 20, 30, 40};
+    /* identical */
+    assert_near(mr_vertex_similarity(pa, oa, 4, pa, oa, 4), 1.0, 0);
+    /* disjoint origins */
+    const uint32_t ob[] = {11, 21, 31, 41};
+    assert_near(mr_vertex_similarity(pa, oa, 4, pa, ob, 4), 0.0, 0);
+    /* b in another order, one vertex moved, one missing */
+    const float pb[] = {0, 0, 1, 0, 1, 0, 1, 0, 0.5f};
+    const uint32_t oc[] = {40, 30, 20};
+    assert_near(mr_vertex_similarity(pa, oa, 4, pb, oc, 3), 0.5, 0);
+    /* -0 is not bitwise +0 */
+    const float pz[] = {-0.0f, 0, 0};
+    assert_near(mr_vertex_similarity(pa, oa, 1, pz, oa, 1), 0.0, 0);
+    /* a share of a's vertices: asymmetric */
+    assert_near(mr_vertex_similarity(pb, oc, 3, pa, oa, 4), 2.0 / 3.0, 1e-15);
+    /* empty and bad input */
+    assert_near(mr_vertex_similarity(NULL, NULL, 0, NULL, NULL, 0), 1.0, 0);
+    assert_near(mr_vertex_similarity(NULL, NULL, 0, pa, oa, 4), 0.0, 0);
+    assert_near(mr_vertex_similarity(pa, oa, 4, NULL, NULL, 0), 0.0, 0);
+    assert_true(isnan(mr_vertex_similarity(NULL, oa, 4, pa, oa, 4)));
+}
+
+static void test_vertex_similarity_large(void **state)
+{
+    (void)state;
+    mr_mesh m = generated(MR_GEN_SPHERE, 200000, 0);
+    const size_t n = m.vertex_count;
+    uint32_t *oa = malloc(n * sizeof *oa), *ob = malloc(n * sizeof *ob);
+    float *pb = malloc(3 * n * sizeof *pb);
+    /* b: the same vertices reversed, every tenth one moved */
+    size_t moved = 0;
+    for (size_t i = 0; i < n; i++) {
+        oa[i] = (uint32_t)(3 * i);
+        ob[n - 1 - i] = (uint32_t)(3 * i);
+        memcpy(pb + 3 * (n - 1 - i), m.positions + 3 * i, 3 * sizeof *pb);
+        if (i % 10 == 0) {
+            pb[3 * (n - 1 - i)] += 1;
+            moved++;
+        }
+    }
+    double s = mr_vertex_similarity(m.positions, oa, n, pb, ob, n);
+    assert_near(s, (double)(n - moved) / (double)n, 1e-15);
+    free(oa);
+    free(ob);
+    free(pb);
+    mr_mesh_free(&m);
+}
+
+/* ---- the command ---------------------------------------------------------------- */
+
+static void test_compare_cli(void **state)
+{
+    (void)state;
+    const char *a = tu_tmp_path("cmp-a.ply"), *b = tu_tmp_path("cmp-b.obj");
+    assert_int_equal(tu_run_cli(fmt("generate scan --triangles 20k --seed 1 -o '%s' -q", a),
+                                NULL),
+                     0);
+    assert_int_equal(tu_run_cli(fmt("generate scan --triangles 5k --seed 1 -o '%s' -q", b),
+                                NULL),
+                     0);
+    char *out;
+    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' --samples 50k", a, b), &out), 0);
+    tu_assert_contains(out, "hausdorff");
+    tu_assert_contains(out, "reference -> test max");
+    tu_assert_contains(out, "modified hausdorff");
+    tu_assert_contains(out, "% of diagonal");
+    tu_assert_contains(out, "50,000 samples each, seed 1");
+    free(out);
+
+    assert_int_equal(tu_run_cli(fmt("--threads 1 compare --json '%s' '%s' --samples=50k", a, b),
+                                &out),
+                     0);
+    tu_assert_contains(out, "{\"reference\": ");
+    tu_assert_contains(out, "\"hausdorff\": ");
+    tu_assert_contains(out, "\"modified_hausdorff_rel\": ");
+    tu_assert_contains(out, "\"samples\": 50000");
+    /* the figures do not depend on the thread count */
+    char *h1 = strstr(out, "\"hausdorff\": ");
+    char *out2;
+    assert_int_equal(tu_run_cli(fmt("--threads 2 compare --json '%s' '%s' --samples=50k", a, b),
+                                &out2),
+                     0);
+    char *h2 = strstr(out2, "\"hausdorff\": ");
+    assert_non_null(h2);
+    assert_memory_equal(h1, h2, strstr(h1, "\"threads\"") - h1);
+    free(out);
+    free(out2);
+
+    /* a mesh against itself */
+    assert_int_equal(tu_run_cli(fmt("compare --json '%s' '%s' --samples 0", a, a), &out), 0);
+    tu_assert_contains(out, "\"hausdorff\": 0,");
+    free(out);
+
+    /* bad input: exit 1 with one clear message */
+    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s'", a, tu_tmp_path("no-such.ply")), &out),
+                     1);
+    tu_assert_contains(out, "no-such.ply");
+    free(out);
+    const char *cloud = tu_tmp_path("cmp-cloud.xyz");
+    tu_write_file(cloud, "0 0 0\n1 0 0\n0 1 0\n", 18);
+    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s'", a, cloud), &out), 1);
+    tu_assert_contains(out, "has no triangles");
+    free(out);
+
+    /* usage errors: exit 2 */
+    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' --frob", a, b), &out), 2);
+    tu_assert_contains(out, "unknown option '--frob'");
+    free(out);
+    assert_int_equal(tu_run_cli(fmt("compare '%s'", a), &out), 2);
+    tu_assert_contains(out, "needs two files");
+    free(out);
+    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' --samples lots", a, b), &out), 2);
+    tu_assert_contains(out, "--samples needs a count");
+    free(out);
+    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' '%s'", a, b, a), &out), 2);
+    free(out);
+    assert_int_equal(tu_run_cli("compare --help", &out), 0);
+    tu_assert_contains(out, "usage: meshreduce compare REF TEST");
+    free(out);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_point_triangle_regions),
+        cmocka_unit_test(test_point_triangle_degenerate),
+        cmocka_unit_test(test_bvh_vs_brute_force),
+        cmocka_unit_test(test_bvh_tiny_and_flat),
+        cmocka_unit_test(test_parallel_planes),
+        cmocka_unit_test(test_self_compare),
+        cmocka_unit_test(test_concentric_spheres),
+        cmocka_unit_test(test_thread_determinism),
+        cmocka_unit_test(test_modified_hausdorff_translation),
+        cmocka_unit_test(test_compare_bad_input),
+        cmocka_unit_test(test_vertex_similarity),
+        cmocka_unit_test(test_vertex_similarity_large),
+        cmocka_unit_test(test_compare_cli),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
