@@ -168,7 +168,60 @@ static void test_demo_small(void **state)
     tu_assert_contains(out, "generate scan");
     tu_assert_contains(out, "identical to what was written");
     tu_assert_contains(out, "closed, manifold, 1 component, euler 2");
+    tu_assert_contains(out, "simplify to 10% (QEM)");
+    tu_assert_contains(out, "hausdorff");
     free(out);
+}
+
+static void test_simplify_cli(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("cli-simp-in.ply");
+    const char *out_path = tu_tmp_path("cli-simp-out.obj");
+    assert_int_equal(tu_run_cli(fmt("generate sphere --triangles 20k -o '%s' -q", in), NULL), 0);
+    char *out;
+    assert_int_equal(tu_run_cli(fmt("simplify '%s' -o '%s' --ratio 10%% --json", in, out_path),
+                                &out), 0);
+    tu_assert_contains(out, "\"output_vertices\": 1024");
+    tu_assert_contains(out, "\"input_vertices\": 10242");
+    free(out);
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(mr_mesh_read(out_path, NULL, &m, &err), MR_OK);
+    assert_int_equal(m.vertex_count, 1024);
+    mr_mesh_free(&m);
+    assert_int_equal(tu_run_cli(fmt("simplify '%s' -o '%s' --triangles 500 --collapse half "
+                                    "--stats", in, out_path), &out), 0);
+    tu_assert_contains(out, "triangles  20,480 -> 500\n");
+    free(out);
+
+    /* bad targets: usage errors, nothing written */
+    const char *never = tu_tmp_path("cli-simp-never.obj");
+    struct {
+        const char *args, *message;
+        int status;
+    } bad[] = {
+        {"--ratio 0", "--ratio needs a fraction in (0, 1]", 2},
+        {"--ratio 1.5", "--ratio needs a fraction", 2},
+        {"--ratio 150%", "--ratio needs a fraction", 2},
+        {"", "no target given", 2},
+        {"--collapse quarter --ratio 0.5", "--collapse is full or half", 2},
+        {"--triangles 30000", "target of 30000 triangles exceeds the input's 20480", 1},
+        {"--max-normal-turn 0 --ratio 0.5", "--max-normal-turn needs degrees", 2},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        assert_int_equal(tu_run_cli(fmt("simplify '%s' -o '%s' %s", in, never, bad[i].args),
+                                    &out),
+                         bad[i].status);
+        tu_assert_contains(out, bad[i].message);
+        free(out);
+        assert_false(tu_file_exists(never));
+    }
+    assert_int_equal(tu_run_cli(fmt("simplify /nonexistent.obj -o '%s' --ratio 0.5", never),
+                                &out), 1);
+    tu_assert_contains(out, "/nonexistent.obj: cannot open for reading");
+    free(out);
+    assert_false(tu_file_exists(never));
 }
 
 int main(void)
@@ -180,6 +233,7 @@ int main(void)
         cmocka_unit_test(test_convert_and_clean),
         cmocka_unit_test(test_bad_inputs_fail_cleanly),
         cmocka_unit_test(test_demo_small),
+        cmocka_unit_test(test_simplify_cli),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

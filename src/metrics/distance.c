@@ -2,17 +2,19 @@
  * Point-to-triangle distance and the bounding-volume hierarchies of
  * distance.h.
  *
- * Build: top-down over an array of primitive ids. Each node computes the
- * box of its primitives and the bounds of their centroids, then picks the
- * cheapest of BINS - 1 split planes per axis by the surface-area heuristic
- * and partitions the ids in place. While building, a subtree over k
+ * Build: top-down over an array of primitive records. Each node computes
+ * the box of its primitives (their centroid bounds come from the parent's
+ * partition pass), then picks the
+ * cheapest of the split planes between BINS bins along the axis of the
+ * largest centroid extent by the surface-area heuristic, and partitions
+ * the primitive records in place. While building, a subtree over k
  * primitives owns 2k - 1 node slots (enough for any binary tree with k
  * leaves): the root takes the first, the left subtree the next 2 kl - 1,
  * the right one the rest. So every node's slot follows from the primitive
  * ranges alone, subtrees can be built as independent OpenMP tasks without
  * any shared counter, and the result is the same for every thread count.
- * A final pass lays the used slots out depth-first (left child right after
- * its parent) in a compact array.
+ * A final pass lays the used slots out in a compact array, the two
+ * children of a node side by side in one cache line.
  */
 #include "distance.h"
 
@@ -25,9 +27,7 @@
 
 #define BINS 16
 #define MAX_LEAF 4           /* primitives per leaf at most */
-#ifndef MIN_LEAF
 #define MIN_LEAF 2           /* ranges this small always become leaves */
-#endif
 #define TRAVERSAL_COST 1.0   /* of a node visit, relative to one primitive test */
 #define TASK_MIN 8192        /* subtrees smaller than this are built in one task */
 #define SAH_MAX_DEPTH 64     /* below this depth, median splits keep the depth bounded */
@@ -658,7 +658,7 @@ void mr_tri_bvh_free(mr_tri_bvh *t)
     memset(t, 0, sizeof *t);
 }
 
-/* Per-triangle float boxes and double centroids for the builder. */
+/* Per-triangle float boxes for the builder. */
 static void triangle_boxes(const float *positions, const uint32_t *indices, size_t n,
                            float *lo, float *hi)
 {
