@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 static uint64_t rng_state = 88172645463325252ull;
 static uint32_t rnd(void)
@@ -27,7 +28,7 @@ static uint32_t model_min(const float *key, const uint8_t *in, uint32_t n)
 static void check_invariant(const mr_heap *h)
 {
     for (uint32_t i = 1; i < h->size; i++)
-        assert_true(h->items[(i - 1) / 2] <= h->items[i]);
+        assert_true(h->items[(i - 1) / MR_HEAP_ARITY] <= h->items[i]);
     for (uint32_t i = 0; i < h->size; i++)
         assert_int_equal(h->slot[(uint32_t)h->items[i]], i);
 }
@@ -107,10 +108,60 @@ static void test_key_order(void **state)
     assert_true(mr_heap_key_bits(NAN) == mr_heap_key_bits(INFINITY));
 }
 
+/* Bulk build: append in any order, heapify, then pops come in (key, id)
+ * order and the heap stays indexed for updates; sized heaps hold fewer
+ * items than ids. */
+static void test_heapify(void **state)
+{
+    (void)state;
+    enum { N = 5000, M = 1200 };
+    mr_heap h;
+    assert_int_equal(mr_heap_init_sized(&h, N, M, NULL), MR_OK);
+    static float key[N];
+    static uint8_t in[N];
+    memset(in, 0, sizeof in);
+    for (uint32_t i = 0; i < M; i++) {
+        uint32_t id = (i * 7919u) % N; /* distinct: 7919 is prime, N < 7919 * N */
+        key[id] = (float)(rnd() % 50); /* many ties */
+        in[id] = 1;
+        mr_heap_append(&h, id, key[id]);
+    }
+    mr_heap_heapify(&h);
+    check_invariant(&h);
+    for (uint32_t i = 0; i < N; i++)
+        assert_int_equal(mr_heap_contains(&h, i), in[i] != 0);
+    /* a few updates and removals on the built heap */
+    for (uint32_t i = 0; i < 200; i++) {
+        uint32_t id = (rnd() % M) * 7919u % N;
+        if (i % 3 == 0) {
+            mr_heap_remove(&h, id);
+            in[id] = 0;
+        } else {
+            key[id] = (float)(rnd() % 50);
+            in[id] = 1;
+            mr_heap_update(&h, id, key[id]);
+        }
+        check_invariant(&h);
+    }
+    float last = -INFINITY;
+    uint32_t last_id = 0;
+    while (!mr_heap_empty(&h)) {
+        uint32_t want = model_min(key, in, N);
+        uint32_t id = mr_heap_pop(&h);
+        assert_int_equal(id, want);
+        assert_true(key[id] > last || (key[id] == last && id > last_id));
+        last = key[id];
+        last_id = id;
+        in[id] = 0;
+    }
+    mr_heap_free(&h);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_random_operations),
+        cmocka_unit_test(test_heapify),
         cmocka_unit_test(test_key_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

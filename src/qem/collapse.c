@@ -149,7 +149,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     if (st != MR_OK)
         return st;
     const size_t total = vt.offsets[vc];
-    const size_t capacity = total + total / 2 + 64;
+    const size_t capacity = total + total / 8 + 64;
     uint32_t *refs = mr_realloc_array(vt.triangles, capacity, sizeof *refs);
     if (!refs) {
         mr_vertex_triangles_free(&vt);
@@ -227,15 +227,31 @@ static bool triangle_ok(const mr_collapse_mesh *m, const uint32_t *tri, uint32_t
             q[k][2] = p[k][2];
         }
     }
+    /* Unnormalised normals (twice the area): the tests below are the unit
+     * normals' cos > min_cos and area ratio > 1e-6, squared, without a
+     * square root or a division. A degenerate normal is 0 and fails. */
     double n0[3], n1[3];
-    double a0 = mr_triangle_normal(p[0], p[1], p[2], n0);
-    double a1 = mr_triangle_normal(q[0], q[1], q[2], n1);
-    /* Unit normals; a degenerate one is 0 and fails the test below. */
-    double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
-    if (!(d > min_cos))
+    {
+        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        n0[0] = u[1] * v[2] - u[2] * v[1];
+        n0[1] = u[2] * v[0] - u[0] * v[2];
+        n0[2] = u[0] * v[1] - u[1] * v[0];
+    }
+    {
+        const double u[3] = {q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
+        const double v[3] = {q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
+        n1[0] = u[1] * v[2] - u[2] * v[1];
+        n1[1] = u[2] * v[0] - u[0] * v[2];
+        n1[2] = u[0] * v[1] - u[1] * v[0];
+    }
+    const double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
+    const double l0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2];
+    const double l1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2];
+    if (!(d > 0) || !(d * d > min_cos * min_cos * l0 * l1))
         return false;
     /* Near-degenerate afterwards: a relative collapse of the area. */
-    return a1 > 1e-6 * a0;
+    return l1 > 1e-12 * l0;
 }
 
 bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,

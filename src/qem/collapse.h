@@ -13,8 +13,8 @@
  *     end of refs (the old lists of u and v become garbage) and removes the
  *     deleted triangles from the lists of their third vertices in place. When
  *     refs is full, mr_collapse_reserve compacts it in place (no extra
- *     memory): the array is sized at 1.5 times the initial lists, so that
- *     happens every few hundred thousand collapses;
+ *     memory): the array is sized at 1.125 times the initial lists, so that
+ *     happens every few tens of thousands of collapses;
  *   - per vertex flags (MR_VF_*).
  *
  * Topology classification (mr_collapse_mesh_init): a vertex whose edges all
@@ -43,7 +43,10 @@ enum {
     MR_VF_SEAM = 1u << 2,        /* on an attribute seam (mr_mesh_simplify) */
     MR_VF_REMOVED = 1u << 3,     /* collapsed away, or never referenced */
     MR_VF_MOVED = 1u << 4,       /* position differs from the input's */
-    MR_VF_NONMANIFOLD = 1u << 5
+    MR_VF_NONMANIFOLD = 1u << 5,
+    MR_VF_BLOCKED = 1u << 6      /* simplifier's bookkeeping: an edge at
+                                    this vertex was found invalid and left
+                                    the queue until the ring changes */
 };
 
 typedef struct mr_collapse_mesh {

@@ -1,22 +1,30 @@
-/* Indexed binary min-heap: see heap.h. */
+/* Indexed 4-ary min-heap: see heap.h. */
 #include "heap.h"
 
 #include <math.h>
 
-mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err)
+mr_status mr_heap_init_sized(mr_heap *h, size_t capacity, size_t max_size, mr_error *err)
 {
     memset(h, 0, sizeof *h);
     if (capacity >= UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL, "heap of %zu ids", capacity);
-    h->items = mr_alloc_array(capacity, sizeof *h->items);
-    h->slot = mr_alloc_array(capacity, sizeof *h->slot);
+    if (max_size > capacity)
+        max_size = capacity;
+    h->items = mr_alloc_array(max_size ? max_size : 1, sizeof *h->items);
+    h->slot = mr_alloc_array(capacity ? capacity : 1, sizeof *h->slot);
     if (!h->items || !h->slot) {
         mr_heap_free(h);
-        return mr_fail_nomem(err, NULL, capacity * 12);
+        return mr_fail_nomem(err, NULL, max_size * 8 + capacity * 4);
     }
     memset(h->slot, 0xff, capacity * sizeof *h->slot); /* MR_HEAP_NONE */
     h->capacity = (uint32_t)capacity;
+    h->max_size = (uint32_t)max_size;
     return MR_OK;
+}
+
+mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err)
+{
+    return mr_heap_init_sized(h, capacity, capacity, err);
 }
 
 void mr_heap_free(mr_heap *h)
@@ -39,7 +47,7 @@ static void sift_up(mr_heap *h, uint32_t i)
 {
     const uint64_t item = h->items[i];
     while (i > 0) {
-        uint32_t parent = (i - 1) / 2;
+        uint32_t parent = (i - 1) / MR_HEAP_ARITY;
         uint64_t p = h->items[parent];
         if (p <= item)
             break;
@@ -56,12 +64,18 @@ static void sift_down(mr_heap *h, uint32_t i)
     const uint64_t item = h->items[i];
     const uint32_t n = h->size;
     for (;;) {
-        uint32_t child = 2 * i + 1;
-        if (child >= n)
+        const uint32_t first = MR_HEAP_ARITY * i + 1;
+        if (first >= n)
             break;
-        uint64_t c = h->items[child];
-        if (child + 1 < n && h->items[child + 1] < c)
-            c = h->items[++child];
+        uint32_t child = first;
+        uint64_t c = h->items[first];
+        const uint32_t end = n - first < MR_HEAP_ARITY ? n : first + MR_HEAP_ARITY;
+        for (uint32_t j = first + 1; j < end; j++) {
+            if (h->items[j] < c) {
+                c = h->items[j];
+                child = j;
+            }
+        }
         if (item <= c)
             break;
         h->items[i] = c;
@@ -70,6 +84,14 @@ static void sift_down(mr_heap *h, uint32_t i)
     }
     h->items[i] = item;
     h->slot[(uint32_t)item] = i;
+}
+
+void mr_heap_heapify(mr_heap *h)
+{
+    for (uint32_t i = 0; i < h->size; i++)
+        h->slot[(uint32_t)h->items[i]] = i;
+    for (uint32_t i = h->size / MR_HEAP_ARITY + 1; i-- > 0;)
+        sift_down(h, i);
 }
 
 void mr_heap_push(mr_heap *h, uint32_t id, float key)

@@ -348,7 +348,13 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     s.attr_apply = attr_apply;
     s.pin_flags = MR_VF_SEAM;
     setup_seams(&s);
-    mr_simplifier_fill_queue(&s);
+    st = mr_simplifier_fill_queue(&s, err);
+    if (st != MR_OK) {
+        mr_simplifier_free(&s);
+        free(geo);
+        free_ctx(&a);
+        return st;
+    }
     const double t1 = now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, &o, &max_error);

@@ -327,6 +327,204 @@ static void update_around(mr_simplifier *s, uint32_t r, uint32_t k)
         mr_heap_update(&s->heap, k, (float)kbest);
 }
 
+
+/* ---- full collapses: one queue entry per edge ------------------------------ */
+
+/*
+ * Full collapses queue EDGES. Ids are half-edges h = 3t + j, the edge from
+ * corner j of triangle t to corner j + 1; an undirected edge is queued
+ * under its representative, the smaller id of its two half-edges (its only
+ * one on a boundary). Triangles are never renumbered -- a collapse u -> v
+ * only relabels corners -- so a representative changes only where a
+ * half-edge dies (a deleted triangle) or two edges merge (u's and v's edges
+ * to an opposite vertex of the collapse), both around the survivor v;
+ * there every edge is re-evaluated anyway (its cost changed), and the
+ * non-representative half-edge leaves the queue. An edge found invalid at
+ * the top leaves the queue and flags its ends BLOCKED; a collapse whose
+ * ring holds a flagged vertex re-queues that vertex's edges.
+ */
+static inline uint32_t he_dst(const mr_collapse_mesh *m, uint32_t h)
+{
+    const uint32_t j = h % 3;
+    return m->tris[h - j + (j == 2 ? 0 : j + 1)];
+}
+
+static inline uint32_t corner_of(const uint32_t *tri, uint32_t v)
+{
+    return tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+}
+
+/* The half-edge b -> a opposite h = a -> b, or NONE (boundary); searched
+ * in a's list. */
+static uint32_t he_twin(const mr_collapse_mesh *m, uint32_t h)
+{
+    const uint32_t a = m->tris[h], b = he_dst(m, h), t = h / 3;
+    const uint32_t *list = mr_collapse_vertex_tris(m, a);
+    for (uint32_t i = 0, n = m->count[a]; i < n; i++) {
+        const uint32_t t2 = list[i];
+        const uint32_t *tri = m->tris + 3 * (size_t)t2;
+        const uint32_t j = corner_of(tri, a), p = j == 0 ? 2 : j - 1;
+        if (tri[p] == b && t2 != t)
+            return 3 * t2 + p;
+    }
+    return NONE;
+}
+
+/* The full collapse of edge (a, b): a pinned end stays, else the end with
+ * the larger id goes. Symmetric in a and b. */
+static double plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
+                        uint32_t *k, double target[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
+    const bool pa = (m->flags[a] & pin) != 0, pb = (m->flags[b] & pin) != 0;
+    uint32_t rr, kk;
+    if (pa != pb) {
+        kk = pa ? a : b;
+        rr = pa ? b : a;
+    } else {
+        kk = a < b ? a : b;
+        rr = a < b ? b : a;
+    }
+    double x[3];
+    const double c = full_cost(s, rr, kk, x);
+    target[0] = (double)m->pos[3 * kk] + x[0];
+    target[1] = (double)m->pos[3 * kk + 1] + x[1];
+    target[2] = (double)m->pos[3 * kk + 2] + x[2];
+    *r = rr;
+    *k = kk;
+    return c;
+}
+
+/* Queue, re-key or drop the edge of half-edge h, whose twin is tw. */
+static void edge_enqueue(mr_simplifier *s, uint32_t h, uint32_t tw)
+{
+    uint32_t rep = h;
+    if (tw != NONE) {
+        rep = tw < h ? tw : h;
+        mr_heap_remove(&s->heap, tw < h ? h : tw);
+    }
+    uint32_t r, k;
+    double target[3];
+    const double c = plan_edge(s, s->m.tris[h], he_dst(&s->m, h), &r, &k, target);
+    if (c < INFINITY)
+        mr_heap_update(&s->heap, rep, (float)c);
+    else
+        mr_heap_remove(&s->heap, rep);
+}
+
+/* Every edge at k anew: each inner edge is k's outgoing half-edge in one
+ * triangle and incoming in another; a boundary edge has one of them. */
+static void edge_update_around(mr_simplifier *s, uint32_t k)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, k);
+    const uint32_t n = m->count[k];
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t t = list[i];
+        const uint32_t *tri = m->tris + 3 * (size_t)t;
+        const uint32_t j = corner_of(tri, k);
+        const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
+        const uint32_t x = tri[jn], p = tri[jp];
+        uint32_t tw_out = NONE;
+        bool in_twinned = false;
+        for (uint32_t i2 = 0; i2 < n; i2++) {
+            if (i2 == i)
+                continue;
+            const uint32_t *o = m->tris + 3 * (size_t)list[i2];
+            const uint32_t j2 = corner_of(o, k);
+            const uint32_t j2n = j2 == 2 ? 0 : j2 + 1, j2p = j2 == 0 ? 2 : j2 - 1;
+            if (o[j2p] == x)
+                tw_out = 3 * list[i2] + j2p;
+            if (o[j2n] == p)
+                in_twinned = true;
+        }
+        edge_enqueue(s, 3 * t + j, tw_out);
+        if (!in_twinned)
+            edge_enqueue(s, 3 * t + jp, NONE);
+    }
+}
+
+/* Re-queue the edges of a BLOCKED vertex x that are out of the queue
+ * (those at k were just re-evaluated). */
+static void edge_requeue_vertex(mr_simplifier *s, uint32_t x, uint32_t k)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, x);
+    for (uint32_t i = 0, n = m->count[x]; i < n; i++) {
+        const uint32_t t = list[i];
+        const uint32_t *tri = m->tris + 3 * (size_t)t;
+        const uint32_t j = corner_of(tri, x);
+        const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
+        if (tri[jn] != k) {
+            const uint32_t h = 3 * t + j, tw = he_twin(m, h);
+            const uint32_t rep = tw != NONE && tw < h ? tw : h;
+            if (!mr_heap_contains(&s->heap, rep))
+                edge_enqueue(s, h, tw);
+        }
+        if (tri[jp] != k) {
+            const uint32_t h = 3 * t + jp;
+            if (!mr_heap_contains(&s->heap, h) && he_twin(m, h) == NONE)
+                edge_enqueue(s, h, NONE);
+        }
+    }
+}
+
+static void edge_unblock_ring(mr_simplifier *s, uint32_t k)
+{
+    mr_collapse_mesh *m = &s->m;
+    m->flags[k] &= (uint8_t)~MR_VF_BLOCKED;
+    const uint32_t *list = mr_collapse_vertex_tris(m, k);
+    for (uint32_t i = 0, n = m->count[k]; i < n; i++) {
+        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        for (int c = 0; c < 3; c++) {
+            const uint32_t x = tri[c];
+            if (m->flags[x] & MR_VF_BLOCKED) {
+                m->flags[x] &= (uint8_t)~MR_VF_BLOCKED;
+                edge_requeue_vertex(s, x, k);
+            }
+        }
+    }
+}
+
+/* The queue of edges: the representatives are found first (a bit each),
+ * so the heap's items are sized to the edge count; built in O(n). */
+static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const size_t nh = 3 * m->triangle_count;
+    uint64_t *rep = mr_calloc_array(nh / 64 + 1, sizeof *rep);
+    if (!rep)
+        return mr_fail_nomem(err, NULL, nh / 8);
+    size_t edges = 0;
+    for (size_t h = 0; h < nh; h++) {
+        if (m->tris[h - h % 3] == NONE)
+            continue;
+        const uint32_t tw = he_twin(m, (uint32_t)h);
+        if (tw == NONE || tw > h) {
+            rep[h / 64] |= 1ull << (h % 64);
+            edges++;
+        }
+    }
+    mr_status st = mr_heap_init_sized(&s->heap, nh, edges, err);
+    if (st != MR_OK) {
+        free(rep);
+        return st;
+    }
+    for (size_t h = 0; h < nh; h++) {
+        if (!(rep[h / 64] >> (h % 64) & 1))
+            continue;
+        uint32_t r, k;
+        double target[3];
+        const double c = plan_edge(s, m->tris[h], he_dst(m, (uint32_t)h), &r, &k, target);
+        if (c < INFINITY)
+            mr_heap_append(&s->heap, (uint32_t)h, (float)c);
+    }
+    free(rep);
+    mr_heap_heapify(&s->heap);
+    return MR_OK;
+}
+
 /* ---- setup ----------------------------------------------------------------- */
 
 /* Initial quadric of v, relative to v's position: the planes of its
@@ -489,16 +687,22 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     }
 
     s->q = mr_alloc_array(vertex_count, sizeof *s->q);
-    s->best = mr_alloc_array(vertex_count, sizeof *s->best);
-    s->stale = mr_calloc_array(vertex_count, 1);
-    if (!s->q || !s->best || !s->stale) {
+    if (!s->q) {
         mr_simplifier_free(s);
-        return mr_fail_nomem(err, NULL, vertex_count * (sizeof *s->q + 4));
+        return mr_fail_nomem(err, NULL, vertex_count * sizeof *s->q);
     }
-    st = mr_heap_init(&s->heap, vertex_count, err);
-    if (st != MR_OK) {
-        mr_simplifier_free(s);
-        return st;
+    if (s->half) { /* full collapses queue edges: see edge_fill_queue */
+        s->best = mr_alloc_array(vertex_count, sizeof *s->best);
+        s->stale = mr_calloc_array(vertex_count, 1);
+        if (!s->best || !s->stale) {
+            mr_simplifier_free(s);
+            return mr_fail_nomem(err, NULL, vertex_count * 5);
+        }
+        st = mr_heap_init(&s->heap, vertex_count, err);
+        if (st != MR_OK) {
+            mr_simplifier_free(s);
+            return st;
+        }
     }
     for (size_t v = 0; v < vertex_count; v++)
         if (!(m->flags[v] & MR_VF_REMOVED))
@@ -506,10 +710,14 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     return MR_OK;
 }
 
-/* Fill the queue: every vertex with its best collapse. Pushed in id order,
- * so the heap -- and everything after -- is deterministic. */
-void mr_simplifier_fill_queue(mr_simplifier *s)
+/* Fill the queue: for half collapses every vertex with its best collapse,
+ * for full ones every edge. Pushed in id order, so the heap -- and
+ * everything after -- is deterministic. On failure the simplifier must
+ * still be freed. */
+mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
 {
+    if (!s->half)
+        return edge_fill_queue(s, err);
     for (size_t v = 0; v < s->m.vertex_count; v++) {
         s->best[v] = NONE;
         if (s->m.flags[v] & MR_VF_REMOVED)
@@ -520,6 +728,7 @@ void mr_simplifier_fill_queue(mr_simplifier *s)
         if (w != NONE)
             mr_heap_push(&s->heap, (uint32_t)v, (float)c);
     }
+    return MR_OK;
 }
 
 /* ---- the loop -------------------------------------------------------------- */
@@ -554,6 +763,47 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
     while (!mr_heap_empty(&s->heap)) {
         if (m->live_vertices <= target_v || (target_t && m->live_triangles <= target_t))
             break;
+        if (!s->half) {
+            const uint32_t h = mr_heap_top(&s->heap);
+            const uint32_t a = m->tris[h], b = he_dst(m, h);
+            uint32_t r, k;
+            double target[3];
+            const double cost = plan_edge(s, a, b, &r, &k, target);
+            if (cost > limit)
+                break;
+            if (!mr_collapse_valid(m, r, k, target, &s->limits) ||
+                (s->attr_valid && !s->attr_valid(s, r, k))) {
+                mr_heap_remove(&s->heap, h);
+                m->flags[a] |= MR_VF_BLOCKED;
+                m->flags[b] |= MR_VF_BLOCKED;
+                continue;
+            }
+            /* The triangles on the edge die with their half-edges. */
+            uint32_t dead[2], nd = 0;
+            const uint32_t *lr = mr_collapse_vertex_tris(m, r);
+            for (uint32_t i = 0; i < m->count[r] && nd < 2; i++) {
+                const uint32_t *tri = m->tris + 3 * (size_t)lr[i];
+                if (tri[0] == k || tri[1] == k || tri[2] == k)
+                    dead[nd++] = lr[i];
+            }
+            if (s->attr_apply)
+                s->attr_apply(s, r, k, target);
+            merge_quadrics(s, r, k, target);
+            mr_collapse_reserve(m, r, k);
+            mr_collapse_apply(m, r, k, target);
+            for (uint32_t i = 0; i < nd; i++)
+                for (uint32_t c = 0; c < 3; c++)
+                    mr_heap_remove(&s->heap, 3 * dead[i] + c);
+            edge_update_around(s, k);
+            edge_unblock_ring(s, k);
+            worst = cost > worst ? cost : worst;
+            done++;
+            if (o->progress && done >= next_report) {
+                o->progress(planned ? (double)done / (double)planned : 1.0, o->progress_user);
+                next_report += planned / 100 + 1;
+            }
+            continue;
+        }
         const uint32_t u = mr_heap_top(&s->heap);
         if (s->stale[u]) {
             requeue(s, u, false);
@@ -652,11 +902,20 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
                                       triangle_count, options, NULL, err);
     if (st != MR_OK)
         return st;
-    mr_simplifier_fill_queue(&s);
+    st = mr_simplifier_fill_queue(&s, err);
+    if (st != MR_OK) {
+        mr_simplifier_free(&s);
+        return st;
+    }
     const double t1 = now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, options, &max_error);
     const double t2 = now_seconds();
+    /* Only the mesh is needed from here: release the rest before the
+     * output is allocated (it would set the peak). */
+    mr_heap_free(&s.heap);
+    free(s.q);
+    s.q = NULL;
     st = mr_simplifier_output(&s, positions, stride, out, err);
     const size_t input_vertices = s.input_vertices;
     mr_simplifier_free(&s);

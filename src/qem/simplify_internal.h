@@ -37,7 +37,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
                              size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const mr_simplify_options *o,
                              const uint8_t *extra_flags, mr_error *err);
-void mr_simplifier_fill_queue(mr_simplifier *s);
+mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
 bool mr_simplifier_valid(mr_simplifier *s, uint32_t u, uint32_t w, double *cost);
 mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
