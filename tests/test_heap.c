@@ -30,15 +30,15 @@ static void check_invariant(const mr_heap *h)
     for (uint32_t i = 1; i < h->size; i++)
         assert_true(h->items[(i - 1) / MR_HEAP_ARITY] <= h->items[i]);
     for (uint32_t i = 0; i < h->size; i++)
-        assert_int_equal(h->slot[(uint32_t)h->items[i]], i);
+        assert_int_equal(mr_heap_slot(h, (uint32_t)h->items[i]), i);
 }
 
-static void test_random_operations(void **state)
+static void run_random_operations(unsigned pos_bytes)
 {
-    (void)state;
     enum { N = 2000, OPS = 100000 };
     mr_heap h;
-    assert_int_equal(mr_heap_init(&h, N, NULL), MR_OK);
+    assert_int_equal(mr_heap_init_width(&h, N, N, pos_bytes, NULL), MR_OK);
+    assert_int_equal(h.pos_bytes, pos_bytes ? pos_bytes : 3);
     float key[N];
     uint8_t in[N] = {0};
     uint32_t count = 0;
@@ -93,6 +93,49 @@ static void test_random_operations(void **state)
         last_key = k;
         last_id = id;
     }
+    mr_heap_free(&h);
+}
+
+static void test_random_operations(void **state)
+{
+    (void)state;
+    run_random_operations(0);
+}
+
+/* The same with 32-bit positions (what heaps of 2^24 items and more get). */
+static void test_random_operations_wide(void **state)
+{
+    (void)state;
+    run_random_operations(4);
+}
+
+/* 24-bit positions beyond 16 bits: a heap of 200000 items, built by pushes
+ * in reverse key order (every push sifts to the root), updated, drained. */
+static void test_large_positions(void **state)
+{
+    (void)state;
+    enum { N = 200000 };
+    mr_heap h;
+    assert_int_equal(mr_heap_init(&h, N, NULL), MR_OK);
+    assert_int_equal(h.pos_bytes, 3);
+    for (uint32_t i = 0; i < N; i++)
+        mr_heap_push(&h, i, (float)(N - i));
+    check_invariant(&h);
+    for (uint32_t i = 0; i < N; i += 7)
+        mr_heap_update(&h, i, (float)i + 0.5f);
+    check_invariant(&h);
+    mr_heap_remove(&h, N - 1);
+    assert_false(mr_heap_contains(&h, N - 1));
+    uint64_t last = 0;
+    uint32_t n = 0;
+    while (!mr_heap_empty(&h)) {
+        const uint64_t item = h.items[0];
+        assert_true(item >= last);
+        last = item;
+        mr_heap_pop(&h);
+        n++;
+    }
+    assert_int_equal(n, N - 1);
     mr_heap_free(&h);
 }
 
@@ -161,6 +204,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_random_operations),
+        cmocka_unit_test(test_random_operations_wide),
+        cmocka_unit_test(test_large_positions),
         cmocka_unit_test(test_heapify),
         cmocka_unit_test(test_key_order),
     };

@@ -149,7 +149,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     if (st != MR_OK)
         return st;
     const size_t total = vt.offsets[vc];
-    const size_t capacity = total + total / 8 + 64;
+    const size_t capacity = total + total / 32 + 64;
     uint32_t *refs = mr_realloc_array(vt.triangles, capacity, sizeof *refs);
     if (!refs) {
         mr_vertex_triangles_free(&vt);

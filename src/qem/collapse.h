@@ -13,8 +13,8 @@
  *     end of refs (the old lists of u and v become garbage) and removes the
  *     deleted triangles from the lists of their third vertices in place. When
  *     refs is full, mr_collapse_reserve compacts it in place (no extra
- *     memory): the array is sized at 1.125 times the initial lists, so that
- *     happens every few tens of thousands of collapses;
+ *     memory): the array is sized at 1 + 1/32 times the initial lists, so that
+ *     happens every few thousand collapses;
  *   - per vertex flags (MR_VF_*).
  *
  * Topology classification (mr_collapse_mesh_init): a vertex whose edges all

@@ -3,23 +3,33 @@
 
 #include <math.h>
 
-mr_status mr_heap_init_sized(mr_heap *h, size_t capacity, size_t max_size, mr_error *err)
+mr_status mr_heap_init_width(mr_heap *h, size_t capacity, size_t max_size, unsigned pos_bytes,
+                             mr_error *err)
 {
     memset(h, 0, sizeof *h);
     if (capacity >= UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL, "heap of %zu ids", capacity);
     if (max_size > capacity)
         max_size = capacity;
+    /* 24-bit positions hold slots below 0xffffff (all ones is "absent"). */
+    if (pos_bytes != 3 || max_size >= 0xffffffu)
+        pos_bytes = pos_bytes == 0 && max_size < 0xffffffu ? 3 : 4;
+    h->pos_bytes = pos_bytes;
     h->items = mr_alloc_array(max_size ? max_size : 1, sizeof *h->items);
-    h->slot = mr_alloc_array(capacity ? capacity : 1, sizeof *h->slot);
-    if (!h->items || !h->slot) {
+    h->pos = mr_alloc_array(capacity ? capacity : 1, pos_bytes);
+    if (!h->items || !h->pos) {
         mr_heap_free(h);
-        return mr_fail_nomem(err, NULL, max_size * 8 + capacity * 4);
+        return mr_fail_nomem(err, NULL, max_size * 8 + capacity * pos_bytes);
     }
-    memset(h->slot, 0xff, capacity * sizeof *h->slot); /* MR_HEAP_NONE */
+    memset(h->pos, 0xff, capacity * pos_bytes); /* MR_HEAP_NONE */
     h->capacity = (uint32_t)capacity;
     h->max_size = (uint32_t)max_size;
     return MR_OK;
+}
+
+mr_status mr_heap_init_sized(mr_heap *h, size_t capacity, size_t max_size, mr_error *err)
+{
+    return mr_heap_init_width(h, capacity, max_size, 0, err);
 }
 
 mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err)
@@ -32,7 +42,7 @@ void mr_heap_free(mr_heap *h)
     if (!h)
         return;
     free(h->items);
-    free(h->slot);
+    free(h->pos);
     memset(h, 0, sizeof *h);
 }
 
@@ -52,11 +62,11 @@ static void sift_up(mr_heap *h, uint32_t i)
         if (p <= item)
             break;
         h->items[i] = p;
-        h->slot[(uint32_t)p] = i;
+        mr_heap_set_slot(h, (uint32_t)p, i);
         i = parent;
     }
     h->items[i] = item;
-    h->slot[(uint32_t)item] = i;
+    mr_heap_set_slot(h, (uint32_t)item, i);
 }
 
 static void sift_down(mr_heap *h, uint32_t i)
@@ -79,17 +89,17 @@ static void sift_down(mr_heap *h, uint32_t i)
         if (item <= c)
             break;
         h->items[i] = c;
-        h->slot[(uint32_t)c] = i;
+        mr_heap_set_slot(h, (uint32_t)c, i);
         i = child;
     }
     h->items[i] = item;
-    h->slot[(uint32_t)item] = i;
+    mr_heap_set_slot(h, (uint32_t)item, i);
 }
 
 void mr_heap_heapify(mr_heap *h)
 {
     for (uint32_t i = 0; i < h->size; i++)
-        h->slot[(uint32_t)h->items[i]] = i;
+        mr_heap_set_slot(h, (uint32_t)h->items[i], i);
     for (uint32_t i = h->size / MR_HEAP_ARITY + 1; i-- > 0;)
         sift_down(h, i);
 }
@@ -106,7 +116,7 @@ void mr_heap_push(mr_heap *h, uint32_t id, float key)
 static void remove_slot(mr_heap *h, uint32_t i)
 {
     const uint32_t id = (uint32_t)h->items[i];
-    h->slot[id] = MR_HEAP_NONE;
+    mr_heap_set_slot(h, id, MR_HEAP_NONE);
     const uint32_t last = --h->size;
     if (i == last)
         return;
@@ -128,7 +138,7 @@ uint32_t mr_heap_pop(mr_heap *h)
 
 void mr_heap_update(mr_heap *h, uint32_t id, float key)
 {
-    const uint32_t i = h->slot[id];
+    const uint32_t i = mr_heap_slot(h, id);
     if (i == MR_HEAP_NONE) {
         mr_heap_push(h, id, key);
         return;
@@ -143,7 +153,7 @@ void mr_heap_update(mr_heap *h, uint32_t id, float key)
 
 void mr_heap_remove(mr_heap *h, uint32_t id)
 {
-    const uint32_t i = h->slot[id];
+    const uint32_t i = mr_heap_slot(h, id);
     if (i != MR_HEAP_NONE)
         remove_slot(h, i);
 }

@@ -10,8 +10,9 @@
  * into one 64-bit word (the key's bits made order-preserving as an
  * unsigned integer in the high half, the id in the low half), so a
  * comparison is a single integer compare. NaN keys are stored as +inf.
- * Memory: 12 bytes per id (8 per slot, 4 per position), or 4 per id and
- * 8 per slot when the heap's size is bounded (mr_heap_init_sized).
+ * Memory: 8 bytes per slot and 4 per id, or 3 per id when fewer than
+ * 2^24 - 1 items can be in the heap at once (mr_heap_init_sized bounds
+ * the slots; the position table then packs 24-bit positions).
  */
 #ifndef MR_HEAP_H
 #define MR_HEAP_H
@@ -28,7 +29,9 @@
 
 typedef struct mr_heap {
     uint64_t *items;  /* slots 0 .. size - 1: (key bits << 32) | id */
-    uint32_t *slot;   /* id -> slot, MR_HEAP_NONE when absent */
+    uint8_t *pos;     /* id -> slot, pos_bytes (3 or 4) little-endian bytes
+                         each; all ones when absent */
+    uint32_t pos_bytes;
     uint32_t size;
     uint32_t capacity;
     uint32_t max_size; /* slots allocated */
@@ -40,7 +43,36 @@ mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err);
 /* The same for ids below capacity of which at most max_size are in the
  * heap at once (items sized to max_size: 8 bytes per item, 4 per id). */
 mr_status mr_heap_init_sized(mr_heap *h, size_t capacity, size_t max_size, mr_error *err);
+/* The same with the position table's width forced (3 or 4 bytes; 0 picks
+ * the smallest that fits). For tests. */
+mr_status mr_heap_init_width(mr_heap *h, size_t capacity, size_t max_size, unsigned pos_bytes,
+                             mr_error *err);
 void mr_heap_free(mr_heap *h);
+
+/* id -> slot, MR_HEAP_NONE when absent. */
+static inline uint32_t mr_heap_slot(const mr_heap *h, uint32_t id)
+{
+    if (h->pos_bytes == 3) {
+        const uint8_t *p = h->pos + 3 * (size_t)id;
+        const uint32_t v = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16;
+        return v == 0xffffffu ? MR_HEAP_NONE : v;
+    }
+    uint32_t v;
+    memcpy(&v, h->pos + 4 * (size_t)id, sizeof v);
+    return v;
+}
+
+static inline void mr_heap_set_slot(mr_heap *h, uint32_t id, uint32_t slot)
+{
+    if (h->pos_bytes == 3) {
+        uint8_t *p = h->pos + 3 * (size_t)id;
+        p[0] = (uint8_t)slot;
+        p[1] = (uint8_t)(slot >> 8);
+        p[2] = (uint8_t)(slot >> 16);
+        return;
+    }
+    memcpy(h->pos + 4 * (size_t)id, &slot, sizeof slot);
+}
 
 /* Keys <-> order-preserving unsigned bits (-0 < +0 is harmless). */
 static inline uint32_t mr_heap_key_bits(float key)
@@ -62,7 +94,7 @@ static inline float mr_heap_bits_key(uint32_t b)
 
 static inline bool mr_heap_contains(const mr_heap *h, uint32_t id)
 {
-    return h->slot[id] != MR_HEAP_NONE;
+    return mr_heap_slot(h, id) != MR_HEAP_NONE;
 }
 
 static inline bool mr_heap_empty(const mr_heap *h) { return h->size == 0; }
@@ -70,7 +102,7 @@ static inline bool mr_heap_empty(const mr_heap *h) { return h->size == 0; }
 /* Key of an element in the heap. */
 static inline float mr_heap_key(const mr_heap *h, uint32_t id)
 {
-    return mr_heap_bits_key((uint32_t)(h->items[h->slot[id]] >> 32));
+    return mr_heap_bits_key((uint32_t)(h->items[mr_heap_slot(h, id)] >> 32));
 }
 
 /* The smallest element without removing it; the heap must not be empty. */

@@ -420,6 +420,37 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
     const mr_collapse_mesh *m = &s->m;
     const uint32_t *list = mr_collapse_vertex_tris(m, k);
     const uint32_t n = m->count[k];
+    if (n <= 2 * MR_COLLAPSE_MAX_DEGREE) {
+        /* The corners of k and its next and previous vertices, gathered
+         * once: the twin search below is then a scan of two small arrays. */
+        uint32_t cj[2 * MR_COLLAPSE_MAX_DEGREE], nx[2 * MR_COLLAPSE_MAX_DEGREE],
+            pv[2 * MR_COLLAPSE_MAX_DEGREE];
+        for (uint32_t i = 0; i < n; i++) {
+            const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+            const uint32_t j = corner_of(tri, k);
+            cj[i] = j;
+            nx[i] = tri[j == 2 ? 0 : j + 1];
+            pv[i] = tri[j == 0 ? 2 : j - 1];
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            const uint32_t x = nx[i], p = pv[i], j = cj[i];
+            uint32_t tw_out = NONE;
+            bool in_twinned = false;
+            for (uint32_t i2 = 0; i2 < n; i2++) {
+                if (i2 == i)
+                    continue;
+                if (pv[i2] == x)
+                    tw_out = 3 * list[i2] + (cj[i2] == 0 ? 2 : cj[i2] - 1);
+                if (nx[i2] == p)
+                    in_twinned = true;
+            }
+            const uint32_t t = list[i];
+            edge_enqueue(s, 3 * t + j, tw_out);
+            if (!in_twinned)
+                edge_enqueue(s, 3 * t + (j == 0 ? 2 : j - 1), NONE);
+        }
+        return;
+    }
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t t = list[i];
         const uint32_t *tri = m->tris + 3 * (size_t)t;
@@ -493,9 +524,20 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
 {
     const mr_collapse_mesh *m = &s->m;
     const size_t nh = 3 * m->triangle_count;
-    uint64_t *rep = mr_calloc_array(nh / 64 + 1, sizeof *rep);
-    if (!rep)
-        return mr_fail_nomem(err, NULL, nh / 8);
+    /* The bits live in the free end of refs when it has room (it is
+     * unused until the first collapse), so they add nothing to the peak. */
+    const size_t words = nh / 64 + 1;
+    uint64_t *rep = NULL, *own = NULL;
+    if ((m->refs_capacity - m->refs_size) * sizeof *m->refs >= words * sizeof *rep + 8) {
+        uintptr_t a = (uintptr_t)(m->refs + m->refs_size);
+        a = (a + 7) & ~(uintptr_t)7;
+        rep = (uint64_t *)a;
+        memset(rep, 0, words * sizeof *rep);
+    } else {
+        rep = own = mr_calloc_array(words, sizeof *rep);
+        if (!rep)
+            return mr_fail_nomem(err, NULL, nh / 8);
+    }
     size_t edges = 0;
     for (size_t h = 0; h < nh; h++) {
         if (m->tris[h - h % 3] == NONE)
@@ -508,7 +550,7 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
     }
     mr_status st = mr_heap_init_sized(&s->heap, nh, edges, err);
     if (st != MR_OK) {
-        free(rep);
+        free(own);
         return st;
     }
     for (size_t h = 0; h < nh; h++) {
@@ -520,7 +562,7 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
         if (c < INFINITY)
             mr_heap_append(&s->heap, (uint32_t)h, (float)c);
     }
-    free(rep);
+    free(own);
     mr_heap_heapify(&s->heap);
     return MR_OK;
 }
@@ -698,7 +740,9 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
             mr_simplifier_free(s);
             return mr_fail_nomem(err, NULL, vertex_count * 5);
         }
-        st = mr_heap_init(&s->heap, vertex_count, err);
+        /* 32-bit positions: this heap is small next to the rest (one id
+         * per vertex), and they are the faster to update. */
+        st = mr_heap_init_width(&s->heap, vertex_count, vertex_count, 4, err);
         if (st != MR_OK) {
             mr_simplifier_free(s);
             return st;
