@@ -58,8 +58,11 @@ fuzz: deps-build deps-fuzz
 	    grep -E 'stat::number_of_executed_units|Done' build-fuzz/fuzz_$$f.log | tail -2; \
 	done
 
+# I/O throughput, then sequential simplification against the installed peers
+# (a few minutes; bench_simplify --quick for a short subset).
 bench: build
 	./$(BUILD)/bench/bench_io
+	./$(BUILD)/bench/bench_simplify --csv $(BUILD)/bench/simplify.csv
 
 clean:
 	rm -rf build build-asan build-fuzz out

@@ -1,11 +1,12 @@
 // Peer driver for bench_simplify: OpenMesh's Decimater with ModQuadric (no
 // other module, no error limit) reducing a mesh to a vertex count.
 //
-//   openmesh_decimate IN OUT VERTICES [RUNS]
+//   openmesh_decimate IN OUT VERTICES [RUNS [BUDGET]]
 //
 // Reads IN (binary PLY or OBJ), then RUNS times (default 1): copies the
 // loaded mesh, decimates the copy to VERTICES vertices and garbage-collects
-// it. Writes the last result to OUT (binary PLY when OUT ends in .ply).
+// it; with BUDGET (seconds), stops repeating once the timed runs add up to
+// more than that (at least one run). Writes the last result to OUT (binary PLY when OUT ends in .ply).
 // File I/O and the copy are not timed. Prints, one per line:
 //   input V F          the mesh as OpenMesh read it
 //   seconds S          one line per run: decimater setup + decimate_to +
@@ -58,8 +59,8 @@ static bool reset_peak()
 
 int main(int argc, char **argv)
 {
-    if (argc < 4 || argc > 5) {
-        std::fprintf(stderr, "usage: openmesh_decimate IN OUT VERTICES [RUNS]\n");
+    if (argc < 4 || argc > 6) {
+        std::fprintf(stderr, "usage: openmesh_decimate IN OUT VERTICES [RUNS [BUDGET]]\n");
         return 2;
     }
     const char *in = argv[1], *out = argv[2];
@@ -67,6 +68,8 @@ int main(int argc, char **argv)
     int runs = argc > 4 ? std::atoi(argv[4]) : 1;
     if (runs < 1)
         runs = 1;
+    double budget = argc > 5 ? std::atof(argv[5]) : 0;
+    double spent = 0;
 
     Mesh original;
     OpenMesh::IO::Options ropt;
@@ -93,14 +96,20 @@ int main(int argc, char **argv)
                 return 1;
             }
             dec.decimate_to(target);
+            // While the decimater lives: it owns the status flags that
+            // mark the removed elements.
+            work.garbage_collection();
         }
-        work.garbage_collection();
         auto t1 = std::chrono::steady_clock::now();
-        std::printf("seconds %.9f\n", std::chrono::duration<double>(t1 - t0).count());
+        double seconds = std::chrono::duration<double>(t1 - t0).count();
+        std::printf("seconds %.9f\n", seconds);
+        spent += seconds;
         if (r == 0) {
             long long peak = status_bytes("VmHWM");
             std::printf("peak_bytes %lld\n", base >= 0 && peak >= base ? peak - base : -1LL);
         }
+        if (budget > 0 && spent > budget)
+            break;
     }
 
     OpenMesh::IO::Options wopt;
