@@ -5,17 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static char cmd[4096];
-
-static const char *fmt(const char *f, ...)
-{
-    va_list ap;
-    va_start(ap, f);
-    vsnprintf(cmd, sizeof cmd, f, ap);
-    va_end(ap);
-    return cmd;
-}
-
 static void test_help_and_usage(void **state)
 {
     (void)state;
@@ -45,16 +34,16 @@ static void test_generate_info_json(void **state)
     (void)state;
     const char *path = tu_tmp_path("cli-sphere.ply");
     char *out;
-    assert_int_equal(tu_run_cli(fmt("generate sphere --triangles 2k -o '%s' -q", path), &out),
+    assert_int_equal(tu_run_cli(tu_fmt("generate sphere --triangles 2k -o '%s' -q", path), &out),
                      0);
     free(out);
-    assert_int_equal(tu_run_cli(fmt("info --json '%s'", path), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("info --json '%s'", path), &out), 0);
     tu_assert_contains(out, "\"triangles\": 2000");
     tu_assert_contains(out, "\"euler_characteristic\": 2");
     tu_assert_contains(out, "\"closed\": true");
     tu_assert_contains(out, "\"genus\": 0");
     free(out);
-    assert_int_equal(tu_run_cli(fmt("info '%s'", path), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", path), &out), 0);
     tu_assert_contains(out, "closed, manifold");
     tu_assert_contains(out, "euler characteristic   2");
     free(out);
@@ -62,7 +51,7 @@ static void test_generate_info_json(void **state)
     /* same seed, same bytes; --threads does not change the result */
     const char *again = tu_tmp_path("cli-sphere2.ply");
     assert_int_equal(
-        tu_run_cli(fmt("--threads 1 generate sphere --triangles 2k -o '%s' -q", again), NULL), 0);
+        tu_run_cli(tu_fmt("--threads 1 generate sphere --triangles 2k -o '%s' -q", again), NULL), 0);
     size_t n1, n2;
     char *a = tu_read_file(path, &n1), *b = tu_read_file(again, &n2);
     assert_int_equal(n1, n2);
@@ -75,10 +64,10 @@ static void test_torus_info(void **state)
 {
     (void)state;
     const char *path = tu_tmp_path("cli-torus.obj");
-    assert_int_equal(tu_run_cli(fmt("generate torus --triangles 5000 -o '%s' -q", path), NULL),
+    assert_int_equal(tu_run_cli(tu_fmt("generate torus --triangles 5000 -o '%s' -q", path), NULL),
                      0);
     char *out;
-    assert_int_equal(tu_run_cli(fmt("info --json '%s'", path), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("info --json '%s'", path), &out), 0);
     tu_assert_contains(out, "\"closed\": false");
     tu_assert_contains(out, "\"manifold\": true");
     free(out);
@@ -93,7 +82,7 @@ static void test_convert_and_clean(void **state)
     tu_write_file(in, text, strlen(text));
     const char *ply = tu_tmp_path("cli-out.ply");
     char *out;
-    assert_int_equal(tu_run_cli(fmt("convert '%s' '%s' --ascii", in, ply), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s' --ascii", in, ply), &out), 0);
     free(out);
     mr_mesh m;
     mr_error err;
@@ -103,7 +92,7 @@ static void test_convert_and_clean(void **state)
     mr_mesh_free(&m);
 
     const char *cleaned = tu_tmp_path("cli-clean.obj");
-    assert_int_equal(tu_run_cli(fmt("clean '%s' -o '%s'", in, cleaned), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("clean '%s' -o '%s'", in, cleaned), &out), 0);
     tu_assert_contains(out, "1 vertices welded");
     free(out);
     assert_int_equal(mr_mesh_read(cleaned, NULL, &m, &err), MR_OK);
@@ -130,7 +119,7 @@ static void test_bad_inputs_fail_cleanly(void **state)
         tu_write_file(in, cases[i].content, strlen(cases[i].content));
         const char *outp = tu_tmp_path("never-written.ply");
         char *out;
-        assert_int_equal(tu_run_cli(fmt("convert '%s' '%s'", in, outp), &out), 1);
+        assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s'", in, outp), &out), 1);
         tu_assert_contains(out, "meshreduce: ");
         tu_assert_contains(out, cases[i].message);
         /* exactly one line of error */
@@ -143,7 +132,7 @@ static void test_bad_inputs_fail_cleanly(void **state)
     assert_int_equal(tu_run_cli("info /nonexistent/mesh.obj", &out), 1);
     tu_assert_contains(out, "/nonexistent/mesh.obj: cannot open for reading");
     free(out);
-    assert_int_equal(tu_run_cli(fmt("generate sphere -o '%s'", tu_tmp_path("x.unknown")), &out),
+    assert_int_equal(tu_run_cli(tu_fmt("generate sphere -o '%s'", tu_tmp_path("x.unknown")), &out),
                      2);
     tu_assert_contains(out, "cannot tell the output format");
     free(out);
@@ -164,7 +153,7 @@ static void test_demo_small(void **state)
     (void)state;
     char *out;
     const char *dir = tu_tmp_path("demo");
-    assert_int_equal(tu_run_cli(fmt("demo --triangles 20000 --dir '%s'", dir), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("demo --triangles 20000 --dir '%s'", dir), &out), 0);
     tu_assert_contains(out, "generate scan");
     tu_assert_contains(out, "identical to what was written");
     tu_assert_contains(out, "closed, manifold, 1 component, euler 2");
@@ -178,9 +167,9 @@ static void test_simplify_cli(void **state)
     (void)state;
     const char *in = tu_tmp_path("cli-simp-in.ply");
     const char *out_path = tu_tmp_path("cli-simp-out.obj");
-    assert_int_equal(tu_run_cli(fmt("generate sphere --triangles 20k -o '%s' -q", in), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("generate sphere --triangles 20k -o '%s' -q", in), NULL), 0);
     char *out;
-    assert_int_equal(tu_run_cli(fmt("simplify '%s' -o '%s' --ratio 10%% --json", in, out_path),
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 10%% --json", in, out_path),
                                 &out), 0);
     tu_assert_contains(out, "\"output_vertices\": 1024");
     tu_assert_contains(out, "\"input_vertices\": 10242");
@@ -190,7 +179,7 @@ static void test_simplify_cli(void **state)
     assert_int_equal(mr_mesh_read(out_path, NULL, &m, &err), MR_OK);
     assert_int_equal(m.vertex_count, 1024);
     mr_mesh_free(&m);
-    assert_int_equal(tu_run_cli(fmt("simplify '%s' -o '%s' --triangles 500 --collapse half "
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --triangles 500 --collapse half "
                                     "--stats", in, out_path), &out), 0);
     tu_assert_contains(out, "triangles  20,480 -> 500\n");
     free(out);
@@ -210,14 +199,14 @@ static void test_simplify_cli(void **state)
         {"--max-normal-turn 0 --ratio 0.5", "--max-normal-turn needs degrees", 2},
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
-        assert_int_equal(tu_run_cli(fmt("simplify '%s' -o '%s' %s", in, never, bad[i].args),
+        assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' %s", in, never, bad[i].args),
                                     &out),
                          bad[i].status);
         tu_assert_contains(out, bad[i].message);
         free(out);
         assert_false(tu_file_exists(never));
     }
-    assert_int_equal(tu_run_cli(fmt("simplify /nonexistent.obj -o '%s' --ratio 0.5", never),
+    assert_int_equal(tu_run_cli(tu_fmt("simplify /nonexistent.obj -o '%s' --ratio 0.5", never),
                                 &out), 1);
     tu_assert_contains(out, "/nonexistent.obj: cannot open for reading");
     free(out);

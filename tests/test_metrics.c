@@ -12,17 +12,6 @@
 #include <omp.h>
 #endif
 
-static char cmd[4096];
-
-static const char *fmt(const char *f, ...)
-{
-    va_list ap;
-    va_start(ap, f);
-    vsnprintf(cmd, sizeof cmd, f, ap);
-    va_end(ap);
-    return cmd;
-}
-
 static void assert_near(double got, double want, double tol)
 {
     if (!(fabs(got - want) <= tol)) {
@@ -489,14 +478,14 @@ static void test_compare_cli(void **state)
 {
     (void)state;
     const char *a = tu_tmp_path("cmp-a.ply"), *b = tu_tmp_path("cmp-b.obj");
-    assert_int_equal(tu_run_cli(fmt("generate scan --triangles 20k --seed 1 -o '%s' -q", a),
+    assert_int_equal(tu_run_cli(tu_fmt("generate scan --triangles 20k --seed 1 -o '%s' -q", a),
                                 NULL),
                      0);
-    assert_int_equal(tu_run_cli(fmt("generate scan --triangles 5k --seed 1 -o '%s' -q", b),
+    assert_int_equal(tu_run_cli(tu_fmt("generate scan --triangles 5k --seed 1 -o '%s' -q", b),
                                 NULL),
                      0);
     char *out;
-    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' --samples 50k", a, b), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s' '%s' --samples 50k", a, b), &out), 0);
     tu_assert_contains(out, "hausdorff");
     tu_assert_contains(out, "reference -> test max");
     tu_assert_contains(out, "modified hausdorff");
@@ -504,7 +493,7 @@ static void test_compare_cli(void **state)
     tu_assert_contains(out, "50,000 samples each, seed 1");
     free(out);
 
-    assert_int_equal(tu_run_cli(fmt("--threads 1 compare --json '%s' '%s' --samples=50k", a, b),
+    assert_int_equal(tu_run_cli(tu_fmt("--threads 1 compare --json '%s' '%s' --samples=50k", a, b),
                                 &out),
                      0);
     tu_assert_contains(out, "{\"reference\": ");
@@ -514,7 +503,7 @@ static void test_compare_cli(void **state)
     /* the figures do not depend on the thread count */
     char *h1 = strstr(out, "\"hausdorff\": ");
     char *out2;
-    assert_int_equal(tu_run_cli(fmt("--threads 2 compare --json '%s' '%s' --samples=50k", a, b),
+    assert_int_equal(tu_run_cli(tu_fmt("--threads 2 compare --json '%s' '%s' --samples=50k", a, b),
                                 &out2),
                      0);
     char *h2 = strstr(out2, "\"hausdorff\": ");
@@ -524,32 +513,32 @@ static void test_compare_cli(void **state)
     free(out2);
 
     /* a mesh against itself */
-    assert_int_equal(tu_run_cli(fmt("compare --json '%s' '%s' --samples 0", a, a), &out), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("compare --json '%s' '%s' --samples 0", a, a), &out), 0);
     tu_assert_contains(out, "\"hausdorff\": 0,");
     free(out);
 
     /* bad input: exit 1 with one clear message */
-    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s'", a, tu_tmp_path("no-such.ply")), &out),
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s' '%s'", a, tu_tmp_path("no-such.ply")), &out),
                      1);
     tu_assert_contains(out, "no-such.ply");
     free(out);
     const char *cloud = tu_tmp_path("cmp-cloud.xyz");
     tu_write_file(cloud, "0 0 0\n1 0 0\n0 1 0\n", 18);
-    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s'", a, cloud), &out), 1);
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s' '%s'", a, cloud), &out), 1);
     tu_assert_contains(out, "has no triangles");
     free(out);
 
     /* usage errors: exit 2 */
-    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' --frob", a, b), &out), 2);
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s' '%s' --frob", a, b), &out), 2);
     tu_assert_contains(out, "unknown option '--frob'");
     free(out);
-    assert_int_equal(tu_run_cli(fmt("compare '%s'", a), &out), 2);
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s'", a), &out), 2);
     tu_assert_contains(out, "needs two files");
     free(out);
-    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' --samples lots", a, b), &out), 2);
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s' '%s' --samples lots", a, b), &out), 2);
     tu_assert_contains(out, "--samples needs a count");
     free(out);
-    assert_int_equal(tu_run_cli(fmt("compare '%s' '%s' '%s'", a, b, a), &out), 2);
+    assert_int_equal(tu_run_cli(tu_fmt("compare '%s' '%s' '%s'", a, b, a), &out), 2);
     free(out);
     assert_int_equal(tu_run_cli("compare --help", &out), 0);
     tu_assert_contains(out, "usage: meshreduce compare REF TEST");

@@ -120,3 +120,13 @@ void tu_assert_mesh_equal(const mr_mesh *a, const mr_mesh *b)
     if (a->colors)
         assert_memory_equal(a->colors, b->colors, a->vertex_count * 4 * sizeof(float));
 }
+
+const char *tu_fmt(const char *format, ...)
+{
+    static char buf[8192];
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(buf, sizeof buf, format, ap);
+    va_end(ap);
+    return buf;
+}

@@ -29,6 +29,10 @@ const char *tu_shared_data(const char *filename);
 /* Parse a string as a file of the given name (format from its extension). */
 mr_status tu_read_string(const char *text, const char *name, mr_mesh *mesh, mr_error *err);
 
+/* printf into a static buffer (valid until the next call), for building
+ * command lines. */
+const char *tu_fmt(const char *format, ...) __attribute__((format(printf, 1, 2)));
+
 /* Run the command-line tool with the given arguments (one shell string,
  * appended to the tool's path); returns its exit status and, when out is
  * non-NULL, stores its combined stdout+stderr (malloc'd) there. */

@@ -7,6 +7,7 @@
 
 #include "meshreduce.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -73,6 +74,29 @@ static inline uint32_t mr_bswap32(uint32_t v)
 static inline uint64_t mr_bswap64(uint64_t v)
 {
     return ((uint64_t)mr_bswap32((uint32_t)v) << 32) | mr_bswap32((uint32_t)(v >> 32));
+}
+
+/* splitmix64's finaliser: a bijective 64-bit mix with full avalanche; the
+ * library's one hash for seeds, counter-based random streams and keys. */
+static inline uint64_t mr_mix64(uint64_t x)
+{
+    x ^= x >> 30;
+    x *= UINT64_C(0xbf58476d1ce4e5b9);
+    x ^= x >> 27;
+    x *= UINT64_C(0x94d049bb133111eb);
+    x ^= x >> 31;
+    return x;
+}
+
+/* Area of the triangle (a, b, c), half the length of the cross product. */
+static inline double mr_triangle_area(const double a[3], const double b[3], const double c[3])
+{
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double x = u[1] * v[2] - u[2] * v[1];
+    double y = u[2] * v[0] - u[0] * v[2];
+    double z = u[0] * v[1] - u[1] * v[0];
+    return 0.5 * sqrt(x * x + y * y + z * z);
 }
 
 /* Number of threads to use for a requested count (0 = all cores). */

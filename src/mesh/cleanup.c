@@ -131,15 +131,6 @@ static bool same_vertex(const weld_layout *l, uint32_t a, uint32_t b)
     return true;
 }
 
-static inline uint64_t mix64(uint64_t h)
-{
-    h ^= h >> 30;
-    h *= UINT64_C(0xbf58476d1ce4e5b9);
-    h ^= h >> 27;
-    h *= UINT64_C(0x94d049bb133111eb);
-    h ^= h >> 31;
-    return h;
-}
 
 static uint64_t hash_vertex(const weld_layout *l, uint32_t v)
 {
@@ -147,7 +138,7 @@ static uint64_t hash_vertex(const weld_layout *l, uint32_t v)
     for (unsigned k = 0; k < l->count; k++) {
         const float *p = l->arrays[k] + (size_t)v * l->widths[k];
         for (unsigned j = 0; j < l->widths[k]; j++)
-            h = mix64(h ^ float_word(p[j]));
+            h = mr_mix64(h ^ float_word(p[j]));
     }
     return h;
 }

@@ -69,21 +69,11 @@ const char *mr_generator_name(mr_generator kind)
 /* Hashing: every random choice is a pure function of (seed, position)     */
 /* ------------------------------------------------------------------------ */
 
-/* The splitmix64 finaliser: a bijection on 64 bits with full avalanche. */
-static inline uint64_t mix64(uint64_t z)
-{
-    z ^= z >> 30;
-    z *= 0xbf58476d1ce4e5b9ull;
-    z ^= z >> 27;
-    z *= 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    return z;
-}
 
 /* The i-th value of an independent stream named by `tag` for `seed`. */
 static inline uint64_t stream(uint64_t seed, uint64_t tag, uint64_t i)
 {
-    return mix64(mix64(seed ^ mix64(tag)) + i * 0x9e3779b97f4a7c15ull);
+    return mr_mix64(mr_mix64(seed ^ mr_mix64(tag)) + i * 0x9e3779b97f4a7c15ull);
 }
 
 /* Uniform in [0, 1) from the top 53 bits. */
@@ -342,7 +332,7 @@ static double gradient_noise(uint64_t seed, double x, double y, double z)
     double v[8];
     for (int c = 0; c < 8; c++) {
         int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
-        uint64_t h = mix64(seed + hx + (dx ? sx : 0) + hy + (dy ? sy : 0) + hz +
+        uint64_t h = mr_mix64(seed + hx + (dx ? sx : 0) + hy + (dy ? sy : 0) + hz +
                            (dz ? sz : 0));
         v[c] = corner_dot(h, ux - dx, uy - dy, uz - dz);
     }

@@ -99,12 +99,7 @@ static double triangle_area(const float *positions, size_t stride, const uint32_
     load_position(positions, stride, tri[0], a);
     load_position(positions, stride, tri[1], b);
     load_position(positions, stride, tri[2], c);
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double x = u[1] * v[2] - u[2] * v[1];
-    double y = u[2] * v[0] - u[0] * v[2];
-    double z = u[0] * v[1] - u[1] * v[0];
-    return 0.5 * sqrt(x * x + y * y + z * z);
+    return mr_triangle_area(a, b, c);
 }
 
 /* Sum of triangle areas. Each fixed block of triangles is summed in order and

@@ -51,21 +51,11 @@ void mr_compare_options_default(mr_compare_options *options)
 
 /* ---- counter-based random numbers ------------------------------------------- */
 
-/* splitmix64's finaliser: a bijective 64-bit mix. */
-static inline uint64_t mix64(uint64_t x)
-{
-    x ^= x >> 30;
-    x *= 0xbf58476d1ce4e5b9ull;
-    x ^= x >> 27;
-    x *= 0x94d049bb133111ebull;
-    x ^= x >> 31;
-    return x;
-}
 
 /* The k-th uniform number in [0, 1) of item i in the stream `seed`. */
 static inline double unit_random(uint64_t seed, uint64_t i, unsigned k)
 {
-    uint64_t h = mix64(seed + 0x9e3779b97f4a7c15ull * (4 * i + k + 1));
+    uint64_t h = mr_mix64(seed + 0x9e3779b97f4a7c15ull * (4 * i + k + 1));
     return (double)(h >> 11) * 0x1p-53;
 }
 
@@ -168,12 +158,7 @@ static double triangle_area(const float *pos, const uint32_t *tri)
     load(pos, tri[0], a);
     load(pos, tri[1], b);
     load(pos, tri[2], c);
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double x = u[1] * v[2] - u[2] * v[1];
-    double y = u[2] * v[0] - u[0] * v[2];
-    double z = u[0] * v[1] - u[1] * v[0];
-    return 0.5 * sqrt(x * x + y * y + z * z);
+    return mr_triangle_area(a, b, c);
 }
 
 /* prefix[t] = area of the triangles before t. Each fixed block of
@@ -424,11 +409,11 @@ mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
     s[0] = (surface){.name = "reference mesh", .pos = ref_positions,
                      .vertex_count = ref_vertex_count, .idx = ref_indices,
                      .triangle_count = ref_triangle_count, .samples = opt.samples,
-                     .seed = mix64(opt.seed ^ 0x7265666572656e63ull)};
+                     .seed = mr_mix64(opt.seed ^ 0x7265666572656e63ull)};
     s[1] = (surface){.name = "test mesh", .pos = test_positions,
                      .vertex_count = test_vertex_count, .idx = test_indices,
                      .triangle_count = test_triangle_count, .samples = opt.samples,
-                     .seed = mix64(opt.seed ^ 0x746573746d657368ull)};
+                     .seed = mr_mix64(opt.seed ^ 0x746573746d657368ull)};
     mr_tri_bvh tree[2];
     mr_point_bvh points;
     memset(tree, 0, sizeof tree);
