@@ -6,8 +6,8 @@
 
 #include <math.h>
 
-/* Marks a list's first entry during compaction; triangle ids stay below it
- * (3 * triangle_count fits in 32 bits). */
+/* Marks a list's first entry during compaction; corner ids stay below it
+ * (3 * triangle_count <= LIST_TAG, checked at init). */
 #define LIST_TAG 0x80000000u
 
 static inline bool tri_has(const uint32_t *t, uint32_t x)
@@ -30,7 +30,7 @@ uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint3
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     uint32_t n = 0;
     for (uint32_t i = 0; i < m->count[v]; i++)
-        n += tri_has(m->tris + 3 * (size_t)list[i], w);
+        n += tri_has(m->tris + (list[i] - list[i] % 3), w);
     return n;
 }
 
@@ -41,8 +41,8 @@ static uint32_t other_triangle(const mr_collapse_mesh *m, uint32_t v, uint32_t w
 {
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     for (uint32_t i = 0; i < m->count[v]; i++)
-        if (list[i] != not && tri_has(m->tris + 3 * (size_t)list[i], w))
-            return list[i];
+        if (list[i] / 3 != not && tri_has(m->tris + (list[i] - list[i] % 3), w))
+            return list[i] / 3;
     return MR_COLLAPSE_NONE;
 }
 
@@ -78,7 +78,7 @@ static uint8_t classify_vertex(const mr_collapse_mesh *m, uint32_t v)
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     uint32_t boundary_edges = 0;
     for (uint32_t i = 0; i < n; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
         /* Edge v -> a of this triangle; each edge at v is seen once from
          * each side, so look at the forward ones and at the backward ones
          * that are boundary edges. */
@@ -94,7 +94,7 @@ static uint8_t classify_vertex(const mr_collapse_mesh *m, uint32_t v)
             }
             /* Two triangles: they must run along the edge in opposite
              * directions (consistent orientation). */
-            uint32_t s = other_triangle(m, v, w, list[i]);
+            uint32_t s = other_triangle(m, v, w, list[i] / 3);
             const uint32_t *o = m->tris + 3 * (size_t)s;
             bool here_forward = k == 0;
             bool there_forward = tri_next(o, v) == w;
@@ -105,9 +105,9 @@ static uint8_t classify_vertex(const mr_collapse_mesh *m, uint32_t v)
     if (boundary_edges != 0 && boundary_edges != 2)
         return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
     bool closed;
-    uint32_t seen = 1 + walk_fan(m, v, list[0], true, &closed);
+    uint32_t seen = 1 + walk_fan(m, v, list[0] / 3, true, &closed);
     if (!closed)
-        seen += walk_fan(m, v, list[0], false, &closed);
+        seen += walk_fan(m, v, list[0] / 3, false, &closed);
     if (seen != n)
         return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* several fans */
     return boundary_edges ? MR_VF_BOUNDARY : 0;
@@ -135,7 +135,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
 {
     memset(m, 0, sizeof *m);
     const size_t vc = vertex_count, tc = triangle_count;
-    if (vc >= LIST_TAG || tc > UINT32_MAX / 3)
+    if (vc >= LIST_TAG || tc > LIST_TAG / 3)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
                              "%zu vertices, %zu triangles exceed the simplifier's limits", vc,
                              tc);
@@ -186,14 +186,17 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     m->live_triangles = live_tris;
 
     /* Drop the degenerate triangles from the lists (the gaps they leave
-     * are garbage that compaction reclaims). */
+     * are garbage that compaction reclaims), and store corner ids. */
     size_t live_vertices = 0;
     for (size_t v = 0; v < vc; v++) {
         const uint32_t s = m->start[v], e = m->start[v + 1];
         uint32_t n = 0;
-        for (uint32_t i = s; i < e; i++)
-            if (m->tris[3 * (size_t)refs[i]] != MR_COLLAPSE_NONE)
-                refs[s + n++] = refs[i];
+        for (uint32_t i = s; i < e; i++) {
+            const uint32_t t = refs[i];
+            const uint32_t *tri = m->tris + 3 * (size_t)t;
+            if (tri[0] != MR_COLLAPSE_NONE)
+                refs[s + n++] = 3 * t + (tri[0] == v ? 0 : tri[1] == v ? 1 : 2);
+        }
         m->count[v] = n;
         live_vertices += n > 0;
         float p[3];
@@ -209,24 +212,21 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
 
 /* ---- validity -------------------------------------------------------------- */
 
-/* Does triangle (a, b, c) -- with the vertex at corner `moved` replaced
- * by `to` -- keep its normal within the limit, and its area? */
+/* Does triangle tri -- with the vertex at corner `moved` replaced by `to`
+ * -- keep its normal within the limit, and its area? */
 static bool triangle_ok(const mr_collapse_mesh *m, const uint32_t *tri, uint32_t moved,
                         const double to[3], double min_cos)
 {
     double p[3][3], q[3][3];
     for (int k = 0; k < 3; k++) {
         mr_collapse_load(m, tri[k], p[k]);
-        if (tri[k] == moved) {
-            q[k][0] = to[0];
-            q[k][1] = to[1];
-            q[k][2] = to[2];
-        } else {
-            q[k][0] = p[k][0];
-            q[k][1] = p[k][1];
-            q[k][2] = p[k][2];
-        }
+        q[k][0] = p[k][0];
+        q[k][1] = p[k][1];
+        q[k][2] = p[k][2];
     }
+    q[moved][0] = to[0];
+    q[moved][1] = to[1];
+    q[moved][2] = to[2];
     /* Unnormalised normals (twice the area): the tests below are the unit
      * normals' cos > min_cos and area ratio > 1e-6, squared, without a
      * square root or a division. A degenerate normal is 0 and fails. */
@@ -254,6 +254,18 @@ static bool triangle_ok(const mr_collapse_mesh *m, const uint32_t *tri, uint32_t
     return l1 > 1e-12 * l0;
 }
 
+/* Corner id e = 3t + j: its triangle's vertices, and the vertices after and
+ * before corner j. */
+#define CORNER_TRI(m, e) ((m)->tris + ((e) - (e) % 3))
+static inline uint32_t corner_next(const uint32_t *tri, uint32_t j)
+{
+    return tri[j == 2 ? 0 : j + 1];
+}
+static inline uint32_t corner_prev(const uint32_t *tri, uint32_t j)
+{
+    return tri[j == 0 ? 2 : j - 1];
+}
+
 bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                        const double target[3], const mr_collapse_limits *limits)
 {
@@ -278,16 +290,21 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         return false;
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
 
-    /* The triangles on the edge and their opposite vertices. */
+    /* u's neighbours across each of its corners, once; the triangles on the
+     * edge and their opposite vertices. */
+    uint32_t nua[MR_COLLAPSE_MAX_DEGREE], nub[MR_COLLAPSE_MAX_DEGREE];
     uint32_t opp[2] = {MR_COLLAPSE_NONE, MR_COLLAPSE_NONE}, ne = 0;
     for (uint32_t i = 0; i < nu; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)lu[i];
-        if (!tri_has(tri, v))
+        const uint32_t e = lu[i], j = e % 3;
+        const uint32_t *tri = CORNER_TRI(m, e);
+        const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
+        nua[i] = a;
+        nub[i] = b;
+        if (a != v && b != v)
             continue;
         if (ne == 2)
             return false; /* non-manifold edge */
-        opp[ne++] = tri[0] != u && tri[0] != v ? tri[0] : tri[1] != u && tri[1] != v ? tri[1]
-                                                                                      : tri[2];
+        opp[ne++] = a == v ? b : a;
     }
     if (ne == 0 || (ne == 2 && opp[0] == opp[1]))
         return false;
@@ -303,37 +320,43 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
     uint32_t nbv[2 * MR_COLLAPSE_MAX_DEGREE];
     uint32_t nn = 0;
     for (uint32_t i = 0; i < nv; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)lv[i];
-        nbv[nn++] = tri_next(tri, v);
-        nbv[nn++] = tri_prev(tri, v);
+        const uint32_t e = lv[i], j = e % 3;
+        const uint32_t *tri = CORNER_TRI(m, e);
+        nbv[nn++] = corner_next(tri, j);
+        nbv[nn++] = corner_prev(tri, j);
     }
     for (uint32_t i = 0; i < nu; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)lu[i];
-        if (tri_has(tri, v))
+        const uint32_t a = nua[i], b = nub[i];
+        if (a == v || b == v)
             continue;
-        const uint32_t a = tri_next(tri, u), b = tri_prev(tri, u);
         for (uint32_t j = 0; j < nn; j++) {
             const uint32_t x = nbv[j];
             if ((x == a || x == b) && x != opp[0] && x != opp[1])
                 return false;
         }
+    }
+    for (uint32_t i = 0; i < nu; i++) {
+        const uint32_t a = nua[i], b = nub[i];
+        if (a == v || b == v)
+            continue;
         /* (3) u's triangle (u, c, d) over both opposite vertices would
          * duplicate a triangle (v, c, d) of v: a tetrahedron-like pocket. */
         if (ne == 2 && ((a == opp[0] && b == opp[1]) || (a == opp[1] && b == opp[0]))) {
             for (uint32_t j = 0; j < nv; j++) {
-                const uint32_t *o = m->tris + 3 * (size_t)lv[j];
+                const uint32_t *o = CORNER_TRI(m, lv[j]);
                 if (tri_has(o, a) && tri_has(o, b))
                     return false;
             }
         }
         /* (2) the triangle's normal under the move of u. */
-        if (!triangle_ok(m, tri, u, t, limits->min_cos_turn))
+        if (!triangle_ok(m, CORNER_TRI(m, lu[i]), lu[i] % 3, t, limits->min_cos_turn))
             return false;
     }
     if (!v_stays) {
         for (uint32_t i = 0; i < nv; i++) {
-            const uint32_t *tri = m->tris + 3 * (size_t)lv[i];
-            if (!tri_has(tri, u) && !triangle_ok(m, tri, v, t, limits->min_cos_turn))
+            if (nbv[2 * i] == u || nbv[2 * i + 1] == u)
+                continue;
+            if (!triangle_ok(m, CORNER_TRI(m, lv[i]), lv[i] % 3, t, limits->min_cos_turn))
                 return false;
         }
     }
@@ -379,13 +402,13 @@ void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
         compact_refs(m);
 }
 
-/* Take triangle t out of vertex c's list (order does not matter). */
-static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t t)
+/* Take corner id e out of its vertex c's list (order does not matter). */
+static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
 {
     uint32_t *list = m->refs + m->start[c];
     const uint32_t n = m->count[c];
     for (uint32_t i = 0; i < n; i++) {
-        if (list[i] == t) {
+        if (list[i] == e) {
             list[i] = list[n - 1];
             m->count[c] = n - 1;
             return;
@@ -400,12 +423,13 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
     unsigned deleted = 0;
     for (uint32_t i = 0; i < nu; i++) {
-        uint32_t *tri = m->tris + 3 * (size_t)lu[i];
-        if (tri_has(tri, v)) {
-            const uint32_t c = tri[0] != u && tri[0] != v ? tri[0]
-                               : tri[1] != u && tri[1] != v ? tri[1]
-                                                            : tri[2];
-            list_remove(m, c, lu[i]);
+        const uint32_t e = lu[i], j = e % 3, base = e - j;
+        uint32_t *tri = m->tris + base;
+        const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
+        if (tri[jn] == v || tri[jp] == v) {
+            const uint32_t jc = tri[jn] == v ? jp : jn;
+            const uint32_t c = tri[jc];
+            list_remove(m, c, base + jc);
             if (m->count[c] == 0) { /* an ear's tip: now unreferenced */
                 m->flags[c] |= MR_VF_REMOVED;
                 m->live_vertices--;
@@ -413,20 +437,18 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
             tri[0] = tri[1] = tri[2] = MR_COLLAPSE_NONE;
             deleted++;
         } else {
-            for (int k = 0; k < 3; k++)
-                if (tri[k] == u)
-                    tri[k] = v;
+            tri[j] = v;
         }
     }
     /* v's merged list, at the end of refs: v's surviving triangles, then
-     * u's. */
+     * u's (their corners now hold v). */
     uint32_t *out = m->refs + m->refs_size;
     uint32_t n = 0;
     for (uint32_t i = 0; i < nv; i++)
-        if (m->tris[3 * (size_t)lv[i]] != MR_COLLAPSE_NONE)
+        if (m->tris[lv[i] - lv[i] % 3] != MR_COLLAPSE_NONE)
             out[n++] = lv[i];
     for (uint32_t i = 0; i < nu; i++)
-        if (m->tris[3 * (size_t)lu[i]] != MR_COLLAPSE_NONE)
+        if (m->tris[lu[i] - lu[i] % 3] != MR_COLLAPSE_NONE)
             out[n++] = lu[i];
     m->start[v] = (uint32_t)m->refs_size;
     m->count[v] = n;

@@ -8,8 +8,9 @@
  *   - pos: float positions in normalised coordinates (see simplify.c);
  *   - tris: 3 vertex ids per triangle; a deleted triangle has
  *     tris[3t] == MR_COLLAPSE_NONE (degenerate input triangles start so);
- *   - per vertex the list of its live triangles: refs[start[v] ..
- *     start[v] + count[v]). A collapse u -> v writes v's merged list at the
+ *   - per vertex the list of its live triangles, as corner ids 3t + j
+ *     with tris[3t + j] == v (so v's corner is never searched for):
+ *     refs[start[v] .. start[v] + count[v]). A collapse u -> v writes v's merged list at the
  *     end of refs (the old lists of u and v become garbage) and removes the
  *     deleted triangles from the lists of their third vertices in place. When
  *     refs is full, mr_collapse_reserve compacts it in place (no extra
@@ -80,6 +81,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
                                 mr_error *err);
 void mr_collapse_mesh_free(mr_collapse_mesh *m);
 
+/* v's list: corner ids 3t + j, tris[3t + j] == v. */
 static inline const uint32_t *mr_collapse_vertex_tris(const mr_collapse_mesh *m, uint32_t v)
 {
     return m->refs + m->start[v];

@@ -103,9 +103,10 @@ static uint32_t edge_tris(const mr_simplifier *s, uint32_t r, uint32_t k, uint32
     const uint32_t *list = mr_collapse_vertex_tris(m, r);
     uint32_t n = 0;
     for (uint32_t i = 0; i < m->count[r] && n < 2; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        const uint32_t t = list[i] / 3;
+        const uint32_t *tri = m->tris + 3 * (size_t)t;
         if (tri[0] == k || tri[1] == k || tri[2] == k)
-            et[n++] = list[i];
+            et[n++] = t;
     }
     return n;
 }
@@ -181,11 +182,10 @@ static void attr_apply(mr_simplifier *s, uint32_t r, uint32_t k, const double ta
     /* r's corners take the survivor's wedge on their side. */
     const uint32_t *list = mr_collapse_vertex_tris(m, r);
     for (uint32_t i = 0; i < m->count[r]; i++) {
-        const uint32_t tt = list[i];
-        const uint32_t *tri = m->tris + 3 * (size_t)tt;
+        const uint32_t c = list[i]; /* r's corner */
+        const uint32_t *tri = m->tris + (c - c % 3);
         if (tri[0] == k || tri[1] == k || tri[2] == k)
             continue;
-        const uint32_t c = 3 * tt + (tri[0] == r ? 0 : tri[1] == r ? 1 : 2);
         const uint32_t w = a->corner[c];
         a->corner[c] = (n == 2 && w == from[1] && w != from[0]) ? to[1] : to[0];
     }
@@ -204,10 +204,10 @@ static void setup_seams(mr_simplifier *s)
         if (m->flags[v] & (MR_VF_REMOVED | MR_VF_NONMANIFOLD))
             continue;
         const uint32_t *list = mr_collapse_vertex_tris(m, v);
-        uint32_t w0 = wedge_at(s, list[0], v), w1 = NONE;
+        uint32_t w0 = a->corner[list[0]], w1 = NONE;
         bool many = false;
         for (uint32_t i = 1; i < m->count[v]; i++) {
-            uint32_t w = wedge_at(s, list[i], v);
+            uint32_t w = a->corner[list[i]];
             if (w == w0 || w == w1)
                 continue;
             if (w1 == NONE)
@@ -225,8 +225,8 @@ static void setup_seams(mr_simplifier *s)
         double pv[3];
         mr_collapse_load(m, v, pv);
         for (uint32_t i = 0; i < m->count[v]; i++) {
-            const uint32_t *tri = m->tris + 3 * (size_t)list[i];
-            const uint32_t k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+            const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+            const uint32_t k = list[i] % 3;
             const uint32_t x = tri[(k + 1) % 3]; /* each inner edge once */
             uint32_t et[2];
             if (edge_tris(s, v, x, et) != 2)

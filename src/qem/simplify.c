@@ -158,8 +158,8 @@ static inline double edge_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
         const uint32_t n_ = m_->count[(u)];                                           \
         const bool ub_ = (m_->flags[(u)] & (MR_VF_BOUNDARY | MR_VF_SEAM)) != 0;       \
         for (uint32_t i_ = 0; i_ < n_; i_++) {                                        \
-            const uint32_t *t_ = m_->tris + 3 * (size_t)list_[i_];                    \
-            const uint32_t k_ = t_[0] == (u) ? 0 : t_[1] == (u) ? 1 : 2;              \
+            const uint32_t k_ = list_[i_] % 3;                                        \
+            const uint32_t *t_ = m_->tris + (list_[i_] - k_);                         \
             {                                                                         \
                 const uint32_t w = t_[k_ == 2 ? 0 : k_ + 1];                          \
                 __VA_ARGS__                                                           \
@@ -349,11 +349,6 @@ static inline uint32_t he_dst(const mr_collapse_mesh *m, uint32_t h)
     return m->tris[h - j + (j == 2 ? 0 : j + 1)];
 }
 
-static inline uint32_t corner_of(const uint32_t *tri, uint32_t v)
-{
-    return tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-}
-
 /* The half-edge b -> a opposite h = a -> b, or NONE (boundary); searched
  * in a's list. */
 static uint32_t he_twin(const mr_collapse_mesh *m, uint32_t h)
@@ -361,11 +356,9 @@ static uint32_t he_twin(const mr_collapse_mesh *m, uint32_t h)
     const uint32_t a = m->tris[h], b = he_dst(m, h), t = h / 3;
     const uint32_t *list = mr_collapse_vertex_tris(m, a);
     for (uint32_t i = 0, n = m->count[a]; i < n; i++) {
-        const uint32_t t2 = list[i];
-        const uint32_t *tri = m->tris + 3 * (size_t)t2;
-        const uint32_t j = corner_of(tri, a), p = j == 0 ? 2 : j - 1;
-        if (tri[p] == b && t2 != t)
-            return 3 * t2 + p;
+        const uint32_t j = list[i] % 3, base = list[i] - j, p = j == 0 ? 2 : j - 1;
+        if (m->tris[base + p] == b && base != 3 * t)
+            return base + p;
     }
     return NONE;
 }
@@ -426,8 +419,8 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
         uint32_t cj[2 * MR_COLLAPSE_MAX_DEGREE], nx[2 * MR_COLLAPSE_MAX_DEGREE],
             pv[2 * MR_COLLAPSE_MAX_DEGREE];
         for (uint32_t i = 0; i < n; i++) {
-            const uint32_t *tri = m->tris + 3 * (size_t)list[i];
-            const uint32_t j = corner_of(tri, k);
+            const uint32_t j = list[i] % 3;
+            const uint32_t *tri = m->tris + (list[i] - j);
             cj[i] = j;
             nx[i] = tri[j == 2 ? 0 : j + 1];
             pv[i] = tri[j == 0 ? 2 : j - 1];
@@ -440,21 +433,20 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
                 if (i2 == i)
                     continue;
                 if (pv[i2] == x)
-                    tw_out = 3 * list[i2] + (cj[i2] == 0 ? 2 : cj[i2] - 1);
+                    tw_out = list[i2] - cj[i2] + (cj[i2] == 0 ? 2 : cj[i2] - 1);
                 if (nx[i2] == p)
                     in_twinned = true;
             }
-            const uint32_t t = list[i];
-            edge_enqueue(s, 3 * t + j, tw_out);
+            const uint32_t base = list[i] - j;
+            edge_enqueue(s, base + j, tw_out);
             if (!in_twinned)
-                edge_enqueue(s, 3 * t + (j == 0 ? 2 : j - 1), NONE);
+                edge_enqueue(s, base + (j == 0 ? 2 : j - 1), NONE);
         }
         return;
     }
     for (uint32_t i = 0; i < n; i++) {
-        const uint32_t t = list[i];
+        const uint32_t j = list[i] % 3, t = list[i] / 3;
         const uint32_t *tri = m->tris + 3 * (size_t)t;
-        const uint32_t j = corner_of(tri, k);
         const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
         const uint32_t x = tri[jn], p = tri[jp];
         uint32_t tw_out = NONE;
@@ -462,11 +454,11 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
         for (uint32_t i2 = 0; i2 < n; i2++) {
             if (i2 == i)
                 continue;
-            const uint32_t *o = m->tris + 3 * (size_t)list[i2];
-            const uint32_t j2 = corner_of(o, k);
+            const uint32_t j2 = list[i2] % 3;
+            const uint32_t *o = m->tris + (list[i2] - j2);
             const uint32_t j2n = j2 == 2 ? 0 : j2 + 1, j2p = j2 == 0 ? 2 : j2 - 1;
             if (o[j2p] == x)
-                tw_out = 3 * list[i2] + j2p;
+                tw_out = list[i2] - j2 + j2p;
             if (o[j2n] == p)
                 in_twinned = true;
         }
@@ -483,9 +475,8 @@ static void edge_requeue_vertex(mr_simplifier *s, uint32_t x, uint32_t k)
     const mr_collapse_mesh *m = &s->m;
     const uint32_t *list = mr_collapse_vertex_tris(m, x);
     for (uint32_t i = 0, n = m->count[x]; i < n; i++) {
-        const uint32_t t = list[i];
+        const uint32_t j = list[i] % 3, t = list[i] / 3;
         const uint32_t *tri = m->tris + 3 * (size_t)t;
-        const uint32_t j = corner_of(tri, x);
         const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
         if (tri[jn] != k) {
             const uint32_t h = 3 * t + j, tw = he_twin(m, h);
@@ -507,7 +498,7 @@ static void edge_unblock_ring(mr_simplifier *s, uint32_t k)
     m->flags[k] &= (uint8_t)~MR_VF_BLOCKED;
     const uint32_t *list = mr_collapse_vertex_tris(m, k);
     for (uint32_t i = 0, n = m->count[k]; i < n; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
         for (int c = 0; c < 3; c++) {
             const uint32_t x = tri[c];
             if (m->flags[x] & MR_VF_BLOCKED) {
@@ -582,7 +573,7 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
     mr_collapse_load(m, v, pv);
     const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
     for (uint32_t i = 0; i < m->count[v]; i++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)list[i];
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
         double p[3][3], n[3];
         for (int k = 0; k < 3; k++)
             mr_collapse_load(m, tri[k], p[k]);
@@ -590,7 +581,7 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
         mr_quadric_add_plane_through_origin(&q, n, area);
         if (!border)
             continue;
-        const uint32_t k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+        const uint32_t k = list[i] % 3;
         const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
         for (int e = 0; e < 2; e++) {
             if (mr_collapse_edge_triangles(m, v, ends[e]) != 1)
@@ -748,7 +739,12 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
             return st;
         }
     }
-    for (size_t v = 0; v < vertex_count; v++)
+    /* A gather over each vertex's own triangles, writing only its own
+     * quadric: the same result on any number of threads. */
+    const int nthreads = mr_thread_count(o->threads);
+    const ptrdiff_t nv = (ptrdiff_t)vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
         if (!(m->flags[v] & MR_VF_REMOVED))
             initial_quadric(s, (uint32_t)v, o->boundary_weight);
     return MR_OK;
@@ -826,9 +822,9 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
             uint32_t dead[2], nd = 0;
             const uint32_t *lr = mr_collapse_vertex_tris(m, r);
             for (uint32_t i = 0; i < m->count[r] && nd < 2; i++) {
-                const uint32_t *tri = m->tris + 3 * (size_t)lr[i];
+                const uint32_t *tri = m->tris + (lr[i] - lr[i] % 3);
                 if (tri[0] == k || tri[1] == k || tri[2] == k)
-                    dead[nd++] = lr[i];
+                    dead[nd++] = lr[i] / 3;
             }
             if (s->attr_apply)
                 s->attr_apply(s, r, k, target);
