@@ -194,9 +194,10 @@ static void attr_apply(mr_simplifier *s, uint32_t r, uint32_t k, const double ta
 /* ---- seam setup ---------------------------------------------------------------- */
 
 /* Flag seam vertices, lock the complex ones, add the seam edges'
- * constraint quadrics. */
-static void setup_seams(mr_simplifier *s)
+ * constraint quadrics. Returns the number of seam vertices. */
+static size_t setup_seams(mr_simplifier *s)
 {
+    size_t seam_vertices = 0;
     mr_collapse_mesh *m = &s->m;
     attr_ctx *a = s->attr;
     for (size_t vi = 0; vi < m->vertex_count; vi++) {
@@ -218,6 +219,7 @@ static void setup_seams(mr_simplifier *s)
         if (w1 == NONE)
             continue;
         m->flags[v] |= MR_VF_SEAM;
+        seam_vertices++;
         /* Count seam edges and add their constraint planes. */
         uint32_t seams = 0, loose = 0;
         mr_quadric q;
@@ -252,6 +254,7 @@ static void setup_seams(mr_simplifier *s)
         if (many || seams != 2 || loose || (m->flags[v] & MR_VF_BOUNDARY))
             m->flags[v] |= MR_VF_LOCKED;
     }
+    return seam_vertices;
 }
 
 /* ---- the call ---------------------------------------------------------------------- */
@@ -344,10 +347,22 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         return st;
     }
     s.attr = &a;
-    s.attr_valid = attr_valid;
-    s.attr_apply = attr_apply;
     s.pin_flags = MR_VF_SEAM;
-    setup_seams(&s);
+    /* Without seams every geometric vertex has one wedge: the attribute
+     * rules cannot refuse a collapse, and without attributes the only
+     * work of attr_apply -- giving moved corners the survivor's wedge --
+     * is done at output from each vertex's one wedge. */
+    const bool has_attributes = a.normals || a.texcoords || a.colors;
+    const bool has_seams = setup_seams(&s) > 0;
+    s.attr_valid = has_seams ? attr_valid : NULL;
+    s.attr_apply = has_seams || has_attributes ? attr_apply : NULL;
+    if (!s.attr_apply) {
+        /* wedge of each geometric vertex, kept in geo (no longer needed) */
+        const mr_collapse_mesh *m0 = &s.m;
+        for (size_t v = 0; v < vc; v++)
+            if (!(m0->flags[v] & MR_VF_REMOVED) && m0->count[v] > 0)
+                geo[v] = a.corner[mr_collapse_vertex_tris(m0, (uint32_t)v)[0]];
+    }
     st = mr_simplifier_fill_queue(&s, err);
     if (st != MR_OK) {
         mr_simplifier_free(&s);
@@ -362,6 +377,10 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
 
     /* Output: one vertex per surviving wedge, in input order. */
     const mr_collapse_mesh *m = &s.m;
+    if (!s.attr_apply)
+        for (size_t c = 0; c < 3 * tc; c++)
+            if (m->tris[c - c % 3] != NONE)
+                a.corner[c] = geo[m->tris[c]];
     uint32_t *remap = geo; /* reused: wedge -> output vertex */
     for (size_t v = 0; v < vc; v++)
         remap[v] = NONE;
