@@ -2,6 +2,7 @@
 #include "internal.h"
 
 #include <stdio.h>
+#include <time.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -109,4 +110,11 @@ int mr_thread_count(int requested)
 #else
     return 1;
 #endif
+}
+
+double mr_now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }

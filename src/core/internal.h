@@ -57,6 +57,15 @@ void *mr_realloc_array(void *p, size_t count, size_t size);
  * touched. */
 void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_count);
 
+/* target[v] = the first vertex whose position is bitwise equal to v's
+ * (-0 and +0 equal), v itself for the first of each group: the map that
+ * mr_mesh_weld_exact applies. Deterministic at any thread count. */
+mr_status mr_weld_positions(const float *positions, size_t vertex_count, uint32_t *target,
+                            mr_error *err);
+
+/* Monotonic wall clock in seconds (phase timings). */
+double mr_now_seconds(void);
+
 /* Byte order helpers for binary formats (the host may be of either order). */
 static inline bool mr_host_is_little_endian(void)
 {

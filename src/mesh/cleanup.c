@@ -169,6 +169,61 @@ static void weld_run(const weld_layout *l, const uint32_t *ids, size_t k, uint32
     }
 }
 
+/*
+ * target[v] = the first vertex whose data in `l` equals v's (v itself for
+ * the first of each group); keep[v] = 1 for those first vertices (when
+ * keep is non-NULL); *merged = the number of later copies.
+ */
+static mr_status weld_map(const weld_layout *l, size_t vc, uint32_t *target, uint8_t *keep,
+                          size_t *merged, mr_error *err)
+{
+    mr_status st = MR_OK;
+    uint64_t *keys = mr_alloc_array(vc, sizeof *keys);
+    uint32_t *ids = mr_alloc_array(vc, sizeof *ids);
+    uint32_t *reps = mr_alloc_array(vc, sizeof *reps);
+    uint8_t *own_keep = keep ? NULL : mr_calloc_array(vc, 1);
+    if (!keys || !ids || !reps || (!keep && !own_keep)) {
+        st = mr_fail_nomem(err, NULL, vc * 17);
+        goto done;
+    }
+    /* Sort by a hash truncated to ~11 bits more than the vertex ids need:
+     * distinct vertices then rarely share a key, with fewer radix passes
+     * than a full 64-bit key. Equal vertices always share it. */
+    unsigned bits = mr_index_bits(vc) + 11;
+    if (bits > 64)
+        bits = 64;
+#pragma omp parallel for schedule(static) if (vc > PARALLEL_MIN)
+    for (size_t v = 0; v < vc; v++) {
+        keys[v] = hash_vertex(l, (uint32_t)v) >> (64 - bits);
+        ids[v] = (uint32_t)v;
+    }
+    if ((st = mr_radix_sort_u64(keys, ids, vc, bits, err)) != MR_OK)
+        goto done;
+
+    *merged = 0;
+    for (size_t i = 0; i < vc;) {
+        size_t j = i + 1;
+        while (j < vc && keys[j] == keys[i])
+            j++;
+        weld_run(l, ids + i, j - i, target, keep ? keep : own_keep, reps, merged);
+        i = j;
+    }
+done:
+    free(keys);
+    free(ids);
+    free(reps);
+    free(own_keep);
+    return st;
+}
+
+mr_status mr_weld_positions(const float *positions, size_t vertex_count, uint32_t *target,
+                            mr_error *err)
+{
+    const weld_layout l = {{positions}, {3}, 1};
+    size_t merged;
+    return weld_map(&l, vertex_count, target, NULL, &merged, err);
+}
+
 mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t *removed,
                              mr_error *err)
 {
@@ -193,46 +248,18 @@ mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t 
         }
     }
 
-    uint64_t *keys = mr_alloc_array(vc, sizeof *keys);
-    uint32_t *ids = mr_alloc_array(vc, sizeof *ids);
     uint32_t *target = mr_alloc_array(vc, sizeof *target);
-    uint32_t *reps = mr_alloc_array(vc, sizeof *reps);
     uint8_t *keep = mr_calloc_array(vc, 1);
-    if (!keys || !ids || !target || !reps || !keep) {
-        st = mr_fail_nomem(err, NULL, vc * 21);
-        goto done;
-    }
-    /* Sort by a hash truncated to ~11 bits more than the vertex ids need:
-     * distinct vertices then rarely share a key, with fewer radix passes
-     * than a full 64-bit key. Equal vertices always share it. */
-    unsigned bits = mr_index_bits(vc) + 11;
-    if (bits > 64)
-        bits = 64;
-#pragma omp parallel for schedule(static) if (vc > PARALLEL_MIN)
-    for (size_t v = 0; v < vc; v++) {
-        keys[v] = hash_vertex(&l, (uint32_t)v) >> (64 - bits);
-        ids[v] = (uint32_t)v;
-    }
-    if ((st = mr_radix_sort_u64(keys, ids, vc, bits, err)) != MR_OK)
-        goto done;
-
     size_t merged = 0;
-    for (size_t i = 0; i < vc;) {
-        size_t j = i + 1;
-        while (j < vc && keys[j] == keys[i])
-            j++;
-        weld_run(&l, ids + i, j - i, target, keep, reps, &merged);
-        i = j;
-    }
-    if (merged)
+    if (!target || !keep)
+        st = mr_fail_nomem(err, NULL, vc * 5);
+    else
+        st = weld_map(&l, vc, target, keep, &merged, err);
+    if (st == MR_OK && merged)
         compact_vertices(mesh, target, keep);
-    if (removed)
+    if (st == MR_OK && removed)
         *removed = merged;
-done:
-    free(keys);
-    free(ids);
     free(target);
-    free(reps);
     free(keep);
     return st;
 }

@@ -23,7 +23,6 @@
 #include "simplify_internal.h"
 
 #include <math.h>
-#include <time.h>
 
 #define NONE MR_COLLAPSE_NONE
 
@@ -33,58 +32,6 @@ typedef struct attr_ctx {
     double seam_weight;
 } attr_ctx;
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* ---- welding ------------------------------------------------------------- */
-
-static inline uint32_t bits_of(float f)
-{
-    if (f == 0)
-        f = 0; /* -0 and +0 weld */
-    uint32_t b;
-    memcpy(&b, &f, sizeof b);
-    return b;
-}
-
-/* geo[v] = the first vertex with v's position (bitwise). */
-static mr_status weld(const float *pos, size_t vc, uint32_t *geo, mr_error *err)
-{
-    size_t cap = 16;
-    while (cap < 2 * vc)
-        cap *= 2;
-    uint32_t *table = mr_alloc_array(cap, sizeof *table);
-    if (!table)
-        return mr_fail_nomem(err, NULL, cap * 4);
-    memset(table, 0xff, cap * sizeof *table);
-    for (size_t v = 0; v < vc; v++) {
-        const uint32_t b[3] = {bits_of(pos[3 * v]), bits_of(pos[3 * v + 1]),
-                               bits_of(pos[3 * v + 2])};
-        uint64_t h = (b[0] * 73856093ull) ^ (b[1] * 19349663ull) ^ (b[2] * 83492791ull);
-        h ^= h >> 29;
-        h *= 0x9e3779b97f4a7c15ull;
-        size_t i = (size_t)(h >> 20) & (cap - 1);
-        for (;; i = (i + 1) & (cap - 1)) {
-            const uint32_t o = table[i];
-            if (o == NONE) {
-                table[i] = (uint32_t)v;
-                geo[v] = (uint32_t)v;
-                break;
-            }
-            if (bits_of(pos[3 * o]) == b[0] && bits_of(pos[3 * o + 1]) == b[1] &&
-                bits_of(pos[3 * o + 2]) == b[2]) {
-                geo[v] = o;
-                break;
-            }
-        }
-    }
-    free(table);
-    return MR_OK;
-}
 
 /* ---- wedges ------------------------------------------------------------------ */
 
@@ -286,7 +233,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: NULL mesh");
     if (in->triangle_count == 0)
         return mr_fail_plain(err, MR_ERR_EMPTY, NULL, "simplify: the mesh has no triangles");
-    const double t0 = now_seconds();
+    const double t0 = mr_now_seconds();
     const size_t vc = in->vertex_count, tc = in->triangle_count;
     mr_status st = mr_check_indices(in->indices, tc, vc, err);
     if (st != MR_OK)
@@ -306,7 +253,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         free_ctx(&a);
         return mr_fail_nomem(err, NULL, vc * 40 + tc * 24);
     }
-    st = weld(in->positions, vc, geo, err);
+    st = mr_weld_positions(in->positions, vc, geo, err);
     if (st != MR_OK) {
         free(geo);
         free(gidx);
@@ -370,10 +317,10 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         free_ctx(&a);
         return st;
     }
-    const double t1 = now_seconds();
+    const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, &o, &max_error);
-    const double t2 = now_seconds();
+    const double t2 = mr_now_seconds();
 
     /* Output: one vertex per surviving wedge, in input order. */
     const mr_collapse_mesh *m = &s.m;
@@ -452,7 +399,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         stats->max_error = max_error;
         stats->seconds_setup = t1 - t0;
         stats->seconds_collapse = t2 - t1;
-        stats->seconds_output = now_seconds() - t2;
+        stats->seconds_output = mr_now_seconds() - t2;
     }
     return MR_OK;
 }

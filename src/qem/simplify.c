@@ -26,16 +26,9 @@
 #include "simplify_internal.h"
 
 #include <math.h>
-#include <time.h>
 
 #define NONE MR_COLLAPSE_NONE
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 void mr_simplify_options_default(mr_simplify_options *o)
 {
@@ -936,7 +929,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     if (!out)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: no output");
     memset(out, 0, sizeof *out);
-    const double t0 = now_seconds();
+    const double t0 = mr_now_seconds();
     mr_simplifier s;
     mr_status st = mr_simplifier_init(&s, positions, stride, vertex_count, indices,
                                       triangle_count, options, NULL, err);
@@ -947,10 +940,10 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
         mr_simplifier_free(&s);
         return st;
     }
-    const double t1 = now_seconds();
+    const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, options, &max_error);
-    const double t2 = now_seconds();
+    const double t2 = mr_now_seconds();
     /* Only the mesh is needed from here: release the rest before the
      * output is allocated (it would set the peak). */
     mr_heap_free(&s.heap);
@@ -961,7 +954,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;
-    const double t3 = now_seconds();
+    const double t3 = mr_now_seconds();
     mr_simplify_stats *stats = &out->stats;
     stats->input_vertices = input_vertices;
     stats->input_triangles = triangle_count;
