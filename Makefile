@@ -7,7 +7,7 @@ CMAKE     ?= cmake
 FUZZ_SECONDS ?= 60
 
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
-BUILD_PKGS = cmake gcc libc6-dev make
+BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
 FUZZ_PKGS  = clang libclang-rt-14-dev
 

@@ -396,6 +396,18 @@ double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
                             size_t a_vertex_count, const float *b_positions,
                             const uint32_t *b_origin, size_t b_vertex_count);
 
+/* ------------------------------------------------------------------------ */
+/* Vertex clustering: exact epsilon welding and grid clustering             */
+/* ------------------------------------------------------------------------ */
+
+/* (declarations of src/cluster/) */
+
+/* ------------------------------------------------------------------------ */
+/* Rendering                                                                */
+/* ------------------------------------------------------------------------ */
+
+/* (declarations of src/render/) */
+
 #ifdef __cplusplus
 }
 #endif
