@@ -24,6 +24,11 @@ static const char usage[] =
     "  -o, --output FILE     output file (required)\n"
     "  --collapse full|half  full: both ends move to the optimal position (default);\n"
     "                        half: one end moves onto the other\n"
+    "  --strategy greedy|batched\n"
+    "                        batched: passes over all edges, cheapest first, at\n"
+    "                        most one collapse per vertex a pass (default);\n"
+    "                        greedy: always the single cheapest collapse, from a\n"
+    "                        heap (the reference; about 2.5x slower)\n"
     "  --lock-border         never move boundary vertices\n"
     "  --boundary-weight W   weight of the quadrics that hold boundaries and seams\n"
     "                        (default 1, 0 = none)\n"
@@ -158,6 +163,13 @@ static int run(int argc, char **argv)
                 o.collapse = MR_COLLAPSE_HALF;
             else
                 return cli_usage_error("simplify", "--collapse is full or half");
+        } else if (cli_value(argc, argv, &i, "--strategy", &v)) {
+            if (v && !strcmp(v, "greedy"))
+                o.strategy = MR_STRATEGY_GREEDY;
+            else if (v && !strcmp(v, "batched"))
+                o.strategy = MR_STRATEGY_BATCHED;
+            else
+                return cli_usage_error("simplify", "--strategy is greedy or batched");
         } else if (cli_flag(argc, argv, &i, "--lock-border")) {
             o.lock_border = 1;
         } else if (cli_value(argc, argv, &i, "--boundary-weight", &v)) {

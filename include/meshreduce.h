@@ -268,6 +268,17 @@ typedef enum mr_collapse_kind {
                              vertex's priority is its best outgoing collapse */
 } mr_collapse_kind;
 
+/* How the next collapses are chosen. */
+typedef enum mr_strategy {
+    MR_STRATEGY_GREEDY = 0, /* always the cheapest valid collapse, from an
+                               indexed heap with mutable priorities: the
+                               sequential reference */
+    MR_STRATEGY_BATCHED     /* passes: every edge's cost, then the cheapest
+                               ones in order, at most one collapse per
+                               vertex per pass (much faster, nearly the
+                               same result) */
+} mr_strategy;
+
 typedef void (*mr_progress_fn)(double fraction_done, void *user);
 
 typedef struct mr_simplify_options {
@@ -283,6 +294,7 @@ typedef struct mr_simplify_options {
                                    the bounding-box diagonal (0, default) */
 
     mr_collapse_kind collapse;  /* MR_COLLAPSE_FULL by default */
+    mr_strategy strategy;       /* MR_STRATEGY_BATCHED by default */
     double boundary_weight;     /* weight of the perpendicular-plane quadrics
                                    that hold open boundaries and attribute
                                    seams in place (default 1; 0 = none) */

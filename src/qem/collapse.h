@@ -87,6 +87,13 @@ static inline const uint32_t *mr_collapse_vertex_tris(const mr_collapse_mesh *m,
     return m->refs + m->start[v];
 }
 
+/* The head of half-edge h = 3t + j: the corner after j in triangle t. */
+static inline uint32_t mr_collapse_he_dst(const mr_collapse_mesh *m, uint32_t h)
+{
+    const uint32_t j = h % 3;
+    return m->tris[h - j + (j == 2 ? 0 : j + 1)];
+}
+
 static inline void mr_collapse_load(const mr_collapse_mesh *m, uint32_t v, double p[3])
 {
     p[0] = m->pos[3 * v];

@@ -34,6 +34,7 @@ void mr_simplify_options_default(mr_simplify_options *o)
 {
     memset(o, 0, sizeof *o);
     o->collapse = MR_COLLAPSE_FULL;
+    o->strategy = MR_STRATEGY_BATCHED;
     o->boundary_weight = 1.0;
     o->max_normal_turn = 60.0 * 3.14159265358979323846 / 180.0;
 }
@@ -336,11 +337,7 @@ static void update_around(mr_simplifier *s, uint32_t r, uint32_t k)
  * the top leaves the queue and flags its ends BLOCKED; a collapse whose
  * ring holds a flagged vertex re-queues that vertex's edges.
  */
-static inline uint32_t he_dst(const mr_collapse_mesh *m, uint32_t h)
-{
-    const uint32_t j = h % 3;
-    return m->tris[h - j + (j == 2 ? 0 : j + 1)];
-}
+#define he_dst mr_collapse_he_dst
 
 /* The half-edge b -> a opposite h = a -> b, or NONE (boundary); searched
  * in a's list. */
@@ -380,6 +377,28 @@ static double plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t
     *r = rr;
     *k = kk;
     return c;
+}
+
+double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
+                               uint32_t *k, double target[3])
+{
+    if (!s->half)
+        return plan_edge(s, a, b, r, k, target);
+    const double ca = half_cost(s, a, b), cb = half_cost(s, b, a);
+    const bool a_goes = ca < cb || (ca == cb && a > b); /* ties: the larger id goes */
+    *r = a_goes ? a : b;
+    *k = a_goes ? b : a;
+    mr_collapse_load(&s->m, *k, target);
+    return a_goes ? ca : cb;
+}
+
+void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
+{
+    if (s->attr_apply)
+        s->attr_apply(s, r, k, target);
+    merge_quadrics(s, r, k, target);
+    mr_collapse_reserve(&s->m, r, k);
+    mr_collapse_apply(&s->m, r, k, target);
 }
 
 /* Queue, re-key or drop the edge of half-edge h, whose twin is tw. */
@@ -598,6 +617,11 @@ void mr_simplifier_free(mr_simplifier *s)
     free(s->q);
     free(s->best);
     free(s->stale);
+    free(s->cand);
+    free(s->cand_tmp);
+    free(s->mark);
+    free(s->hist);
+    free(s->best64);
     memset(s, 0, sizeof *s);
 }
 
@@ -627,6 +651,9 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
     if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown collapse kind %d", (int)o->collapse);
+    if (o->strategy != MR_STRATEGY_GREEDY && o->strategy != MR_STRATEGY_BATCHED)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: unknown strategy %d", (int)o->strategy);
     if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
         o->max_error == 0)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -700,6 +727,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         return st;
     }
     s->half = o->collapse == MR_COLLAPSE_HALF;
+    s->batched = o->strategy == MR_STRATEGY_BATCHED;
     s->limits.half_edge = s->half;
     double c = cos(o->max_normal_turn);
     s->limits.min_cos_turn = c > 0 ? c : 0;
@@ -717,7 +745,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         mr_simplifier_free(s);
         return mr_fail_nomem(err, NULL, vertex_count * sizeof *s->q);
     }
-    if (s->half) { /* full collapses queue edges: see edge_fill_queue */
+    if (s->half && !s->batched) { /* full collapses queue edges: see edge_fill_queue */
         s->best = mr_alloc_array(vertex_count, sizeof *s->best);
         s->stale = mr_calloc_array(vertex_count, 1);
         if (!s->best || !s->stale) {
@@ -749,6 +777,8 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
  * still be freed. */
 mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
 {
+    if (s->batched)
+        return mr_simplifier_batched_init(s, err);
     if (!s->half)
         return edge_fill_queue(s, err);
     for (size_t v = 0; v < s->m.vertex_count; v++) {
@@ -766,10 +796,11 @@ mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
 
 /* ---- the loop -------------------------------------------------------------- */
 
-size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
+                           mr_simplify_goal *g)
 {
-    mr_collapse_mesh *m = &s->m;
-    size_t target_v = 0, target_t = 0;
+    const mr_collapse_mesh *m = &s->m;
+    size_t target_v = 0;
     if (o->target_ratio > 0)
         target_v = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
     if (o->target_vertices > target_v)
@@ -780,16 +811,29 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
         size_t a = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
         target_v = a > o->target_vertices ? a : o->target_vertices; /* first reached */
     }
-    target_t = o->target_triangles;
-    double limit = INFINITY;
+    g->vertices = target_v;
+    g->triangles = o->target_triangles;
+    g->limit = INFINITY;
     if (o->max_error > 0) {
         double rel = o->error_absolute ? o->max_error / s->diagonal : o->max_error;
-        limit = rel * rel;
+        g->limit = rel * rel;
     }
     /* Progress: the share of the collapses the vertex target needs. */
     size_t planned = m->live_vertices > target_v ? m->live_vertices - target_v : 0;
-    if (target_t && (m->live_triangles - target_t) / 2 < planned)
-        planned = (m->live_triangles - target_t) / 2;
+    if (g->triangles && (m->live_triangles - g->triangles) / 2 < planned)
+        planned = (m->live_triangles - g->triangles) / 2;
+    g->planned = planned;
+}
+
+size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+{
+    if (s->batched)
+        return mr_simplifier_run_batched(s, o, max_error);
+    mr_collapse_mesh *m = &s->m;
+    mr_simplify_goal g;
+    mr_simplifier_targets(s, o, &g);
+    const size_t target_v = g.vertices, target_t = g.triangles, planned = g.planned;
+    const double limit = g.limit;
     size_t next_report = planned / 100 + 1, done = 0;
     double worst = 0;
 
@@ -819,11 +863,7 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
                 if (tri[0] == k || tri[1] == k || tri[2] == k)
                     dead[nd++] = lr[i] / 3;
             }
-            if (s->attr_apply)
-                s->attr_apply(s, r, k, target);
-            merge_quadrics(s, r, k, target);
-            mr_collapse_reserve(m, r, k);
-            mr_collapse_apply(m, r, k, target);
+            mr_simplifier_collapse(s, r, k, target);
             for (uint32_t i = 0; i < nd; i++)
                 for (uint32_t c = 0; c < 3; c++)
                     mr_heap_remove(&s->heap, 3 * dead[i] + c);
@@ -853,11 +893,7 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
             requeue(s, u, true);
             continue;
         }
-        if (s->attr_apply)
-            s->attr_apply(s, r, k, target);
-        merge_quadrics(s, r, k, target);
-        mr_collapse_reserve(m, r, k);
-        mr_collapse_apply(m, r, k, target);
+        mr_simplifier_collapse(s, r, k, target);
         update_around(s, r, k);
         worst = cost > worst ? cost : worst;
         done++;

@@ -20,6 +20,12 @@ struct mr_simplifier {
     mr_heap heap;
     mr_collapse_limits limits;
     int half;
+    int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
+    uint64_t *cand, *cand_tmp; /* batched: a pass's edges (cost << 32 | h) */
+    size_t cand_cap;
+    uint8_t *mark;           /* batched: per vertex, changed in this pass */
+    uint32_t *hist;          /* batched: histogram */
+    uint64_t *best64;        /* batched: per vertex, its cheapest candidate */
     uint8_t pin_flags;       /* flags that pin a full collapse's target to
                                 that end (MR_VF_SEAM with attributes) */
     double centre[3], scale, diagonal;
@@ -31,6 +37,13 @@ struct mr_simplifier {
     void *attr;
 };
 
+/* What the run aims at, from the options. */
+typedef struct mr_simplify_goal {
+    size_t vertices, triangles; /* stop at or below (0 = unused) */
+    double limit;               /* largest cost allowed (squared, normalised) */
+    size_t planned;             /* collapses the targets need, for progress */
+} mr_simplify_goal;
+
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
                                     size_t input_triangles, mr_error *err);
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
@@ -39,6 +52,19 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
                              const uint8_t *extra_flags, mr_error *err);
 mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
+void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
+                           mr_simplify_goal *g);
+/* The collapse of edge (a, b) this simplifier makes -- full: to the
+ * optimum, a pinned end stays, else the larger id goes; half: the cheaper
+ * direction -- as r removed, k kept, target; returns its cost (INFINITY
+ * when it may not happen). Symmetric in a and b. */
+double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
+                               uint32_t *k, double target[3]);
+/* Apply a valid planned collapse: attribute hook, quadrics, mesh. */
+void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
+mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
+size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
+                                 double *max_error);
 bool mr_simplifier_valid(mr_simplifier *s, uint32_t u, uint32_t w, double *cost);
 mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
                                mr_simplified *out, mr_error *err);

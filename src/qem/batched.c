@@ -1,0 +1,332 @@
+/*
+ * Batched selection of collapses (MR_STRATEGY_BATCHED): the simplifier
+ * works in passes instead of one collapse at a time from a heap.
+ *
+ * A pass gathers every live edge with its cost (the same costs, the same
+ * planned collapse and the same validity test as the greedy strategy),
+ * sorts the cheapest ones and applies them in order of cost, skipping an
+ * edge when one of its ends was already the survivor of a collapse in this
+ * pass: only the survivor's quadric and position change, so every other
+ * edge's cost is still exact when its turn comes, and validity is tested
+ * on the mesh as it is at that moment. The next pass re-evaluates
+ * everything that changed.
+ *
+ * How far a pass goes decides how close the result is to the greedy one:
+ * a pass takes edges up to the cost of the `goal`-th cheapest one (a
+ * share of the collapses still needed) times a small factor -- edges
+ * blocked by a neighbour's collapse would otherwise leave the pass short.
+ * Costs and order are deterministic (ties keep gathering order, which is
+ * by vertex id), so the result is too.
+ *
+ * Why it is faster: no heap with mutable keys (a sift per neighbour edge
+ * after every collapse), no re-evaluation of a neighbourhood that collapses
+ * again before its edges reach the top, and the gathering sweeps the mesh
+ * in memory order.
+ */
+#include "simplify_internal.h"
+
+#include <math.h>
+
+#define NONE MR_COLLAPSE_NONE
+
+/* Share of the collapses still needed that one pass aims at, and the
+ * slack on the cost of the goal-th cheapest edge. */
+#define PASS_SHARE 0.25
+#define PASS_SLACK 1.5f
+
+/* Rounds of winner selection per pass. */
+#define MAX_ROUNDS 4
+
+/* Histogram buckets over the top 16 bits of a key. */
+#define HIST_BUCKETS 65536u
+
+static inline uint32_t float_key(float x)
+{
+    uint32_t u;
+    memcpy(&u, &x, sizeof u);
+    return u; /* costs are >= 0: the bits order as the values */
+}
+
+static inline float key_float(uint32_t u)
+{
+    float x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/*
+ * Runs the block once, with h set, for every live edge: the half-edge h from its smaller
+ * end (an inner edge's other half-edge runs from the larger end), or, for a
+ * boundary edge whose only half-edge runs from the larger end, that one.
+ */
+#define FOR_EACH_EDGE(m, v, h, ...)                                                   \
+    do {                                                                               \
+        const uint32_t *list_ = mr_collapse_vertex_tris((m), (v));                     \
+        const bool vb_ = ((m)->flags[(v)] & MR_VF_BOUNDARY) != 0;                      \
+        for (uint32_t i_ = 0, n_ = (m)->count[(v)]; i_ < n_; i_++) {                   \
+            const uint32_t c_ = list_[i_], j_ = c_ % 3, base_ = c_ - j_;               \
+            const uint32_t nx_ = (m)->tris[base_ + (j_ == 2 ? 0 : j_ + 1)];            \
+            if ((v) < nx_) {                                                           \
+                const uint32_t h = c_;                                                 \
+                __VA_ARGS__                                                            \
+            }                                                                          \
+            if (vb_) {                                                                 \
+                const uint32_t jp_ = j_ == 0 ? 2 : j_ - 1;                             \
+                const uint32_t pv_ = (m)->tris[base_ + jp_];                           \
+                if ((v) < pv_ && ((m)->flags[pv_] & MR_VF_BOUNDARY) &&                 \
+                    mr_collapse_edge_triangles((m), (v), pv_) == 1) {                  \
+                    const uint32_t h = base_ + jp_;                                    \
+                    __VA_ARGS__                                                        \
+                }                                                                      \
+            }                                                                          \
+        }                                                                              \
+    } while (0)
+
+mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
+{
+    const mr_collapse_mesh *m = &s->m;
+    size_t edges = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        FOR_EACH_EDGE(m, v, h, { (void)h; edges++; });
+    }
+    s->cand_cap = edges + 1;
+    s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
+    s->cand_tmp = mr_alloc_array(s->cand_cap, sizeof *s->cand_tmp);
+    s->mark = mr_calloc_array(m->vertex_count, 1);
+    s->hist = mr_alloc_array(HIST_BUCKETS, sizeof *s->hist);
+    s->best64 = mr_alloc_array(m->vertex_count, sizeof *s->best64);
+    if (!s->cand || !s->cand_tmp || !s->mark || !s->hist || !s->best64)
+        return mr_fail_nomem(err, NULL, s->cand_cap * 16 + m->vertex_count);
+    return MR_OK;
+}
+
+/* Collapses still needed to reach the targets. */
+static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g)
+{
+    const mr_collapse_mesh *m = &s->m;
+    size_t needed = m->live_vertices > g->vertices ? m->live_vertices - g->vertices : 0;
+    if (g->triangles) {
+        const size_t t = m->live_triangles > g->triangles
+                             ? (m->live_triangles - g->triangles + 1) / 2
+                             : 0;
+        needed = t < needed ? t : needed;
+    }
+    return needed;
+}
+
+/* Every live edge whose collapse may happen (cost finite and within the
+ * limit), as (cost key << 32 | half-edge), in vertex order. Returns how
+ * many were written (at most s->cand_cap). */
+static size_t gather(mr_simplifier *s, double limit)
+{
+    const mr_collapse_mesh *m = &s->m;
+    uint64_t *out = s->cand;
+    const size_t cap = s->cand_cap;
+    size_t n = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        FOR_EACH_EDGE(m, v, h, {
+            uint32_t r, k;
+            double target[3];
+            const double c = mr_simplifier_plan_edge(s, m->tris[h], mr_collapse_he_dst(m, h),
+                                                     &r, &k, target);
+            if (c <= limit && n < cap)
+                out[n++] = (uint64_t)float_key((float)c) << 32 | h;
+        });
+    }
+    return n;
+}
+
+/* The key below which at least `rank` + 1 of the n candidates lie, to the
+ * resolution of the top 16 bits (1/128 relative). */
+static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
+{
+    uint32_t *hist = s->hist;
+    memset(hist, 0, HIST_BUCKETS * sizeof *hist);
+    for (size_t i = 0; i < n; i++)
+        hist[s->cand[i] >> 48]++;
+    size_t acc = 0;
+    for (uint32_t b = 0; b < HIST_BUCKETS; b++) {
+        acc += hist[b];
+        if (acc > rank)
+            return b << 16 | 0xFFFFu;
+    }
+    return UINT32_MAX;
+}
+
+/* Stable sort of a[0..n) by the key in the high 32 bits (11-bit digits;
+ * keys are non-negative floats, so the top bit is 0). tmp holds n items.
+ * Returns the array holding the result. */
+static uint64_t *sort_by_key(uint64_t *a, uint64_t *tmp, size_t n, uint32_t *hist)
+{
+    for (unsigned shift = 32; shift < 64; shift += 11) {
+        const unsigned bits = shift + 11 <= 64 ? 11 : 64 - shift;
+        const uint32_t buckets = 1u << bits, mask = buckets - 1;
+        memset(hist, 0, buckets * sizeof *hist);
+        for (size_t i = 0; i < n; i++)
+            hist[(a[i] >> shift) & mask]++;
+        if (n == 0 || hist[(a[0] >> shift) & mask] == n)
+            continue; /* this digit is the same everywhere */
+        uint32_t sum = 0;
+        for (uint32_t b = 0; b < buckets; b++) {
+            const uint32_t c = hist[b];
+            hist[b] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            tmp[hist[(a[i] >> shift) & mask]++] = a[i];
+        uint64_t *t = a;
+        a = tmp;
+        tmp = t;
+    }
+    return a;
+}
+
+/* Apply the collapse of candidate c if it is still valid. */
+static bool try_collapse(mr_simplifier *s, uint64_t c, double limit, double *worst)
+{
+    mr_collapse_mesh *m = &s->m;
+    const uint32_t h = (uint32_t)c;
+    const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
+    uint32_t r, k;
+    double target[3];
+    const double cost = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
+    if (!(cost <= limit) || !mr_collapse_valid(m, r, k, target, &s->limits) ||
+        (s->attr_valid && !s->attr_valid(s, r, k)))
+        return false;
+    mr_simplifier_collapse(s, r, k, target);
+    s->mark[r] = s->mark[k] = 1;
+    *worst = cost > *worst ? cost : *worst;
+    return true;
+}
+
+size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
+                                 double *max_error)
+{
+    mr_collapse_mesh *m = &s->m;
+    mr_simplify_goal g;
+    mr_simplifier_targets(s, o, &g);
+    size_t next_report = g.planned / 100 + 1, done = 0;
+    double worst = 0;
+    double share = PASS_SHARE;
+    bool finished = false;
+    uint64_t *best = s->best64;
+
+    while (!finished) {
+        if (m->live_vertices <= g.vertices || (g.triangles && m->live_triangles <= g.triangles))
+            break;
+        size_t n = gather(s, g.limit);
+        if (n == 0)
+            break;
+
+        /* This pass's candidates: up to the goal-th cheapest cost, with
+         * slack, in gathering order. */
+        const double goal = ceil(share * (double)needed_collapses(s, &g));
+        size_t nsel = n;
+        if (goal < (double)n) {
+            const uint32_t kth = rank_key(s, n, (size_t)goal);
+            const float bound = key_float(kth) * PASS_SLACK;
+            const uint64_t lim = (uint64_t)float_key(bound) << 32 | 0xFFFFFFFFu;
+            nsel = 0;
+            for (size_t i = 0; i < n; i++)
+                if (s->cand[i] <= lim)
+                    s->cand[nsel++] = s->cand[i];
+        }
+        const bool partial = nsel < n;
+
+        /* Rounds: a candidate cheaper (ties: smaller id) than every other
+         * candidate at its two ends collapses; its ends are then marked,
+         * which retires the candidates around them, and the next round
+         * looks again among the rest. Iterated, this takes the same edges
+         * as taking them in order of cost, skipping those at a marked end;
+         * but the collapses of a round run in gathering (vertex) order,
+         * so they walk the mesh in memory order. */
+        memset(s->mark, 0, m->vertex_count);
+        size_t pass_done = 0;
+        for (int round = 0; round < MAX_ROUNDS && nsel && !finished; round++) {
+            size_t live = 0;
+            for (size_t i = 0; i < nsel; i++) {
+                const uint32_t h = (uint32_t)s->cand[i];
+                if (m->tris[h - h % 3] == NONE)
+                    continue;
+                const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
+                if (s->mark[a] | s->mark[b])
+                    continue;
+                best[a] = best[b] = UINT64_MAX;
+                s->cand[live++] = s->cand[i];
+            }
+            nsel = live;
+            for (size_t i = 0; i < nsel; i++) {
+                const uint64_t c = s->cand[i];
+                const uint32_t h = (uint32_t)c;
+                const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
+                best[a] = c < best[a] ? c : best[a];
+                best[b] = c < best[b] ? c : best[b];
+            }
+            /* The winners, moved to the front (the rest keep their order
+             * behind them). Winners share no end, and a collapse changes
+             * only its own ends and the triangles on its edge, so each
+             * winner's cost is still exact when it is applied. */
+            size_t wins = 0;
+            for (size_t i = 0; i < nsel; i++) {
+                const uint64_t c = s->cand[i];
+                const uint32_t h = (uint32_t)c;
+                const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
+                if (best[a] == c && best[b] == c) {
+                    s->cand[i] = s->cand[wins];
+                    s->cand[wins++] = c;
+                }
+            }
+            if (wins == 0)
+                break;
+            /* When the winners are more than the target needs, the
+             * cheapest go first. */
+            const uint64_t *order = s->cand;
+            if (wins > needed_collapses(s, &g))
+                order = sort_by_key(s->cand, s->cand_tmp, wins, s->hist);
+            size_t round_done = 0;
+            for (size_t i = 0; i < wins; i++) {
+                if (!try_collapse(s, order[i], g.limit, &worst)) {
+                    /* Out of the pass: mark nothing, so that the other
+                     * candidates at its ends can win the next round. */
+                    continue;
+                }
+                done++;
+                round_done++;
+                if (m->live_vertices <= g.vertices ||
+                    (g.triangles && m->live_triangles <= g.triangles)) {
+                    finished = true;
+                    break;
+                }
+                if (o->progress && done >= next_report) {
+                    o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
+                                o->progress_user);
+                    next_report += g.planned / 100 + 1;
+                }
+            }
+            pass_done += round_done;
+            /* Winners that failed validity leave the candidates. */
+            if (order != s->cand)
+                memcpy(s->cand, order, wins * sizeof *order);
+            size_t keep = 0;
+            for (size_t i = wins; i < nsel; i++)
+                s->cand[keep++] = s->cand[i];
+            nsel = keep;
+        }
+        if (pass_done == 0) {
+            if (!partial)
+                break; /* nothing valid is left */
+            share *= 4; /* the cheapest are all invalid: look further */
+        } else {
+            share = PASS_SHARE;
+        }
+    }
+    if (o->progress)
+        o->progress(1.0, o->progress_user);
+    const double e = sqrt(worst);
+    *max_error = o->error_absolute ? e * s->diagonal : e;
+    return done;
+}
