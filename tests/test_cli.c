@@ -183,6 +183,10 @@ static void test_simplify_cli(void **state)
                                     "--stats", in, out_path), &out), 0);
     tu_assert_contains(out, "triangles  20,480 -> 500\n");
     free(out);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.1 --strategy greedy "
+                                    "--json", in, out_path), &out), 0);
+    tu_assert_contains(out, "\"output_vertices\": 1024");
+    free(out);
 
     /* bad targets: usage errors, nothing written */
     const char *never = tu_tmp_path("cli-simp-never.obj");
@@ -195,6 +199,7 @@ static void test_simplify_cli(void **state)
         {"--ratio 150%", "--ratio needs a fraction", 2},
         {"", "no target given", 2},
         {"--collapse quarter --ratio 0.5", "--collapse is full or half", 2},
+        {"--strategy best --ratio 0.5", "--strategy is greedy or batched", 2},
         {"--triangles 30000", "target of 30000 triangles exceeds the input's 20480", 1},
         {"--max-normal-turn 0 --ratio 0.5", "--max-normal-turn needs degrees", 2},
     };
