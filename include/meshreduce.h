@@ -412,7 +412,141 @@ double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
 /* Vertex clustering: exact epsilon welding and grid clustering             */
 /* ------------------------------------------------------------------------ */
 
-/* (declarations of src/cluster/) */
+/*
+ * Epsilon welding (vertex clustering in a fixed vertex order). Vertices are
+ * visited in order (index order, or decreasing visual importance); an
+ * unclustered vertex starts a new cluster with all its still-unclustered
+ * neighbours within eps, and the cluster is represented by the mean of its
+ * members (positions, and normals, texture coordinates and colors where
+ * present), summed in double in member order. Triangles are remapped to the
+ * representatives. This is Open3D's TriangleMesh::merge_close_vertices;
+ * Open3D compares strictly (d < eps), which `strict` selects; the default
+ * (d <= eps) also welds exact duplicates at eps = 0.
+ *
+ * The three algorithms give bitwise identical output at every thread count:
+ * S-Weld, the serial reference (parallel neighbour graph, serial
+ * clustering); P-Weld, the lock-free parallel mapping of Fathollahi and
+ * Chester (SIGGRAPH Asia 2023, Algorithm 2); P-Weld-Async, which numbers
+ * clusters by a parallel prefix sum and overlaps repositioning with
+ * retriangulation.
+ */
+typedef enum mr_weld_algorithm {
+    MR_WELD_AUTO = 0,    /* the fastest exact one (P-Weld-Async) */
+    MR_WELD_SERIAL,      /* S-Weld */
+    MR_WELD_PWELD,       /* P-Weld */
+    MR_WELD_PWELD_ASYNC  /* P-Weld-Async */
+} mr_weld_algorithm;
+
+typedef enum mr_weld_order {
+    MR_WELD_ORDER_INDEX = 0, /* vertex index order, as Open3D */
+    MR_WELD_ORDER_GRADE      /* decreasing visual importance (Low and Tan
+                                1997): longest incident edge and sharpness
+                                (cosine of half the widest angle between
+                                incident edges), ties by index */
+} mr_weld_order;
+
+typedef struct mr_weld_options {
+    double eps;                  /* merge radius (absolute, >= 0) */
+    int strict;                  /* 0: distance <= eps (default); 1: < eps */
+    mr_weld_algorithm algorithm; /* MR_WELD_AUTO by default */
+    mr_weld_order order;         /* MR_WELD_ORDER_INDEX by default */
+    int drop_degenerate;         /* remove triangles that collapse (0) */
+    int threads;                 /* 0 = all cores */
+} mr_weld_options;
+
+void mr_weld_options_default(mr_weld_options *options);
+
+typedef struct mr_weld_stats {
+    size_t input_vertices;
+    size_t input_triangles;
+    size_t output_vertices;      /* clusters */
+    size_t output_triangles;
+    size_t graph_edges;          /* vertex pairs within eps */
+    unsigned rounds;             /* P-Weld mapping rounds (0 for S-Weld) */
+    int threads;
+    mr_weld_algorithm algorithm; /* the one that ran */
+    double eps;
+    double seconds_order;        /* grade computation and sort */
+    double seconds_graph;        /* neighbour graph */
+    double seconds_mapping;      /* vertex -> cluster (S-Weld: its serial
+                                    clustering with repositioning) */
+    double seconds_reduction;    /* cluster numbering and repositioning
+                                    (P-Weld-Async: numbering only) */
+    double seconds_retriangulation; /* (P-Weld-Async: repositioning and
+                                       retriangulation, overlapped) */
+    double seconds_total;
+    size_t peak_bytes;           /* most working memory held at once,
+                                    besides the input and the output */
+} mr_weld_stats;
+
+/* The result of mr_weld: malloc'd arrays that mr_welded_free releases. */
+typedef struct mr_welded {
+    size_t vertex_count;
+    size_t triangle_count;
+    float *positions;  /* 3 * vertex_count: the cluster means */
+    uint32_t *indices; /* 3 * triangle_count, in input triangle order */
+    uint32_t *remap;   /* input vertex count entries: the output vertex
+                          (cluster) of each input vertex */
+    mr_weld_stats stats;
+} mr_welded;
+
+void mr_welded_free(mr_welded *result);
+
+/* Weld a mesh or point cloud (triangle_count 0, indices may be NULL) given
+ * as flat arrays; stride is the byte distance between positions (0 =
+ * packed). Clusters are numbered in visiting order. A negative or NaN eps,
+ * a non-finite position or a bad index is an error; `out` is left empty on
+ * failure. */
+mr_status mr_weld(const float *positions, size_t stride, size_t vertex_count,
+                  const uint32_t *indices, size_t triangle_count,
+                  const mr_weld_options *options, mr_welded *out, mr_error *err);
+
+/* Weld an owning mesh, averaging normals, texture coordinates and colors
+ * with the positions. `out` must be empty; `remap` (optional) receives the
+ * malloc'd input-vertex -> output-vertex map; `stats` (optional). */
+mr_status mr_mesh_weld(const mr_mesh *in, const mr_weld_options *options, mr_mesh *out,
+                       uint32_t **remap, mr_weld_stats *stats, mr_error *err);
+
+/* The epsilon finder: the smallest eps (to a relative 1e-6, by bisection
+ * over whole mappings) whose weld removes at least `fraction` (in [0, 1))
+ * of the vertices; *removed (optional) gets how many it removes. Uses
+ * options->strict and threads, in index order; options->eps is ignored. */
+mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_count,
+                           double fraction, const mr_weld_options *options, double *eps,
+                           size_t *removed, mr_error *err);
+
+/*
+ * Grid clustering (Rossignac and Borrel 1993): every vertex falls into a
+ * cubic cell of a uniform grid; each occupied cell becomes one vertex,
+ * placed at the minimiser of the summed area-weighted plane quadrics of the
+ * triangles that span three cells (Lindstrom 2000), kept inside its cell,
+ * or at the mean of its points where they do not pin a point (point
+ * clouds, flat or thin cells). Triangles that collapse, and duplicates,
+ * are removed, and for meshes the vertices that no triangle uses. Order
+ * free and deterministic at any thread count.
+ */
+typedef struct mr_cluster_options {
+    double cell;            /* cell edge length (absolute), or 0 */
+    size_t target_vertices; /* or: the cell size whose grid has about this
+                               many occupied cells (bisection) */
+    int threads;            /* 0 = all cores */
+} mr_cluster_options;
+
+void mr_cluster_options_default(mr_cluster_options *options);
+
+typedef struct mr_cluster_stats {
+    size_t input_vertices, input_triangles;
+    size_t cells;            /* occupied cells */
+    size_t output_vertices, output_triangles;
+    double cell;             /* the cell size used */
+    double seconds_cells;    /* binning and sort (and the cell search) */
+    double seconds_representatives;
+    double seconds_triangles;
+    double seconds_total;
+} mr_cluster_stats;
+
+mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, mr_mesh *out,
+                          mr_cluster_stats *stats, mr_error *err);
 
 /* ------------------------------------------------------------------------ */
 /* Rendering                                                                */

@@ -1,0 +1,88 @@
+/*
+ * Fixed-radius neighbour graph on a uniform grid, the spatial index of the
+ * epsilon welders. Internal, not part of the public API.
+ *
+ * The graph is stored the way P-Weld consumes it (Algorithm 2, lines 1-4):
+ * for every point only its neighbours of larger index, sorted, in one
+ * compressed-sparse-row array, plus the number of its neighbours of smaller
+ * index (the dependency count). The full symmetric graph is never stored:
+ * every edge appears once, under its smaller end.
+ */
+#ifndef MR_CLUSTER_GRID_H
+#define MR_CLUSTER_GRID_H
+
+#include "../mesh/adjacency.h"
+
+#include <stdatomic.h>
+
+typedef struct mr_radius_graph {
+    size_t n;
+    size_t edge_count;         /* unordered pairs within the radius */
+    size_t *offsets;           /* n + 1 */
+    uint32_t *adj;             /* edge_count: larger neighbours, ascending */
+    _Atomic int32_t *depend;   /* n: count of smaller neighbours */
+    size_t bytes;              /* memory held by the three arrays */
+    size_t peak_bytes;         /* most memory held at once while building */
+} mr_radius_graph;
+
+/*
+ * Build the graph of the n packed points `pos` for the radius eps >= 0:
+ * i and j are neighbours when their squared distance, computed in double
+ * as dx*dx + dy*dy + dz*dz, is <= eps*eps (or < eps*eps when strict).
+ * Points must be finite (checked by the caller). Parallel with `threads`
+ * threads; the result does not depend on the thread count. On failure the
+ * graph is left empty (safe to free).
+ */
+mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, double eps,
+                                int strict, int threads, mr_error *err);
+void mr_radius_graph_free(mr_radius_graph *g);
+
+/* Axis-aligned bounds of packed points, in double; returns false (and the
+ * index of the first offender in *bad) when a coordinate is not finite. */
+bool mr_points_bounds(const float *pos, size_t n, int threads, double lo[3], double hi[3],
+                      size_t *bad);
+
+/* Grid of cells of size `cell` over the box [lo, hi]: dims[k] cells along
+ * axis k, with cell grown where needed so that no axis has more than
+ * 2^20 cells. A cell's key packs its coordinates in bit fields, x in the
+ * low bits[0] bits, then y, then z: decoding is shifts, not divisions, and
+ * the cells x-1 .. x+1 of one row are still consecutive keys. */
+typedef struct mr_grid {
+    double lo[3];
+    double cell;
+    uint64_t dims[3];
+    unsigned bits[3];
+} mr_grid;
+
+void mr_grid_init(mr_grid *grid, const double lo[3], const double hi[3], double cell);
+
+static inline uint64_t mr_grid_pack(const mr_grid *g, uint64_t x, uint64_t y, uint64_t z)
+{
+    return (z << (g->bits[0] + g->bits[1])) | (y << g->bits[0]) | x;
+}
+
+static inline void mr_grid_unpack(const mr_grid *g, uint64_t key, uint64_t c[3])
+{
+    c[0] = key & ((UINT64_C(1) << g->bits[0]) - 1);
+    c[1] = (key >> g->bits[0]) & ((UINT64_C(1) << g->bits[1]) - 1);
+    c[2] = key >> (g->bits[0] + g->bits[1]);
+}
+
+/* Key of the cell holding point p. */
+static inline uint64_t mr_grid_key(const mr_grid *g, const float *p)
+{
+    uint64_t c[3];
+    for (int k = 0; k < 3; k++) {
+        double t = ((double)p[k] - g->lo[k]) / g->cell;
+        uint64_t i = t > 0 ? (uint64_t)t : 0;
+        c[k] = i < g->dims[k] ? i : g->dims[k] - 1;
+    }
+    return mr_grid_pack(g, c[0], c[1], c[2]);
+}
+
+static inline unsigned mr_grid_key_bits(const mr_grid *g)
+{
+    return g->bits[0] + g->bits[1] + g->bits[2];
+}
+
+#endif /* MR_CLUSTER_GRID_H */
