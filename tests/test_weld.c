@@ -379,6 +379,138 @@ static void test_find_eps(void **state)
     mr_mesh_free(&m);
 }
 
+/* Brute force against every algorithm and thread count on one cloud. */
+static void check_cloud(const float *p, size_t n, double eps, int strict)
+{
+    uint32_t *label = malloc(n * sizeof *label);
+    float *rep = malloc(n * 3 * sizeof *rep);
+    size_t k;
+    brute_weld(p, n, eps, strict, label, rep, &k);
+    mr_weld_options o;
+    mr_weld_options_default(&o);
+    o.eps = eps;
+    o.strict = strict;
+    for (size_t a = 0; a < 3; a++)
+        for (size_t t = 0; t < 4; t++) {
+            mr_welded r;
+            o.algorithm = algorithms[a];
+            o.threads = thread_counts[t];
+            weld_ok(p, n, NULL, 0, &o, &r);
+            assert_int_equal(r.vertex_count, k);
+            assert_memory_equal(r.remap, label, n * sizeof *label);
+            assert_memory_equal(r.positions, rep, k * 3 * sizeof *rep);
+            mr_welded_free(&r);
+        }
+    free(label);
+    free(rep);
+}
+
+/* The sweep's grid: rows along the longest axis (x, y or z), points
+ * exactly on cell boundaries and exactly eps apart, negative and offset
+ * coordinates, duplicates, radii of 0, tiny (cells grown to 2^-20 of the
+ * extent) and larger than the model. */
+static void test_sweep_grid_edges(void **state)
+{
+    (void)state;
+    const size_t n = 1000;
+    float *p = malloc(n * 3 * sizeof *p);
+    uint64_t s = 7;
+    for (int axis = 0; axis < 3; axis++)
+        for (int offset = 0; offset < 2; offset++) {
+            /* a lattice of step 0.25, stretched along `axis`, around
+             * -2 or -1000.5 */
+            for (size_t i = 0; i < n; i++) {
+                s = s * 6364136223846793005ull + 1442695040888963407ull;
+                uint32_t r = (uint32_t)(s >> 33);
+                float base = offset ? -1000.5f : -2.0f;
+                for (int c = 0; c < 3; c++) {
+                    int span = c == axis ? 64 : 6;
+                    p[3 * i + (size_t)c] = base + 0.25f * (float)((r >> (8 * c)) % (uint32_t)span);
+                }
+                if (i % 7 == 3 && i > 0) /* duplicates of an earlier point */
+                    memcpy(p + 3 * i, p + 3 * (i / 2), 3 * sizeof *p);
+            }
+            const double radii[] = {0, 1e-30, 0.25, 0.2500001, 0.5, 1e6};
+            for (size_t e = 0; e < sizeof radii / sizeof *radii; e++)
+                for (int strict = 0; strict <= 1; strict++)
+                    check_cloud(p, n, radii[e], strict);
+        }
+    free(p);
+    /* above the parallel threshold: the threads share the rows */
+    const size_t big = 17000;
+    float *q = random_points(big, 3);
+    check_cloud(q, big, 0.25, 0);
+    free(q);
+}
+
+/* The finder's filtered graph gives the radius a bisection over whole
+ * welds gives: the same bracket and steps, each step a full mr_weld. */
+static void test_find_eps_reference(void **state)
+{
+    (void)state;
+    const size_t n = 3000;
+    float *p = random_points(n, 11);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            lo[c] = fmin(lo[c], p[3 * i + (size_t)c]);
+            hi[c] = fmax(hi[c], p[3 * i + (size_t)c]);
+        }
+    double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                       (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    const double shares[] = {0.0, 0.01, 0.3, 0.9};
+    for (int strict = 0; strict <= 1; strict++)
+        for (int i = 0; i < 4; i++) {
+            mr_weld_options o;
+            mr_weld_options_default(&o);
+            o.strict = strict;
+            o.threads = 2;
+            double eps;
+            size_t removed;
+            mr_error err;
+            assert_int_equal(
+                mr_weld_find_eps(p, 0, n, shares[i], &o, &eps, &removed, &err), MR_OK);
+            const size_t target = (size_t)ceil(shares[i] * (double)n);
+            /* the reference */
+            mr_welded r;
+            o.eps = 0;
+            weld_ok(p, n, NULL, 0, &o, &r);
+            size_t got = n - r.vertex_count;
+            mr_welded_free(&r);
+            double want = 0;
+            if (got < target) {
+                double a = 0, b = diag * 1e-5;
+                for (;;) {
+                    o.eps = b;
+                    weld_ok(p, n, NULL, 0, &o, &r);
+                    got = n - r.vertex_count;
+                    mr_welded_free(&r);
+                    if (got >= target || b > 2 * diag)
+                        break;
+                    a = b;
+                    b *= 2;
+                }
+                for (int it = 0; it < 60 && b - a > 1e-6 * b; it++) {
+                    double m = 0.5 * (a + b);
+                    o.eps = m;
+                    weld_ok(p, n, NULL, 0, &o, &r);
+                    if (n - r.vertex_count >= target) {
+                        b = m;
+                        got = n - r.vertex_count;
+                    } else {
+                        a = m;
+                    }
+                    mr_welded_free(&r);
+                }
+                want = b;
+            }
+            assert_true(eps == want);
+            assert_int_equal(removed, got);
+            assert_true(removed >= target);
+        }
+    free(p);
+}
+
 /* ---- Open3D --------------------------------------------------------------- */
 
 static const char *open3d_script(void)
@@ -574,6 +706,8 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_stride),
         cmocka_unit_test(test_find_eps),
+        cmocka_unit_test(test_sweep_grid_edges),
+        cmocka_unit_test(test_find_eps_reference),
         cmocka_unit_test(test_open3d_equivalence),
         cmocka_unit_test(test_cli),
     };

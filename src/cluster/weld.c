@@ -799,27 +799,82 @@ mr_status mr_mesh_weld(const mr_mesh *in, const mr_weld_options *options, mr_mes
 
 /* ---- the epsilon finder -------------------------------------------------- */
 
-/* Clusters of a weld at eps: the graph and S-Weld's marking pass only. */
-static mr_status count_clusters(const float *pos, size_t n, double eps, int strict,
-                                int threads, uint8_t *clustered, size_t *clusters,
-                                mr_error *err)
-{
+/*
+ * The finder's evaluations. Every radius it tries after the bracket is
+ * below the bracket's top b, so the graph at b, with the squared distance
+ * of every edge (computed as the graph builder computes it), holds the
+ * graph of each of them: the edges whose distance passes the test at that
+ * radius. A bisection step is then S-Weld's marking pass over that graph,
+ * filtered, instead of a new neighbour search.
+ */
+typedef struct finder_graph {
     mr_radius_graph g;
-    mr_status s = mr_radius_graph_build(&g, pos, n, eps, strict, threads, err);
+    double *d2; /* per edge of g */
+} finder_graph;
+
+static void finder_graph_free(finder_graph *f)
+{
+    mr_radius_graph_free(&f->g);
+    free(f->d2);
+    f->d2 = NULL;
+}
+
+static mr_status finder_graph_build(finder_graph *f, const float *pos, size_t n, double eps,
+                                    int strict, int threads, mr_error *err)
+{
+    f->d2 = NULL;
+    mr_status s = mr_radius_graph_build(&f->g, pos, n, eps, strict, threads, err);
     if (s != MR_OK)
         return s;
-    memset(clustered, 0, n);
-    size_t k = 0;
+    const mr_radius_graph *g = &f->g;
+    f->d2 = mr_alloc_array(g->edge_count, sizeof *f->d2);
+    if (!f->d2) {
+        mr_radius_graph_free(&f->g);
+        return mr_fail_nomem(err, NULL, g->edge_count * sizeof *f->d2);
+    }
+#pragma omp parallel for schedule(dynamic, 4096) num_threads(threads) if (n > PARALLEL_MIN)
     for (size_t r = 0; r < n; r++) {
+        const float *a = pos + 3 * r;
+        for (size_t e = g->offsets[r]; e < g->offsets[r + 1]; e++) {
+            const float *b = pos + 3 * (size_t)g->adj[e];
+            double dx = (double)a[0] - (double)b[0];
+            double dy = (double)a[1] - (double)b[1];
+            double dz = (double)a[2] - (double)b[2];
+            f->d2[e] = dx * dx + dy * dy + dz * dz;
+        }
+    }
+    return MR_OK;
+}
+
+/* Clusters of a weld at eps (eps no more than the radius f was built
+ * for): S-Weld's marking pass over the edges within eps. */
+static size_t count_clusters(const finder_graph *f, double eps, int strict, uint8_t *clustered)
+{
+    const mr_radius_graph *g = &f->g;
+    const double eps2 = eps * eps;
+    memset(clustered, 0, g->n);
+    size_t k = 0;
+    for (size_t r = 0; r < g->n; r++) {
         if (clustered[r])
             continue;
         k++;
-        for (size_t e = g.offsets[r]; e < g.offsets[r + 1]; e++)
-            clustered[g.adj[e]] = 1;
+        for (size_t e = g->offsets[r]; e < g->offsets[r + 1]; e++)
+            if (strict ? f->d2[e] < eps2 : f->d2[e] <= eps2)
+                clustered[g->adj[e]] = 1;
     }
-    mr_radius_graph_free(&g);
-    *clusters = k;
-    return MR_OK;
+    return k;
+}
+
+/* Build at eps and count there; f keeps the graph. */
+static mr_status build_and_count(finder_graph *f, const float *pos, size_t n, double eps,
+                                 int strict, int threads, uint8_t *clustered, size_t *clusters,
+                                 mr_error *err)
+{
+    finder_graph_free(f);
+    mr_status s = finder_graph_build(f, pos, n, eps, strict, threads, err);
+    if (s == MR_OK)
+        *clusters = count_clusters(f, eps, strict, clustered);
+    return s;
 }
 
 mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_count,
@@ -861,18 +916,23 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
     double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                        (hi[2] - lo[2]) * (hi[2] - lo[2]));
     double a = 0, b;
+    finder_graph f;
+    memset(&f, 0, sizeof f);
     /* eps = 0 already enough (duplicates, or nothing to remove)? */
-    if ((s = count_clusters(pos, n, 0, options->strict, threads, mark, &k, err)) != MR_OK)
+    if ((s = build_and_count(&f, pos, n, 0, options->strict, threads, mark, &k, err)) != MR_OK)
         goto done;
     if (n - k >= target) {
         *eps = 0;
         best_removed = n - k;
         goto done;
     }
-    /* bracket: grow b from a small share of the diagonal until enough goes */
+    /* bracket: grow b from a small share of the diagonal until enough goes
+     * (a neighbour search per step, at radii that double: the last one
+     * costs about as much as all before it) */
     b = diag > 0 ? diag * 1e-5 : 1;
     for (;;) {
-        if ((s = count_clusters(pos, n, b, options->strict, threads, mark, &k, err)) != MR_OK)
+        if ((s = build_and_count(&f, pos, n, b, options->strict, threads, mark, &k, err)) !=
+            MR_OK)
             goto done;
         if (n - k >= target || b > 2 * diag)
             break;
@@ -880,11 +940,11 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
         b *= 2;
     }
     best_removed = n - k;
-    /* bisect: a removes too few, b enough */
+    /* bisect: a removes too few, b enough; every step filters the graph
+     * built at b */
     for (int it = 0; it < 60 && b - a > 1e-6 * b; it++) {
         double m = 0.5 * (a + b);
-        if ((s = count_clusters(pos, n, m, options->strict, threads, mark, &k, err)) != MR_OK)
-            goto done;
+        k = count_clusters(&f, m, options->strict, mark);
         if (n - k >= target) {
             b = m;
             best_removed = n - k;
@@ -896,6 +956,7 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
 done:
     if (s == MR_OK && removed)
         *removed = best_removed;
+    finder_graph_free(&f);
     free(mark);
     free(owned);
     return s;
