@@ -11,7 +11,7 @@ BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
 FUZZ_PKGS  = clang libclang-rt-14-dev
 
-.PHONY: all build demo check asan fuzz bench clean deps-build deps-test deps-fuzz
+.PHONY: all build demo check asan fuzz bench report clean deps-build deps-test deps-fuzz
 
 all: build
 
@@ -63,6 +63,13 @@ fuzz: deps-build deps-fuzz
 bench: build
 	./$(BUILD)/bench/bench_io
 	./$(BUILD)/bench/bench_simplify --csv $(BUILD)/bench/simplify.csv
+
+# The benchmark sweep (meshes x targets x algorithms x threads, with the
+# installed peers; several minutes), then bench/REPORT.md with its plots and
+# comparison sheets in bench/report/.
+report: build
+	./$(BUILD)/bench/sweep --csv bench/report/sweep.csv
+	./$(BUILD)/bench/report bench/report/sweep.csv --out bench
 
 clean:
 	rm -rf build build-asan build-fuzz out

@@ -21,6 +21,7 @@ typedef struct cli_command {
 extern const cli_command cli_cmd_info, cli_cmd_convert, cli_cmd_generate, cli_cmd_clean,
     cli_cmd_demo;
 extern const cli_command cli_cmd_compare, cli_cmd_simplify;
+extern const cli_command cli_cmd_weld, cli_cmd_cluster, cli_cmd_render;
 
 /* Print "meshreduce: <message>" to stderr and return CLI_FAIL. */
 int cli_fail(const char *fmt, ...) __attribute__((format(printf, 1, 2)));

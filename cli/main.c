@@ -8,11 +8,9 @@
 #include <omp.h>
 #endif
 
-extern const cli_command cli_cmd_weld, cli_cmd_cluster;
-
 static const cli_command *const commands[] = {
     &cli_cmd_info, &cli_cmd_convert, &cli_cmd_clean, &cli_cmd_generate, &cli_cmd_demo,
-    &cli_cmd_simplify, &cli_cmd_compare, &cli_cmd_weld, &cli_cmd_cluster,
+    &cli_cmd_simplify, &cli_cmd_compare, &cli_cmd_weld, &cli_cmd_cluster, &cli_cmd_render,
 };
 enum { N_COMMANDS = sizeof commands / sizeof *commands };
 

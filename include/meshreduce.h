@@ -552,7 +552,158 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
 /* Rendering                                                                */
 /* ------------------------------------------------------------------------ */
 
-/* (declarations of src/render/) */
+/*
+ * A software rasterizer for looking at meshes: z-buffered, flat-shaded
+ * triangles lit by a headlight (Lambert, two-sided), an optional wireframe
+ * overlay, point clouds as shaded splats, supersampled anti-aliasing, an
+ * orthographic camera framed from a bounding box. Output is an RGBA
+ * buffer (one panel, possibly a sub-rectangle of a larger image), a
+ * comparison sheet of several panels with captions and a colour bar, and
+ * PNG files. Every image is byte-identical for the same input and options
+ * at any thread count.
+ */
+
+typedef enum mr_view {
+    MR_VIEW_ISO = 0, /* from the front-right, above: yaw 45, pitch 35.26 */
+    MR_VIEW_FRONT,   /* looking along -z (yaw 0, pitch 0), +y up */
+    MR_VIEW_SIDE,    /* looking along -x (yaw 90, pitch 0), +y up */
+    MR_VIEW_TOP,     /* looking down along -y (pitch 90), -z up */
+    MR_VIEW_CUSTOM   /* mr_render_options.yaw and .pitch */
+} mr_view;
+
+/* View from its name ("iso", "front", "side", "top"); returns 0 and sets
+ * *view, or -1 for an unknown name. */
+int mr_view_from_name(const char *name, mr_view *view);
+
+typedef struct mr_render_options {
+    int width, height;          /* pixels (default 1024 x 768; 1 .. 16384) */
+    mr_view view;               /* MR_VIEW_ISO by default */
+    double yaw, pitch;          /* degrees, for MR_VIEW_CUSTOM: the camera
+                                   turns yaw about +y from the front view,
+                                   then looks down by pitch */
+    int supersample;            /* k: k x k samples per pixel, box-filtered
+                                   (default 3; 1 = no anti-aliasing; <= 8) */
+    int wire;                   /* draw triangle edges over the surface */
+    int threads;                /* 0 = all cores */
+    uint32_t background;        /* 0xRRGGBB (default white) */
+    uint32_t color;             /* surface colour 0xRRGGBB (default light
+                                   grey-blue) */
+    uint32_t wire_color;        /* 0xRRGGBB (default dark grey) */
+    double point_radius;        /* splat radius in pixels for point clouds;
+                                   0 = from the point density (default) */
+    double margin;              /* empty border, a fraction of the smaller
+                                   side (default 0.04) */
+    int use_bounds;             /* frame the corners of this box instead of
+                                   the drawn vertices (the default frames
+                                   the vertices as seen from the view, the
+                                   tightest fit) */
+    float bounds_lo[3], bounds_hi[3];
+    /* Heat colouring: a value per face (flat) or per vertex (interpolated);
+     * at most one of them non-NULL. Values map linearly from
+     * [scalar_min, scalar_max] onto mr_colormap, clamped. */
+    const float *face_scalar;
+    const float *vertex_scalar;
+    double scalar_min, scalar_max;
+} mr_render_options;
+
+void mr_render_options_default(mr_render_options *options);
+
+/*
+ * Render a triangle mesh (triangle_count > 0) or a point cloud
+ * (triangle_count == 0: every vertex is a splat) into `rgba`: height rows
+ * of width pixels, 4 bytes each, rows `row_bytes` apart (0 = 4 * width),
+ * so a panel can be drawn into a sub-rectangle of a larger image. Positions
+ * are packed floats; every vertex used must be finite. Vertices outside a
+ * given bounds box are drawn where they fall (clipped to the image). The
+ * whole rectangle is written, background included; alpha is 255.
+ */
+mr_status mr_render(const float *positions, size_t vertex_count, const uint32_t *indices,
+                    size_t triangle_count, const mr_render_options *options, uint8_t *rgba,
+                    size_t row_bytes, mr_error *err);
+
+/* The heat-map colour of t in [0, 1] (clamped; NaN counts as 0): dark
+ * blue through cyan, green and yellow to red, lightness rising then
+ * falling so both ends stay distinct from white and black. */
+void mr_colormap(double t, uint8_t rgb[3]);
+
+/* ---- text: a built-in 5x7 bitmap font, ASCII 32..126 -------------------- */
+
+/* Size in pixels of `text` drawn at integer `scale` (each glyph cell is 6
+ * x 9 units: 5 x 7 glyph, spacing, line gap; '\n' starts a new line;
+ * characters outside 32..126 draw as '?'). */
+void mr_text_size(const char *text, int scale, int *width, int *height);
+
+/* Draw text with its top-left corner at (x, y), clipped to the image. */
+void mr_draw_text(uint8_t *rgba, int width, int height, size_t row_bytes, int x, int y,
+                  const char *text, int scale, uint32_t color);
+
+/* ---- heat maps: distance to a reference surface ------------------------ */
+
+/*
+ * Distance of a test mesh to a reference surface (triangle mesh), through
+ * the library's nearest-triangle hierarchy. For a test mesh with triangles,
+ * face_distance[f] (triangle_count floats) is the largest distance over the
+ * face's three corners and four interior points (the centroid and the
+ * points at barycentric (2/3, 1/6, 1/6) and its permutations), so a face
+ * far from the surface shows even when its corners lie on it; for a point
+ * cloud (test_triangle_count == 0) it is the distance of each point
+ * (test_vertex_count floats). Deterministic at any thread count. *max_out
+ * (may be NULL) receives the largest value.
+ */
+mr_status mr_surface_distances(const float *ref_positions, size_t ref_vertex_count,
+                               const uint32_t *ref_indices, size_t ref_triangle_count,
+                               const float *test_positions, size_t test_vertex_count,
+                               const uint32_t *test_indices, size_t test_triangle_count,
+                               int threads, float *face_distance, double *max_out,
+                               mr_error *err);
+
+/* ---- comparison sheets --------------------------------------------------- */
+
+/* One panel: a mesh or point cloud, its caption ('\n' separates lines),
+ * and optional heat values (as in mr_render_options). */
+typedef struct mr_sheet_panel {
+    const float *positions;
+    size_t vertex_count;
+    const uint32_t *indices;
+    size_t triangle_count;
+    const char *caption;
+    const float *face_scalar;
+    const float *vertex_scalar;
+} mr_sheet_panel;
+
+typedef struct mr_sheet_options {
+    mr_render_options render;   /* panel size, camera, shading; its bounds
+                                   and scalars are set per sheet/panel */
+    int columns;                /* panels per row (0 = all in one row) */
+    int text_scale;             /* font scale of captions (0 = from the
+                                   panel width) */
+    double scalar_min, scalar_max; /* the heat range shared by all panels */
+    const char *colorbar_label; /* caption of the colour bar */
+    const char *colorbar_min_label, *colorbar_max_label; /* its end labels
+                                   (NULL: the numbers scalar_min/max) */
+    const char *title;          /* optional line above the panels */
+} mr_sheet_options;
+
+void mr_sheet_options_default(mr_sheet_options *options);
+
+/*
+ * Compose a sheet: the panels on a grid, all rendered from one camera
+ * framed on all the panels' vertices together (or render.bounds when
+ * use_bounds is set), each with its caption below, and a colour bar with
+ * its scale under the grid when any panel has heat values. *rgba receives
+ * a malloc'd image of *width x *height pixels (free() it).
+ */
+mr_status mr_render_sheet(const mr_sheet_panel *panels, size_t panel_count,
+                          const mr_sheet_options *options, uint8_t **rgba, int *width,
+                          int *height, mr_error *err);
+
+/* ---- PNG ------------------------------------------------------------------ */
+
+/* Write an RGBA image (rows 4 * width bytes apart) as an 8-bit RGB PNG
+ * (alpha is dropped: images are opaque). The file appears complete or not
+ * at all (temporary file beside it, then renamed). */
+mr_status mr_png_write(const char *path, const uint8_t *rgba, int width, int height,
+                       mr_error *err);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,243 @@
+/* Peer simplifiers and peak-memory measurement: see benchpeers.h. */
+#include "benchpeers.h"
+
+#include <float.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+#ifdef MR_HAVE_MESHOPT
+#include <meshoptimizer.h>
+#endif
+
+/* A /proc/self/status field ("VmRSS", "VmHWM") in bytes, or -1. */
+static long long status_bytes(const char *field)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f)
+        return -1;
+    char line[256];
+    long long kb = -1;
+    size_t n = strlen(field);
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, field, n) && line[n] == ':') {
+            kb = atoll(line + n + 1);
+            break;
+        }
+    fclose(f);
+    return kb < 0 ? -1 : kb * 1024;
+}
+
+static int reset_peak(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (!f)
+        return 0;
+    int ok = fputs("5", f) >= 0;
+    return fclose(f) == 0 && ok;
+}
+
+double bench_child_peak(bench_job_fn job, void *ctx, int threads)
+{
+    int fd[2];
+    if (pipe(fd) != 0)
+        return -1;
+    long long parent_rss = status_bytes("VmRSS");
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]);
+        close(fd[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        close(fd[0]);
+        omp_set_num_threads(threads > 0 ? threads : 1);
+#ifdef __GLIBC__
+        malloc_trim(0);
+#endif
+        long long peak = -1;
+        if (reset_peak()) {
+            long long base = status_bytes("VmRSS");
+            job(ctx);
+            long long hwm = status_bytes("VmHWM");
+            if (base >= 0 && hwm >= base)
+                peak = hwm - base;
+        } else {
+            job(ctx);
+            struct rusage ru;
+            getrusage(RUSAGE_SELF, &ru);
+            long long maxrss = (long long)ru.ru_maxrss * 1024;
+            if (parent_rss >= 0 && maxrss >= parent_rss)
+                peak = maxrss - parent_rss;
+        }
+        ssize_t w = write(fd[1], &peak, sizeof peak);
+        _exit(w == (ssize_t)sizeof peak ? 0 : 1);
+    }
+    close(fd[1]);
+    long long peak = -1;
+    if (read(fd[0], &peak, sizeof peak) != (ssize_t)sizeof peak)
+        peak = -1;
+    close(fd[0]);
+    int status = 0;
+    if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        return -1;
+    return (double)peak;
+}
+
+void bench_output_free(bench_output *o)
+{
+    free(o->positions);
+    free(o->indices);
+    memset(o, 0, sizeof *o);
+}
+
+/* Compact an index buffer that refers to the input's vertex array. */
+static void compact(const mr_mesh *in, const uint32_t *idx, size_t n, bench_output *out)
+{
+    uint32_t *remap = malloc(sizeof(uint32_t) * (in->vertex_count ? in->vertex_count : 1));
+    memset(remap, 0xff, sizeof(uint32_t) * in->vertex_count);
+    size_t nv = 0;
+    for (size_t i = 0; i < n; i++)
+        if (remap[idx[i]] == UINT32_MAX)
+            remap[idx[i]] = (uint32_t)nv++;
+    out->positions = malloc(sizeof(float) * 3 * (nv ? nv : 1));
+    out->indices = malloc(sizeof(uint32_t) * (n ? n : 1));
+    for (size_t v = 0; v < in->vertex_count; v++)
+        if (remap[v] != UINT32_MAX)
+            memcpy(out->positions + 3 * (size_t)remap[v], in->positions + 3 * v,
+                   3 * sizeof(float));
+    for (size_t i = 0; i < n; i++)
+        out->indices[i] = remap[idx[i]];
+    out->vertex_count = nv;
+    out->triangle_count = n / 3;
+    free(remap);
+}
+
+#ifdef MR_HAVE_MESHOPT
+typedef struct meshopt_job {
+    const mr_mesh *in;
+    size_t target_indices;
+    int sloppy;
+} meshopt_job;
+
+static size_t meshopt_call(const meshopt_job *j, unsigned int *dst)
+{
+    const mr_mesh *in = j->in;
+    float result_error = 0;
+    if (j->sloppy)
+        return meshopt_simplifySloppy(dst, in->indices, 3 * in->triangle_count, in->positions,
+                                      in->vertex_count, 3 * sizeof(float), j->target_indices,
+                                      FLT_MAX, &result_error);
+    return meshopt_simplify(dst, in->indices, 3 * in->triangle_count, in->positions,
+                            in->vertex_count, 3 * sizeof(float), j->target_indices, FLT_MAX, 0,
+                            &result_error);
+}
+
+static void meshopt_once(void *ctx)
+{
+    meshopt_job *j = ctx;
+    unsigned int *dst = malloc(sizeof(unsigned int) * 3 * j->in->triangle_count);
+    if (dst)
+        meshopt_call(j, dst);
+    free(dst);
+}
+#endif
+
+int bench_have_meshopt(void)
+{
+#ifdef MR_HAVE_MESHOPT
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+int bench_run_meshopt(const mr_mesh *in, size_t target_triangles, int sloppy, int runs,
+                      double *times, double *peak_bytes, bench_output *out)
+{
+#ifdef MR_HAVE_MESHOPT
+    meshopt_job j = {in, 3 * target_triangles, sloppy};
+    unsigned int *dst = malloc(sizeof(unsigned int) * 3 * (in->triangle_count + 1));
+    size_t n = 0;
+    for (int k = 0; k < runs; k++) {
+        double t0 = bench_now();
+        n = meshopt_call(&j, dst);
+        times[k] = bench_now() - t0;
+    }
+    *peak_bytes = bench_child_peak(meshopt_once, &j, 1);
+    compact(in, dst, n, out);
+    free(dst);
+    return 1;
+#else
+    (void)in, (void)target_triangles, (void)sloppy, (void)runs, (void)times, (void)peak_bytes,
+        (void)out;
+    return 0;
+#endif
+}
+
+int bench_have_openmesh(void)
+{
+#ifdef MR_OPENMESH_DRIVER
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_path,
+                       size_t target_vertices, int runs, double budget, double *times,
+                       int *runs_done, double *peak_bytes, bench_output *out)
+{
+#ifdef MR_OPENMESH_DRIVER
+    char cmd[3 * 4096 + 64];
+    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' %zu %d %g", MR_OPENMESH_DRIVER, in_path, out_path,
+             target_vertices, runs, budget);
+    char *text = bench_capture(cmd);
+    if (!text) {
+        fprintf(stderr, "bench: the OpenMesh driver failed: %s\n", cmd);
+        return 0;
+    }
+    int nt = 0;
+    *peak_bytes = -1;
+    for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
+        double x;
+        if (sscanf(line, "seconds %lf", &x) == 1 && nt < runs)
+            times[nt++] = x;
+        else if (sscanf(line, "peak_bytes %lf", &x) == 1)
+            *peak_bytes = x;
+    }
+    free(text);
+    *runs_done = nt;
+    if (nt == 0)
+        return 0;
+    mr_mesh m;
+    mr_error err;
+    if (mr_mesh_read(out_path, NULL, &m, &err) != MR_OK) {
+        fprintf(stderr, "bench: reading OpenMesh's output: %s\n", err.message);
+        return 0;
+    }
+    mr_mesh_remove_unreferenced(&m, NULL, &err);
+    out->vertex_count = m.vertex_count;
+    out->triangle_count = m.triangle_count;
+    out->positions = m.positions;
+    out->indices = m.indices;
+    m.positions = NULL;
+    m.indices = NULL;
+    mr_mesh_free(&m);
+    unlink(out_path);
+    (void)in;
+    return 1;
+#else
+    (void)in, (void)in_path, (void)out_path, (void)target_vertices, (void)runs, (void)budget,
+        (void)times, (void)runs_done, (void)peak_bytes, (void)out;
+    return 0;
+#endif
+}
