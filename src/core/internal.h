@@ -11,6 +11,7 @@
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -110,5 +111,16 @@ static inline double mr_triangle_area(const double a[3], const double b[3], cons
 
 /* Number of threads to use for a requested count (0 = all cores). */
 int mr_thread_count(int requested);
+
+/* Output that appears whole or not at all: mr_output_open creates a temp
+ * file beside `path` (out->f); mr_output_close flushes and closes it and,
+ * when st is MR_OK and that worked, renames it onto `path`, else removes
+ * it. Returns the final status (st, or the first write error). */
+typedef struct mr_output_file {
+    FILE *f;
+    char tmp[4200];
+} mr_output_file;
+mr_status mr_output_open(mr_output_file *out, const char *path, mr_error *err);
+mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, mr_error *err);
 
 #endif /* MR_INTERNAL_H */

@@ -204,6 +204,49 @@ static void dir_of(const char *path, char *buf, size_t cap)
     buf[n] = '\0';
 }
 
+mr_status mr_output_open(mr_output_file *out, const char *path, mr_error *err)
+{
+    /* Write next to the destination, then rename: the destination either
+     * keeps its old content or gets the complete new file. */
+    char dir[4096];
+    dir_of(path, dir, sizeof dir);
+    snprintf(out->tmp, sizeof out->tmp, "%s/.meshreduce-XXXXXX", dir);
+    out->f = NULL;
+    int fd = mkstemp(out->tmp);
+    if (fd < 0)
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
+                             strerror(errno));
+    out->f = fdopen(fd, "wb");
+    if (!out->f) {
+        int e = errno;
+        close(fd);
+        unlink(out->tmp);
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(e));
+    }
+    return MR_OK;
+}
+
+mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, mr_error *err)
+{
+    FILE *f = out->f;
+    if (st == MR_OK && (fflush(f) != 0 || ferror(f)))
+        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
+    if (fclose(f) != 0 && st == MR_OK)
+        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
+    out->f = NULL;
+    if (st == MR_OK) {
+        /* mkstemp creates 0600; give the file the usual permissions. */
+        mode_t mask = umask(0);
+        umask(mask);
+        chmod(out->tmp, 0666 & ~mask);
+        if (rename(out->tmp, path) != 0)
+            st = mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(errno));
+    }
+    if (st != MR_OK)
+        unlink(out->tmp);
+    return st;
+}
+
 mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
                         const mr_write_options *options, mr_error *err)
 {
@@ -233,28 +276,16 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
                                  "triangle %zu uses vertex %u, but there are %zu vertices",
                                  i / 3, mesh->indices[i], mesh->vertex_count);
 
-    /* Write next to the destination, then rename: the destination either
-     * keeps its old content or gets the complete new file. */
-    char dir[4096], tmp[4200];
-    dir_of(path, dir, sizeof dir);
-    snprintf(tmp, sizeof tmp, "%s/.meshreduce-XXXXXX", dir);
-    int fd = mkstemp(tmp);
-    if (fd < 0)
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
-                             strerror(errno));
-    FILE *f = fdopen(fd, "wb");
-    if (!f) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(e));
-    }
+    mr_output_file out;
+    mr_status st = mr_output_open(&out, path, err);
+    if (st != MR_OK)
+        return st;
+    FILE *f = out.f;
     static const size_t bufsize = 1 << 20;
     char *buf = malloc(bufsize);
     if (buf)
         setvbuf(f, buf, _IOFBF, bufsize);
 
-    mr_status st;
     switch (fmt) {
     case MR_FORMAT_OBJ: st = mr_write_obj(f, mesh, options, path, err); break;
     case MR_FORMAT_PLY: st = mr_write_ply(f, mesh, options, path, err); break;
@@ -262,20 +293,7 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     case MR_FORMAT_XYZ: st = mr_write_xyz(f, mesh, options, path, err); break;
     default: st = mr_fail_plain(err, MR_ERR_UNSUPPORTED, path, "unknown output format");
     }
-    if (st == MR_OK && (fflush(f) != 0 || ferror(f)))
-        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
-    if (fclose(f) != 0 && st == MR_OK)
-        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
+    st = mr_output_close(&out, path, st, err);
     free(buf);
-    if (st == MR_OK) {
-        /* mkstemp creates 0600; give the file the usual permissions. */
-        mode_t mask = umask(0);
-        umask(mask);
-        chmod(tmp, 0666 & ~mask);
-        if (rename(tmp, path) != 0)
-            st = mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(errno));
-    }
-    if (st != MR_OK)
-        unlink(tmp);
     return st;
 }

@@ -1,29 +1,8 @@
 /* PNG output through libpng, written atomically (temporary file + rename). */
-#define _GNU_SOURCE /* mkstemp, fdopen under strict C11 */
 #include "../core/internal.h"
 
-#include <errno.h>
 #include <png.h>
 #include <stdio.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-/* The directory part of a path ("." when it has none). */
-static void dir_of(const char *path, char *buf, size_t cap)
-{
-    const char *slash = strrchr(path, '/');
-    size_t n = slash ? (size_t)(slash - path) : 0;
-    if (!slash) {
-        snprintf(buf, cap, ".");
-        return;
-    }
-    if (n == 0)
-        n = 1; /* "/file" */
-    if (n >= cap)
-        n = cap - 1;
-    memcpy(buf, path, n);
-    buf[n] = '\0';
-}
 
 typedef struct png_failure {
     char message[200];
@@ -82,37 +61,12 @@ mr_status mr_png_write(const char *path, const uint8_t *rgba, int width, int hei
     if (width < 1 || height < 1 || width > (1 << 20) || height > (1 << 20))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path,
                              "image size %dx%d is invalid", width, height);
-    char dir[4096], tmp[4200];
-    dir_of(path, dir, sizeof dir);
-    snprintf(tmp, sizeof tmp, "%s/.meshreduce-XXXXXX", dir);
-    int fd = mkstemp(tmp);
-    if (fd < 0)
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
-                             strerror(errno));
-    FILE *f = fdopen(fd, "wb");
-    if (!f) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(e));
-    }
-    png_failure fail = {""};
-    mr_status st = MR_OK;
-    if (encode(f, rgba, width, height, &fail) != 0)
-        st = mr_fail_plain(err, MR_ERR_IO, path, "PNG encoding failed: %s", fail.message);
-    if (st == MR_OK && (fflush(f) != 0 || ferror(f)))
-        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
-    if (fclose(f) != 0 && st == MR_OK)
-        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
-    if (st == MR_OK) {
-        /* mkstemp creates 0600; give the file the usual permissions. */
-        mode_t mask = umask(0);
-        umask(mask);
-        chmod(tmp, 0666 & ~mask);
-        if (rename(tmp, path) != 0)
-            st = mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(errno));
-    }
+    mr_output_file out;
+    mr_status st = mr_output_open(&out, path, err);
     if (st != MR_OK)
-        unlink(tmp);
-    return st;
+        return st;
+    png_failure fail = {""};
+    if (encode(out.f, rgba, width, height, &fail) != 0)
+        st = mr_fail_plain(err, MR_ERR_IO, path, "PNG encoding failed: %s", fail.message);
+    return mr_output_close(&out, path, st, err);
 }
