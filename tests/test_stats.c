@@ -602,14 +602,31 @@ static void test_radix_sort(void **state)
                 keys[i] = (lcg(&seed) | (lcg(&seed) << 53)) & mask & ~UINT64_C(0xff0);
                 vals[i] = (uint32_t)i;
             }
-            assert_int_equal(mr_radix_sort_u64(keys, vals, n, bits[bi], NULL), MR_OK);
+            /* the same keys, cut to 32 bits, through the 32-bit sort */
+            uint32_t *k32 = malloc((n + 1) * sizeof *k32);
+            uint32_t *v32 = malloc((n + 1) * sizeof *v32);
+            for (size_t i = 0; i < n; i++) {
+                k32[i] = (uint32_t)keys[i];
+                v32[i] = (uint32_t)i;
+            }
+            /* 0 threads: the default team; else the slice count asked */
+            const int threads = (int)(bi % 3);
+            assert_int_equal(mr_radix_sort_u64(keys, vals, n, bits[bi], threads, NULL), MR_OK);
+            assert_int_equal(
+                mr_radix_sort_u32(k32, v32, n, bits[bi] < 32 ? bits[bi] : 32, threads, NULL),
+                MR_OK);
             for (size_t i = 1; i < n; i++) {
                 assert_true(keys[i - 1] <= keys[i]);
                 if (keys[i - 1] == keys[i])
                     assert_true(vals[i - 1] < vals[i]);
+                assert_true(k32[i - 1] <= k32[i]);
+                if (k32[i - 1] == k32[i])
+                    assert_true(v32[i - 1] < v32[i]);
             }
             free(keys);
             free(vals);
+            free(k32);
+            free(v32);
         }
     }
     set_threads(saved);

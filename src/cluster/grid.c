@@ -2,23 +2,28 @@
  * Fixed-radius neighbour search: a sweep over rows of a uniform grid.
  *
  * The two shorter axes of the bounding box are cut into cells of edge
- * >= eps; a row is one cell of that 2D grid, a column of space along the
- * longest (sweep) axis. Points are sorted by row and, within a row, by
- * their sweep coordinate quantised to 1/16 cell (one stable radix sort of
- * a packed key, so the layout is the same at any thread count). A point's
- * candidates are the points of the 3x3 neighbouring rows whose quantised
- * coordinate is within eps of its own: a window per row that slides
- * forward as the point moves along its row. Against the 3x3x3 cells of
- * edge eps this tests about 2/3 of the candidates, and a row look-up (nine
- * forward-only cursors) serves every point of the row, where small radii
- * leave cells with one point each and made the per-cell look-ups the
- * bulk of the work.
+ * ROW_CELLS * eps; a row is one cell of that 2D grid, a column of space
+ * along the longest (sweep) axis. Points are sorted by row and, within a
+ * row, by their sweep coordinate quantised to 1/32 cell (one stable radix
+ * sort of a packed key, so the layout is the same at any thread count).
+ * A point's candidates in a row are those whose quantised coordinate is
+ * within eps of its own: a window per row that slides forward as the
+ * point moves along its row.
  *
- * The graph is built in one search: each thread appends the lists of
- * larger neighbours of the points it searches to its own buffer and
- * writes each point's two counts; a prefix sum places the lists and a
- * parallel pass moves them into place, sorted. The full symmetric graph
- * is never stored.
+ * Each pair is tested once, from the point whose row comes first (or,
+ * in one row, from the earlier point): the search looks at the rest of
+ * its own row and at most four of the eight neighbouring rows, those
+ * after it in row order, and of these only the ones within eps of the
+ * point (a row is three radii wide, so most points need none or one).
+ * At welding radii a row cell of edge eps holds about one point, and
+ * setting up its neighbour windows cost more than the distance tests;
+ * rows three radii wide hold a few dozen, and the one-sided search
+ * halves both the windows and the tests.
+ *
+ * Each thread appends the pairs it finds to its own buffer; atomic
+ * counters give every point its count of larger and of smaller
+ * neighbours, a prefix sum places the lists, and each list is sorted.
+ * The full symmetric graph is never stored.
  */
 #include "grid.h"
 
@@ -28,9 +33,15 @@
 #include <omp.h>
 #else
 static inline int omp_get_thread_num(void) { return 0; }
+static inline int omp_get_num_threads(void) { return 1; }
 #endif
 
 #define PARALLEL_MIN 16384
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#include <float.h>
 
 bool mr_points_bounds(const float *pos, size_t n, int threads, double lo[3], double hi[3],
                       size_t *bad)
@@ -93,7 +104,8 @@ void mr_grid_init(mr_grid *grid, const double lo[3], const double hi[3], double 
 typedef struct sweep {
     size_t n, rows;
     uint32_t *ids;       /* n: point of each sorted slot */
-    float *pos;          /* 3n: positions in sorted order */
+    float *px, *py, *pz; /* n + PAD each: coordinates in sorted order */
+    float eps2f;         /* float bound above every squared distance <= eps^2 */
     uint32_t *q;         /* n: quantised sweep coordinate (ascending per row) */
     uint64_t *keys;      /* rows: key of each occupied row, ascending */
     uint32_t *first;     /* rows + 1: first sorted slot of each row */
@@ -102,12 +114,16 @@ typedef struct sweep {
     uint64_t reach;      /* window half-width, in quanta */
     double eps2;
     int strict;
+    unsigned a1, a2;     /* the binned axes */
+    double lo1, lo2;     /* grid origin on them */
+    double inv_cell;
+    double near;         /* eps / cell plus rounding margin */
 } sweep;
 
 static void sweep_free(sweep *s)
 {
     free(s->ids);
-    free(s->pos);
+    free(s->px);
     free(s->q);
     free(s->keys);
     free(s->first);
@@ -127,11 +143,12 @@ static size_t lower_row(const sweep *s, uint64_t k)
     return a;
 }
 
-static inline bool within(const sweep *s, const float *a, const float *b)
+/* The exact test: squared distance in double, as the header promises. */
+static inline bool within(const sweep *s, uint32_t a, uint32_t b)
 {
-    double dx = (double)a[0] - (double)b[0];
-    double dy = (double)a[1] - (double)b[1];
-    double dz = (double)a[2] - (double)b[2];
+    double dx = (double)s->px[a] - (double)s->px[b];
+    double dy = (double)s->py[a] - (double)s->py[b];
+    double dz = (double)s->pz[a] - (double)s->pz[b];
     double d2 = dx * dx + dy * dy + dz * dz;
     return s->strict ? d2 < s->eps2 : d2 <= s->eps2;
 }
@@ -142,73 +159,130 @@ typedef struct edge_buf {
     size_t len, cap;
 } edge_buf;
 
-static bool buf_push(edge_buf *b, uint32_t v)
+static bool buf_pair(edge_buf *b, uint32_t x, uint32_t y)
 {
-    if (b->len == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 4096;
+    if (b->len + 2 > b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 8192;
         uint32_t *p = mr_realloc_array(b->data, cap, sizeof *p);
         if (!p)
             return false;
         b->data = p;
         b->cap = cap;
     }
-    b->data[b->len++] = v;
+    b->data[b->len++] = x < y ? x : y;
+    b->data[b->len++] = x < y ? y : x;
+    return true;
+}
+
+/* Padding after each coordinate array: the 4-wide test reads up to 3
+ * entries past a window's end (and ignores them). */
+#define PAD 4
+
+/*
+ * Append (a, b) for every b in [b0, b1) within eps of a. A float filter,
+ * four points at a time, passes every pair the exact test can accept
+ * (eps2f sits above their float distances' rounding); the exact test
+ * decides the few that pass.
+ */
+static bool test_range(const sweep *s, uint32_t a, uint32_t b0, uint32_t b1, edge_buf *buf)
+{
+    const uint32_t ia = s->ids[a];
+#if defined(__SSE2__)
+    const __m128 ax = _mm_set1_ps(s->px[a]), ay = _mm_set1_ps(s->py[a]),
+                 az = _mm_set1_ps(s->pz[a]), e2 = _mm_set1_ps(s->eps2f);
+    for (uint32_t b = b0; b < b1; b += 4) {
+        const __m128 dx = _mm_sub_ps(_mm_loadu_ps(s->px + b), ax);
+        const __m128 dy = _mm_sub_ps(_mm_loadu_ps(s->py + b), ay);
+        const __m128 dz = _mm_sub_ps(_mm_loadu_ps(s->pz + b), az);
+        const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
+                                     _mm_mul_ps(dz, dz));
+        unsigned m = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, e2));
+        if (b1 - b < 4)
+            m &= (1u << (b1 - b)) - 1;
+        while (m) {
+            const uint32_t c = b + (uint32_t)__builtin_ctz(m);
+            m &= m - 1;
+            if (within(s, a, c) && !buf_pair(buf, ia, s->ids[c]))
+                return false;
+        }
+    }
+#else
+    for (uint32_t b = b0; b < b1; b++)
+        if (within(s, a, b) && !buf_pair(buf, ia, s->ids[b]))
+            return false;
+#endif
     return true;
 }
 
 /*
- * Search the rows r0 .. r1-1: for every point, its larger neighbours are
- * appended to `buf` (in sorted-slot order of the points), their count goes
- * to off[id + 1] and the count of its smaller ones to depend[id]. The
- * candidates of a point are the points of the 3x3 neighbouring rows whose
- * quantised sweep coordinate lies within `reach` of its own: one window
- * per row, whose ends only move forward as the point moves along its row.
- * The row look-ups use nine cursors that only move forward too: the key
- * of the row at offset (d1, d2) grows with the row's own key.
+ * Search the rows r0 .. r1-1 and append every pair within the radius to
+ * `buf` as (smaller id, larger id). A point's partners are the points
+ * after it in its own row and the points of the rows after its row, among
+ * (d1, d2) = (+1, 0), (-1, +1), (0, +1), (+1, +1), that it lies within eps
+ * of; in each, those whose quantised sweep coordinate is within `reach`
+ * of its own: one window per row whose ends only move forward as the
+ * point moves along its row. The row look-ups use cursors that only move
+ * forward too: the key of the row at offset (d1, d2) grows with the row's
+ * own key.
  */
-static bool search_rows(const sweep *s, size_t r0, size_t r1, size_t *off,
-                        _Atomic int32_t *depend, edge_buf *buf)
+static bool search_rows(const sweep *s, size_t r0, size_t r1, edge_buf *buf)
 {
-    size_t cur[9];
-    bool have[9] = {false};
+    /* the four rows after a row, as (d1, d2) */
+    static const int fd1[4] = {1, -1, 0, 1}, fd2[4] = {0, 1, 1, 1};
+    size_t cur[4];
+    bool have[4] = {false, false, false, false};
     const uint64_t mask1 = (UINT64_C(1) << s->bits1) - 1;
     const uint64_t reach = s->reach;
+    const double near = s->near, far = 1 - s->near;
     for (size_t r = r0; r < r1; r++) {
         const uint64_t c1 = s->keys[r] & mask1, c2 = s->keys[r] >> s->bits1;
-        uint32_t lo[9], hi[9], end[9];
-        int nr = 0;
-        for (int d2 = -1; d2 <= 1; d2++) {
-            if ((d2 < 0 && c2 == 0) || (d2 > 0 && c2 + 1 >= s->dims2))
+        uint32_t lo[4], hi[4], end[4];
+        bool on[4];
+        for (int k = 0; k < 4; k++) {
+            on[k] = false;
+            if ((fd1[k] < 0 && c1 == 0) || (fd1[k] > 0 && c1 + 1 >= s->dims1) ||
+                c2 + (uint64_t)fd2[k] >= s->dims2)
                 continue;
-            for (int d1 = -1; d1 <= 1; d1++) {
-                if ((d1 < 0 && c1 == 0) || (d1 > 0 && c1 + 1 >= s->dims1))
-                    continue;
-                const int k = (d2 + 1) * 3 + (d1 + 1);
-                const uint64_t want = ((c2 + (uint64_t)(int64_t)d2) << s->bits1) |
-                                      (c1 + (uint64_t)(int64_t)d1);
-                size_t a;
-                if (!have[k]) {
-                    a = lower_row(s, want);
-                    have[k] = true;
-                } else {
-                    a = cur[k];
-                    while (a < s->rows && s->keys[a] < want)
-                        a++;
-                }
-                cur[k] = a;
-                if (a < s->rows && s->keys[a] == want) {
-                    lo[nr] = hi[nr] = s->first[a];
-                    end[nr] = s->first[a + 1];
-                    nr++;
-                }
+            const uint64_t want =
+                ((c2 + (uint64_t)fd2[k]) << s->bits1) | (c1 + (uint64_t)(int64_t)fd1[k]);
+            size_t a;
+            if (!have[k]) {
+                a = lower_row(s, want);
+                have[k] = true;
+            } else {
+                a = cur[k];
+                while (a < s->rows && s->keys[a] < want)
+                    a++;
+            }
+            cur[k] = a;
+            if (a < s->rows && s->keys[a] == want) {
+                lo[k] = hi[k] = s->first[a];
+                end[k] = s->first[a + 1];
+                on[k] = true;
             }
         }
-        for (uint32_t a = s->first[r]; a < s->first[r + 1]; a++) {
+        const uint32_t row_end = s->first[r + 1];
+        uint32_t own_hi = s->first[r];
+        for (uint32_t a = s->first[r]; a < row_end; a++) {
             const uint64_t qa = s->q[a];
-            const float *pa = s->pos + 3 * (size_t)a;
-            const uint32_t ia = s->ids[a];
-            uint32_t larger = 0, smaller = 0;
-            for (int k = 0; k < nr; k++) {
+            /* the rest of its own row */
+            if (own_hi <= a)
+                own_hi = a + 1;
+            while (own_hi < row_end && (uint64_t)s->q[own_hi] <= qa + reach)
+                own_hi++;
+            if (!test_range(s, a, a + 1, own_hi, buf))
+                return false;
+            /* where the point sits across its row: the rows it is near */
+            const float pa[3] = {s->px[a], s->py[a], s->pz[a]};
+            const double f1 = ((double)pa[s->a1] - s->lo1) * s->inv_cell - (double)c1;
+            const double f2 = ((double)pa[s->a2] - s->lo2) * s->inv_cell - (double)c2;
+            const bool left = f1 < near, right = f1 > far, up = f2 > far;
+            if (!right && !up)
+                continue;
+            for (int k = 0; k < 4; k++) {
+                if (!on[k] || (fd2[k] > 0 && !up) || (fd1[k] > 0 && !right) ||
+                    (fd1[k] < 0 && !left))
+                    continue;
                 uint32_t l = lo[k], h = hi[k];
                 while (l < end[k] && (uint64_t)s->q[l] + reach < qa)
                     l++;
@@ -218,21 +292,9 @@ static bool search_rows(const sweep *s, size_t r0, size_t r1, size_t *off,
                     h++;
                 lo[k] = l;
                 hi[k] = h;
-                for (uint32_t b = l; b < h; b++) {
-                    if (b == a || !within(s, pa, s->pos + 3 * (size_t)b))
-                        continue;
-                    const uint32_t ib = s->ids[b];
-                    if (ib > ia) {
-                        if (!buf_push(buf, ib))
-                            return false;
-                        larger++;
-                    } else {
-                        smaller++;
-                    }
-                }
+                if (!test_range(s, a, l, h, buf))
+                    return false;
             }
-            off[(size_t)ia + 1] = larger;
-            atomic_init(&depend[ia], (int32_t)smaller);
         }
     }
     return true;
@@ -286,35 +348,48 @@ static void sort_list(uint32_t *list, size_t len)
     }
 }
 
-/* Rows per work item of the search: long enough runs for the cursors,
- * short enough to balance uneven rows. */
-#define ROW_BLOCK 256
+/* Points per work item of the search (whole rows): long enough runs for
+ * the cursors, short enough to balance uneven rows. */
+#define BLOCK_POINTS 4096
+
+/* Most slices of the offsets' prefix sum. */
+#define MAX_SLICES 256
+
+/* Row cells are this many radii wide: a point is then near (within eps
+ * of) a neighbouring row on one axis for about 2 in 3 of the points, and
+ * a row holds enough points that its set-up cost is spread thin. */
+#define ROW_CELLS 3
 
 /* Sub-cells per cell along the sweep axis (as a power of two): the window
  * is then at most eps + 2/2^s cells wide on each side. */
-#define SWEEP_SUB_BITS 4
+#define SWEEP_SUB_BITS 5
 
 /*
  * Sort the points for the sweep. The sweep axis is the longest side of the
  * bounding box (on a surface, rows along it are long); rows are cells of
- * edge `cell` >= eps in the other two axes, so two points within eps are
- * in rows at most one apart on each; the sweep coordinate is quantised to
- * cell / 2^s, so two points within eps are at most `reach` quanta apart.
- * Coordinates are scaled by reciprocals (no division per point); the
- * cell's margin over eps covers their rounding.
+ * edge ROW_CELLS * eps in the other two axes, so two points within eps
+ * are in rows at most one apart on each, and only a point within eps of
+ * its row's side can have a neighbour across that side. The sweep
+ * coordinate is quantised to cell / 2^s, so two points within eps are at
+ * most `reach` quanta apart. Coordinates are scaled by reciprocals (no
+ * division per point); the margins on `near` and `reach` cover their
+ * rounding.
  */
 static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, int strict,
-                             int threads, size_t *transient, mr_error *err)
+                             const double *box, int threads, size_t *peak, mr_error *err)
 {
     memset(s, 0, sizeof *s);
     s->n = n;
     double lo[3], hi[3];
-    size_t bad;
-    mr_points_bounds(pos, n, threads, lo, hi, &bad);
+    if (box) {
+        memcpy(lo, box, sizeof lo);
+        memcpy(hi, box + 3, sizeof hi);
+    } else {
+        size_t bad;
+        mr_points_bounds(pos, n, threads, lo, hi, &bad);
+    }
     mr_grid grid;
-    /* A hair above eps: a pair at distance exactly eps then never lands two
-     * cells apart through the rounding of the cell coordinates. */
-    mr_grid_init(&grid, lo, hi, eps * (1.0 + 1e-8));
+    mr_grid_init(&grid, lo, hi, ROW_CELLS * eps * (1.0 + 1e-8));
     unsigned ax = 0;
     for (unsigned k = 1; k < 3; k++)
         if (hi[k] - lo[k] > hi[ax] - lo[ax])
@@ -332,18 +407,45 @@ static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, i
     s->dims2 = grid.dims[a2];
     s->eps2 = eps * eps;
     s->strict = strict;
+    s->a1 = a1;
+    s->a2 = a2;
+    s->lo1 = lo[a1];
+    s->lo2 = lo[a2];
+    s->inv_cell = inv_cell;
+    /* cell coordinates are below 2^21, so their rounding is far below the
+     * absolute margin */
+    s->near = eps * inv_cell * (1 + 1e-6) + 1e-7;
 
-    uint64_t *keys = mr_alloc_array(n, sizeof *keys);
+    /* keys of at most 32 bits (the usual case) sort a third faster */
+    const unsigned shift2 = qbits + grid.bits[a1];
+    const unsigned key_bits = shift2 + grid.bits[a2];
+    const bool narrow = key_bits <= 32;
+    uint64_t *keys64 = narrow ? NULL : mr_alloc_array(n, sizeof *keys64);
+    uint32_t *keys32 = narrow ? mr_alloc_array(n, sizeof *keys32) : NULL;
     s->ids = mr_alloc_array(n, sizeof *s->ids);
-    s->pos = mr_alloc_array(n, 3 * sizeof *s->pos);
+    s->px = mr_alloc_array(n + PAD, 3 * sizeof *s->px);
     s->q = mr_alloc_array(n, sizeof *s->q);
-    if (!keys || !s->ids || !s->pos || !s->q) {
-        free(keys);
+    size_t *chunk_rows = mr_calloc_array((size_t)threads + 1, sizeof *chunk_rows);
+    if ((!keys64 && !keys32) || !s->ids || !s->px || !s->q || !chunk_rows) {
+        free(keys64);
+        free(keys32);
+        free(chunk_rows);
         return mr_fail_nomem(err, NULL, n * 28);
     }
+    s->py = s->px + n + PAD;
+    s->pz = s->py + n + PAD;
+    for (size_t i = n; i < n + PAD; i++)
+        s->px[i] = s->py[i] = s->pz[i] = 0;
+    /* The float distance of a pair is within a few ulps of its exact
+     * value; the bound is 10 ppm above eps^2 and never below the underflow
+     * of tiny differences. */
+    s->eps2f = (float)(eps * eps * (1 + 1e-5));
+    if (!(s->eps2f >= 4 * FLT_MIN))
+        s->eps2f = 4 * FLT_MIN;
+    /* ids, positions, sweep coordinates, keys and the radix scratch */
+    *peak = n * (20 + (narrow ? 12 : 20));
     const double l0 = lo[ax], l1 = lo[a1], l2 = lo[a2];
     const uint64_t d0 = qdims, d1 = grid.dims[a1], d2 = grid.dims[a2];
-    const unsigned shift2 = qbits + grid.bits[a1];
 #pragma omp parallel for schedule(static) num_threads(threads) if (n > PARALLEL_MIN)
     for (size_t i = 0; i < n; i++) {
         const float *p = pos + 3 * i;
@@ -355,44 +457,74 @@ static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, i
         q = q < d0 ? q : d0 - 1;
         c1 = c1 < d1 ? c1 : d1 - 1;
         c2 = c2 < d2 ? c2 : d2 - 1;
-        keys[i] = (c2 << shift2) | (c1 << qbits) | q;
+        const uint64_t key = (c2 << shift2) | (c1 << qbits) | q;
+        if (narrow)
+            keys32[i] = (uint32_t)key;
+        else
+            keys64[i] = key;
         s->ids[i] = (uint32_t)i;
     }
-    /* radix scratch is 12 bytes per point */
-    *transient = n * (sizeof *keys + sizeof *s->ids + 3 * sizeof *s->pos + sizeof *s->q + 12);
-    mr_status st = mr_radix_sort_u64(keys, s->ids, n, shift2 + grid.bits[a2], err);
+    mr_status st = narrow ? mr_radix_sort_u32(keys32, s->ids, n, key_bits, threads, err)
+                          : mr_radix_sort_u64(keys64, s->ids, n, key_bits, threads, err);
     if (st != MR_OK) {
-        free(keys);
+        free(keys64);
+        free(keys32);
+        free(chunk_rows);
         return st;
     }
-    size_t rows = 0;
-    for (size_t i = 0; i < n; i++)
-        rows += i == 0 || (keys[i] >> qbits) != (keys[i - 1] >> qbits);
-    s->rows = rows;
-    s->keys = mr_alloc_array(rows, sizeof *s->keys);
-    s->first = mr_alloc_array(rows + 1, sizeof *s->first);
-    if (!s->keys || !s->first) {
-        free(keys);
-        return mr_fail_nomem(err, NULL, rows * 12);
-    }
-    for (size_t i = 0, r = 0; i < n; i++)
-        if (i == 0 || (keys[i] >> qbits) != (keys[i - 1] >> qbits)) {
-            s->keys[r] = keys[i] >> qbits;
-            s->first[r++] = (uint32_t)i;
-        }
-    s->first[rows] = (uint32_t)n;
+
+    /* Rows, sweep coordinates and positions in sorted order, in one pass:
+     * each thread counts the rows starting in its slice, then fills them. */
     const uint64_t qmask = (UINT64_C(1) << qbits) - 1;
-#pragma omp parallel for schedule(static) num_threads(threads) if (n > PARALLEL_MIN)
-    for (size_t i = 0; i < n; i++) {
-        s->q[i] = (uint32_t)(keys[i] & qmask);
-        memcpy(s->pos + 3 * i, pos + 3 * (size_t)s->ids[i], 3 * sizeof(float));
+#define KEY_AT(i) (narrow ? (uint64_t)keys32[i] : keys64[i])
+    _Atomic int failed;
+    atomic_init(&failed, 0);
+#pragma omp parallel num_threads(threads) if (n > PARALLEL_MIN)
+    {
+        const size_t nt = (size_t)omp_get_num_threads(), me = (size_t)omp_get_thread_num();
+        const size_t i0 = n * me / nt, i1 = n * (me + 1) / nt;
+        size_t count = 0;
+        for (size_t i = i0; i < i1; i++)
+            count += i == 0 || (KEY_AT(i) >> qbits) != (KEY_AT(i - 1) >> qbits);
+        chunk_rows[me + 1] = count;
+#pragma omp barrier
+#pragma omp single
+        {
+            for (size_t t = 0; t < nt; t++)
+                chunk_rows[t + 1] += chunk_rows[t];
+            s->rows = chunk_rows[nt];
+            s->keys = mr_alloc_array(s->rows, sizeof *s->keys);
+            s->first = mr_alloc_array(s->rows + 1, sizeof *s->first);
+            if (!s->keys || !s->first)
+                atomic_store(&failed, 1);
+            else
+                s->first[s->rows] = (uint32_t)n;
+        }
+        if (!atomic_load(&failed))
+            for (size_t i = i0, r = chunk_rows[me]; i < i1; i++) {
+                const uint64_t key = KEY_AT(i);
+                if (i == 0 || (key >> qbits) != (KEY_AT(i - 1) >> qbits)) {
+                    s->keys[r] = key >> qbits;
+                    s->first[r++] = (uint32_t)i;
+                }
+                s->q[i] = (uint32_t)(key & qmask);
+                const float *p = pos + 3 * (size_t)s->ids[i];
+                s->px[i] = p[0];
+                s->py[i] = p[1];
+                s->pz[i] = p[2];
+            }
     }
-    free(keys);
+#undef KEY_AT
+    free(keys64);
+    free(keys32);
+    free(chunk_rows);
+    if (atomic_load(&failed))
+        return mr_fail_nomem(err, NULL, s->rows * 12);
     return MR_OK;
 }
 
 mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, double eps,
-                                int strict, int threads, mr_error *err)
+                                int strict, const double *box, int threads, mr_error *err)
 {
     memset(g, 0, sizeof *g);
     g->n = n;
@@ -401,73 +533,124 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
                              "%zu points: more than 32-bit indices can address", n);
     if (threads < 1)
         threads = 1;
-    g->offsets = mr_calloc_array(n + 1, sizeof *g->offsets);
+    /* Strictly closer than 0 is never true: the graph has no edge. */
+    const bool empty = n == 0 || (strict && eps == 0);
+    sweep s;
+    memset(&s, 0, sizeof s);
+    edge_buf *bufs = NULL;
+    size_t *blk_first = NULL;
+    _Atomic uint32_t *cnt = NULL;
+    size_t sort_bytes = 0, transient = 0;
+    mr_status st = empty ? MR_OK
+                         : sweep_build(&s, pos, n, eps, strict, box, threads, &sort_bytes, err);
+    if (st != MR_OK) {
+        sweep_free(&s);
+        return st;
+    }
+    g->offsets = mr_alloc_array(n + 1, sizeof *g->offsets);
     g->depend = mr_alloc_array(n, sizeof *g->depend);
     if (!g->offsets || !g->depend) {
-        mr_radius_graph_free(g);
-        return mr_fail_nomem(err, NULL, n * 12);
+        st = mr_fail_nomem(err, NULL, n * 12);
+        goto done;
     }
+    g->offsets[0] = 0;
     g->bytes = (n + 1) * sizeof *g->offsets + n * sizeof *g->depend;
-    /* Strictly closer than 0 is never true: the graph has no edge. */
-    if (n == 0 || (strict && eps == 0)) {
-        for (size_t i = 0; i < n; i++)
+    g->peak_bytes = sort_bytes > g->bytes ? sort_bytes : g->bytes;
+    if (empty) {
+        for (size_t i = 0; i < n; i++) {
+            g->offsets[i + 1] = 0;
             atomic_init(&g->depend[i], 0);
-        g->adj = mr_alloc_array(0, sizeof *g->adj);
-        g->peak_bytes = g->bytes;
-        if (!g->adj) {
-            mr_radius_graph_free(g);
-            return mr_fail_nomem(err, NULL, 1);
         }
-        return MR_OK;
-    }
-
-    size_t transient = 0;
-    sweep s;
-    edge_buf *bufs = NULL;
-    uint32_t *blk_buf = NULL;
-    size_t *blk_pos = NULL;
-    mr_status st = sweep_build(&s, pos, n, eps, strict, threads, &transient, err);
-    if (st != MR_OK)
+        g->adj = mr_alloc_array(0, sizeof *g->adj);
+        if (!g->adj)
+            st = mr_fail_nomem(err, NULL, 1);
         goto done;
-    transient = n * (sizeof *s.ids + 3 * sizeof *s.pos + sizeof *s.q) + s.rows * 12;
+    }
+    const size_t sweep_bytes = n * (sizeof *s.ids + 3 * sizeof *s.px + sizeof *s.q) + s.rows * 12;
+    transient = sweep_bytes;
 
-    /* One search: each thread appends the larger-neighbour lists of the
-     * blocks it takes to its own buffer; a block remembers which buffer
-     * and where. */
-    const size_t blocks = (s.rows + ROW_BLOCK - 1) / ROW_BLOCK;
+    /* work items: runs of whole rows of about BLOCK_POINTS points */
+    size_t blocks = 0;
+    blk_first = mr_alloc_array(n / BLOCK_POINTS + 2, sizeof *blk_first);
     bufs = mr_calloc_array((size_t)threads, sizeof *bufs);
-    blk_buf = mr_alloc_array(blocks, sizeof *blk_buf);
-    blk_pos = mr_alloc_array(blocks, sizeof *blk_pos);
-    if (!bufs || !blk_buf || !blk_pos) {
-        st = mr_fail_nomem(err, NULL, blocks * 12);
+    cnt = mr_alloc_array(n, sizeof *cnt);
+    if (!blk_first || !bufs || !cnt) {
+        st = mr_fail_nomem(err, NULL, n * 4);
         goto done;
     }
-    size_t *off = g->offsets;
+    transient += n * sizeof *cnt;
+    for (size_t r = 0; r < s.rows; r++)
+        if (blocks == 0 || s.first[r] - s.first[blk_first[blocks - 1]] >= BLOCK_POINTS)
+            blk_first[blocks++] = r;
+    blk_first[blocks] = s.rows;
+
+    /* One search: each thread appends the pairs of the blocks it takes to
+     * its own buffer; then every buffer's pairs are counted at both ends.
+     * (A buffer is walked by whichever thread gets it: the team may be
+     * smaller than asked.) */
     _Atomic int failed;
     atomic_init(&failed, 0);
 #pragma omp parallel num_threads(threads) if (n > PARALLEL_MIN)
     {
         edge_buf *mine = &bufs[omp_get_thread_num()];
-#pragma omp for schedule(dynamic, 1)
-        for (size_t blk = 0; blk < blocks; blk++) {
-            blk_buf[blk] = (uint32_t)omp_get_thread_num();
-            blk_pos[blk] = mine->len;
-            if (atomic_load_explicit(&failed, memory_order_relaxed))
-                continue;
-            const size_t r1 = (blk + 1) * ROW_BLOCK < s.rows ? (blk + 1) * ROW_BLOCK : s.rows;
-            if (!search_rows(&s, blk * ROW_BLOCK, r1, off, g->depend, mine))
-                atomic_store_explicit(&failed, 1, memory_order_relaxed);
+#pragma omp for schedule(static)
+        for (size_t i = 0; i < n; i++) {
+            atomic_init(&cnt[i], 0);
+            atomic_init(&g->depend[i], 0);
         }
+#pragma omp for schedule(dynamic, 1)
+        for (size_t blk = 0; blk < blocks; blk++)
+            if (!atomic_load_explicit(&failed, memory_order_relaxed) &&
+                !search_rows(&s, blk_first[blk], blk_first[blk + 1], mine))
+                atomic_store_explicit(&failed, 1, memory_order_relaxed);
+#pragma omp for schedule(static, 1)
+        for (int t = 0; t < threads; t++)
+            for (size_t e = 0; e < bufs[t].len; e += 2) {
+                atomic_fetch_add_explicit(&cnt[bufs[t].data[e]], 1, memory_order_relaxed);
+                atomic_fetch_add_explicit(&g->depend[bufs[t].data[e + 1]], 1,
+                                          memory_order_relaxed);
+            }
     }
     size_t buffered = 0;
     for (int t = 0; t < threads; t++)
         buffered += bufs[t].cap * sizeof *bufs[t].data;
+    transient += buffered;
     if (atomic_load(&failed)) {
         st = mr_fail_nomem(err, NULL, buffered);
         goto done;
     }
-    for (size_t i = 0; i < n; i++)
-        off[i + 1] += off[i];
+    if (g->bytes + transient > g->peak_bytes)
+        g->peak_bytes = g->bytes + transient;
+    sweep_free(&s);
+    memset(&s, 0, sizeof s);
+    transient -= sweep_bytes;
+
+    /* offsets: a prefix sum over the counts, in slices (the slice sums
+     * first, then each slice from its start); the counts become the
+     * placement cursors */
+    size_t *off = g->offsets;
+    size_t slice_sum[MAX_SLICES + 1];
+    const size_t slices = threads < MAX_SLICES ? (size_t)threads : MAX_SLICES;
+    slice_sum[0] = 0;
+#pragma omp parallel for schedule(static, 1) num_threads(threads) if (n > PARALLEL_MIN)
+    for (size_t t = 0; t < slices; t++) {
+        size_t sum = 0;
+        for (size_t i = n * t / slices; i < n * (t + 1) / slices; i++)
+            sum += atomic_load_explicit(&cnt[i], memory_order_relaxed);
+        slice_sum[t + 1] = sum;
+    }
+    for (size_t t = 0; t < slices; t++)
+        slice_sum[t + 1] += slice_sum[t];
+#pragma omp parallel for schedule(static, 1) num_threads(threads) if (n > PARALLEL_MIN)
+    for (size_t t = 0; t < slices; t++) {
+        size_t at = slice_sum[t];
+        for (size_t i = n * t / slices; i < n * (t + 1) / slices; i++) {
+            off[i] = at;
+            at += atomic_load_explicit(&cnt[i], memory_order_relaxed);
+            atomic_init(&cnt[i], 0);
+        }
+    }
+    off[n] = slice_sum[slices];
     g->edge_count = off[n];
     g->adj = mr_alloc_array(g->edge_count, sizeof *g->adj);
     if (!g->adj) {
@@ -475,24 +658,22 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
         goto done;
     }
     g->bytes += g->edge_count * sizeof *g->adj;
-    transient += buffered + blocks * (sizeof *blk_buf + sizeof *blk_pos);
-    g->peak_bytes = g->bytes + transient;
 
-    /* Move the lists into place, each sorted so that every consumer walks
-     * the members of a cluster in index order. */
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (n > PARALLEL_MIN)
-    for (size_t blk = 0; blk < blocks; blk++) {
-        const uint32_t *src = bufs[blk_buf[blk]].data + blk_pos[blk];
-        const size_t r1 = (blk + 1) * ROW_BLOCK < s.rows ? (blk + 1) * ROW_BLOCK : s.rows;
-        for (uint32_t a = s.first[blk * ROW_BLOCK]; a < s.first[r1]; a++) {
-            const uint32_t ia = s.ids[a];
-            const size_t len = off[(size_t)ia + 1] - off[ia];
-            if (len == 0)
-                continue;
-            memcpy(g->adj + off[ia], src, len * sizeof *src);
-            src += len;
-            sort_list(g->adj + off[ia], len);
-        }
+    /* Place every pair under its smaller end, then sort each list, so that
+     * every consumer walks the members of a cluster in index order. */
+#pragma omp parallel num_threads(threads) if (n > PARALLEL_MIN)
+    {
+#pragma omp for schedule(static, 1)
+        for (int t = 0; t < threads; t++)
+            for (size_t e = 0; e < bufs[t].len; e += 2) {
+                const uint32_t u = bufs[t].data[e];
+                const uint32_t at = atomic_fetch_add_explicit(&cnt[u], 1, memory_order_relaxed);
+                g->adj[off[u] + at] = bufs[t].data[e + 1];
+            }
+#pragma omp for schedule(dynamic, 16384)
+        for (size_t i = 0; i < n; i++)
+            if (off[i + 1] - off[i] > 1)
+                sort_list(g->adj + off[i], off[i + 1] - off[i]);
     }
 
 done:
@@ -502,8 +683,8 @@ done:
         for (int t = 0; t < threads; t++)
             free(bufs[t].data);
     free(bufs);
-    free(blk_buf);
-    free(blk_pos);
+    free(blk_first);
+    free((void *)cnt);
     sweep_free(&s);
     if (st != MR_OK)
         mr_radius_graph_free(g);

@@ -54,7 +54,7 @@ static mr_status bin(const float *pos, size_t n, const mr_grid *g, int threads, 
         c->keys[i] = mr_grid_key(g, pos + 3 * i);
         c->ids[i] = (uint32_t)i;
     }
-    mr_status s = mr_radix_sort_u64(c->keys, c->ids, n, mr_grid_key_bits(g), err);
+    mr_status s = mr_radix_sort_u64(c->keys, c->ids, n, mr_grid_key_bits(g), threads, err);
     if (s != MR_OK) {
         cells_free(c);
         return s;
@@ -294,7 +294,7 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
         o++;
     }
     np = 3 * survivors;
-    if ((s = mr_radix_sort_u64(pairs, ptri, np, mr_index_bits(k), err)) != MR_OK)
+    if ((s = mr_radix_sort_u64(pairs, ptri, np, mr_index_bits(k), threads, err)) != MR_OK)
         goto done;
 
     /* per cell: quadric sum (pairs sorted by cell, triangles ascending),

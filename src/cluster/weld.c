@@ -97,6 +97,20 @@ static inline void accumulate(const weld_job *j, uint32_t r, double *acc)
 static void represent(const weld_job *j, const mr_radius_graph *g, uint32_t c,
                       const uint32_t *label, uint32_t k)
 {
+    if (g->offsets[c] == g->offsets[(size_t)c + 1]) {
+        /* No larger neighbour: c is alone (most vertices at welding
+         * radii). The mean of one value, as the sum below computes it
+         * from +0: the value, with -0 turned into +0. */
+        const uint32_t v = j->perm ? j->perm[c] : c;
+        for (unsigned ci = 0; ci < j->nch; ci++) {
+            const unsigned w = j->ch[ci].width;
+            const float *p = j->ch[ci].data + (size_t)(j->ch[ci].by_rank ? c : v) * w;
+            float *out = j->ch[ci].out + (size_t)k * w;
+            for (unsigned q = 0; q < w; q++)
+                out[q] = p[q] + 0.0f;
+        }
+        return;
+    }
     double acc[12] = {0};
     accumulate(j, c, acc);
     size_t count = 1;
@@ -472,7 +486,7 @@ static mr_status grade_order(const float *pos, size_t n, const uint32_t *indices
         return s;
     float *len = mr_alloc_array(n, sizeof *len);
     float *sharp = mr_alloc_array(n, sizeof *sharp);
-    uint64_t *keys = mr_alloc_array(n, sizeof *keys);
+    uint32_t *keys = mr_alloc_array(n, sizeof *keys);
     if (!len || !sharp || !keys) {
         s = mr_fail_nomem(err, NULL, n * 16);
         goto done;
@@ -513,7 +527,7 @@ static mr_status grade_order(const float *pos, size_t n, const uint32_t *indices
         keys[v] = UINT32_MAX - float_bits((float)grade);
         perm[v] = (uint32_t)v;
     }
-    s = mr_radix_sort_u64(keys, perm, n, 32, err);
+    s = mr_radix_sort_u32(keys, perm, n, 32, threads, err);
 done:
     free(len);
     free(sharp);
@@ -562,7 +576,8 @@ static mr_status check_input(const weld_in *in, mr_error *err)
 /* Packed positions in rank order: the input itself when it is packed and
  * in index order, else a copy (*owned). Fails on a non-finite coordinate. */
 static mr_status packed_positions(const weld_in *in, const uint32_t *perm, int threads,
-                                  const float **pos, float **owned, mr_error *err)
+                                  const float **pos, float **owned, double box[6],
+                                  mr_error *err)
 {
     const size_t n = in->n, stride = in->stride ? in->stride : 3 * sizeof(float);
     *owned = NULL;
@@ -578,9 +593,8 @@ static mr_status packed_positions(const weld_in *in, const uint32_t *perm, int t
             memcpy(p + 3 * r, base + (size_t)(perm ? perm[r] : r) * stride, 3 * sizeof(float));
         *pos = *owned = p;
     }
-    double lo[3], hi[3];
     size_t bad;
-    if (!mr_points_bounds(*pos, n, threads, lo, hi, &bad)) {
+    if (!mr_points_bounds(*pos, n, threads, box, box + 3, &bad)) {
         free(*owned);
         *owned = NULL;
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -628,6 +642,7 @@ static mr_status weld_run(const weld_in *in, const mr_weld_options *options, wel
     st->algorithm = options->algorithm == MR_WELD_AUTO ? MR_WELD_PWELD_ASYNC : options->algorithm;
 
     uint32_t *perm = NULL, *label_own = NULL;
+    double box[6];
     float *pos_own = NULL;
     _Atomic uint32_t *centroid = NULL;
     mr_radius_graph g;
@@ -638,7 +653,7 @@ static mr_status weld_run(const weld_in *in, const mr_weld_options *options, wel
     if (options->order == MR_WELD_ORDER_GRADE && in->tc > 0) {
         const float *packed;
         float *tmp;
-        if ((s = packed_positions(in, NULL, j.threads, &packed, &tmp, err)) != MR_OK)
+        if ((s = packed_positions(in, NULL, j.threads, &packed, &tmp, box, err)) != MR_OK)
             goto fail;
         perm = mr_alloc_array(n, sizeof *perm);
         if (!perm) {
@@ -653,7 +668,7 @@ static mr_status weld_run(const weld_in *in, const mr_weld_options *options, wel
         base_bytes += n * sizeof *perm;
     }
     j.perm = perm;
-    if ((s = packed_positions(in, perm, j.threads, &j.pos, &pos_own, err)) != MR_OK)
+    if ((s = packed_positions(in, perm, j.threads, &j.pos, &pos_own, box, err)) != MR_OK)
         goto fail;
     if (pos_own)
         base_bytes += n * 12;
@@ -669,7 +684,7 @@ static mr_status weld_run(const weld_in *in, const mr_weld_options *options, wel
         j.ch[j.nch++] = (channel){in->colors, 4, 0, NULL};
 
     double t = mr_now_seconds();
-    if ((s = mr_radius_graph_build(&g, j.pos, n, options->eps, options->strict != 0, j.threads,
+    if ((s = mr_radius_graph_build(&g, j.pos, n, options->eps, options->strict != 0, box, j.threads,
                                    err)) != MR_OK)
         goto fail;
     st->seconds_graph = mr_now_seconds() - t;
@@ -820,10 +835,10 @@ static void finder_graph_free(finder_graph *f)
 }
 
 static mr_status finder_graph_build(finder_graph *f, const float *pos, size_t n, double eps,
-                                    int strict, int threads, mr_error *err)
+                                    int strict, const double *box, int threads, mr_error *err)
 {
     f->d2 = NULL;
-    mr_status s = mr_radius_graph_build(&f->g, pos, n, eps, strict, threads, err);
+    mr_status s = mr_radius_graph_build(&f->g, pos, n, eps, strict, box, threads, err);
     if (s != MR_OK)
         return s;
     const mr_radius_graph *g = &f->g;
@@ -867,11 +882,11 @@ static size_t count_clusters(const finder_graph *f, double eps, int strict, uint
 
 /* Build at eps and count there; f keeps the graph. */
 static mr_status build_and_count(finder_graph *f, const float *pos, size_t n, double eps,
-                                 int strict, int threads, uint8_t *clustered, size_t *clusters,
-                                 mr_error *err)
+                                 int strict, const double *box, int threads,
+                                 uint8_t *clustered, size_t *clusters, mr_error *err)
 {
     finder_graph_free(f);
-    mr_status s = finder_graph_build(f, pos, n, eps, strict, threads, err);
+    mr_status s = finder_graph_build(f, pos, n, eps, strict, box, threads, err);
     if (s == MR_OK)
         *clusters = count_clusters(f, eps, strict, clustered);
     return s;
@@ -902,7 +917,8 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
     float *owned;
     /* a flat-array call without triangles: the finder welds in index
      * order */
-    if ((s = packed_positions(&in, NULL, threads, &pos, &owned, err)) != MR_OK)
+    double box[6];
+    if ((s = packed_positions(&in, NULL, threads, &pos, &owned, box, err)) != MR_OK)
         return s;
     uint8_t *mark = mr_alloc_array(n, 1);
     if (!mark) {
@@ -910,16 +926,15 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
         return mr_fail_nomem(err, NULL, n);
     }
     const size_t target = (size_t)ceil(fraction * (double)n);
-    double lo[3], hi[3];
-    size_t bad, k = 0, best_removed = 0;
-    mr_points_bounds(pos, n, threads, lo, hi, &bad);
+    const double *lo = box, *hi = box + 3;
+    size_t k = 0, best_removed = 0;
     double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                        (hi[2] - lo[2]) * (hi[2] - lo[2]));
     double a = 0, b;
     finder_graph f;
     memset(&f, 0, sizeof f);
     /* eps = 0 already enough (duplicates, or nothing to remove)? */
-    if ((s = build_and_count(&f, pos, n, 0, options->strict, threads, mark, &k, err)) != MR_OK)
+    if ((s = build_and_count(&f, pos, n, 0, options->strict, box, threads, mark, &k, err)) != MR_OK)
         goto done;
     if (n - k >= target) {
         *eps = 0;
@@ -931,7 +946,8 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
      * costs about as much as all before it) */
     b = diag > 0 ? diag * 1e-5 : 1;
     for (;;) {
-        if ((s = build_and_count(&f, pos, n, b, options->strict, threads, mark, &k, err)) !=
+        if ((s = build_and_count(&f, pos, n, b, options->strict, box, threads, mark, &k,
+                                 err)) !=
             MR_OK)
             goto done;
         if (n - k >= target || b > 2 * diag)

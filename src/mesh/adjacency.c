@@ -57,98 +57,17 @@ mr_status mr_check_indices(const uint32_t *indices, size_t triangle_count,
 #define RADIX_BITS 8
 #define RADIX_SIZE (1u << RADIX_BITS)
 
-mr_status mr_radix_sort_u64(uint64_t *keys, uint32_t *values, size_t n, unsigned key_bits,
-                            mr_error *err)
-{
-    if (n < 2 || key_bits == 0)
-        return MR_OK;
-    if (key_bits > 64)
-        key_bits = 64;
-    int nthreads = 1;
-#ifdef _OPENMP
-    if (n > MR_PARALLEL_MIN)
-        nthreads = omp_get_max_threads();
-#endif
-    const unsigned passes = (key_bits + RADIX_BITS - 1) / RADIX_BITS;
-    uint64_t *tmp_keys = mr_alloc_array(n, sizeof *tmp_keys);
-    uint32_t *tmp_values = values ? mr_alloc_array(n, sizeof *tmp_values) : NULL;
-    size_t *hist = mr_alloc_array((size_t)nthreads * RADIX_SIZE, sizeof *hist);
-    if (!tmp_keys || (values && !tmp_values) || !hist) {
-        free(tmp_keys);
-        free(tmp_values);
-        free(hist);
-        return mr_fail_nomem(err, NULL, n * 12);
-    }
-    bool skip = false;
+#define RADIX_NAME mr_radix_sort_u64
+#define RADIX_KEY uint64_t
+#include "radix_sort.inc"
+#undef RADIX_NAME
+#undef RADIX_KEY
 
-    /* One team for all passes. In each pass every thread counts the digits
-     * of its own contiguous slice and scatters that slice; the offsets give
-     * thread u's part of bucket b room after every lower thread's part,
-     * which is what keeps the sort stable. */
-#pragma omp parallel num_threads(nthreads)
-    {
-        int nt = 1, me = 0;
-#ifdef _OPENMP
-        nt = omp_get_num_threads();
-        me = omp_get_thread_num();
-#endif
-        const size_t lo = n * (size_t)me / (size_t)nt;
-        const size_t hi = n * (size_t)(me + 1) / (size_t)nt;
-        size_t *h = hist + (size_t)me * RADIX_SIZE;
-        /* Private: every thread swaps its own copy after each pass. */
-        uint64_t *src_k = keys, *dst_k = tmp_keys;
-        uint32_t *src_v = values, *dst_v = tmp_values;
-        for (unsigned p = 0; p < passes; p++) {
-            const unsigned shift = p * RADIX_BITS;
-            memset(h, 0, RADIX_SIZE * sizeof *h);
-            for (size_t i = lo; i < hi; i++)
-                h[(src_k[i] >> shift) & (RADIX_SIZE - 1)]++;
-#pragma omp barrier
-#pragma omp single
-            {
-                size_t sum = 0;
-                skip = false;
-                for (unsigned b = 0; b < RADIX_SIZE; b++) {
-                    size_t bucket = 0;
-                    for (int u = 0; u < nt; u++) {
-                        size_t *c = &hist[(size_t)u * RADIX_SIZE + b];
-                        size_t count = *c;
-                        *c = sum;
-                        sum += count;
-                        bucket += count;
-                    }
-                    if (bucket == n)
-                        skip = true; /* every key has this digit: nothing moves */
-                }
-            }
-            if (skip)
-                continue; /* the same for every thread: all passed the barrier above */
-            for (size_t i = lo; i < hi; i++) {
-                size_t at = h[(src_k[i] >> shift) & (RADIX_SIZE - 1)]++;
-                dst_k[at] = src_k[i];
-                if (src_v)
-                    dst_v[at] = src_v[i];
-            }
-            uint64_t *tk = src_k;
-            src_k = dst_k;
-            dst_k = tk;
-            uint32_t *tv = src_v;
-            src_v = dst_v;
-            dst_v = tv;
-#pragma omp barrier
-        }
-#pragma omp single
-        if (src_k != keys) {
-            memcpy(keys, src_k, n * sizeof *keys);
-            if (values)
-                memcpy(values, src_v, n * sizeof *values);
-        }
-    }
-    free(tmp_keys);
-    free(tmp_values);
-    free(hist);
-    return MR_OK;
-}
+#define RADIX_NAME mr_radix_sort_u32
+#define RADIX_KEY uint32_t
+#include "radix_sort.inc"
+#undef RADIX_NAME
+#undef RADIX_KEY
 
 static int compare_u64(const void *a, const void *b)
 {

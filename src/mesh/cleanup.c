@@ -197,7 +197,7 @@ static mr_status weld_map(const weld_layout *l, size_t vc, uint32_t *target, uin
         keys[v] = hash_vertex(l, (uint32_t)v) >> (64 - bits);
         ids[v] = (uint32_t)v;
     }
-    if ((st = mr_radix_sort_u64(keys, ids, vc, bits, err)) != MR_OK)
+    if ((st = mr_radix_sort_u64(keys, ids, vc, bits, 0, err)) != MR_OK)
         goto done;
 
     *merged = 0;
@@ -303,7 +303,7 @@ static mr_status flag_duplicates(const mr_mesh *mesh, uint8_t *drop, mr_error *e
         keys[t] = drop[t] ? none : ((uint64_t)s[0] << shift) | s[1];
         ids[t] = (uint32_t)t;
     }
-    if ((st = mr_radix_sort_u64(keys, ids, tc, key_bits, err)) != MR_OK)
+    if ((st = mr_radix_sort_u64(keys, ids, tc, key_bits, 0, err)) != MR_OK)
         goto done;
     size_t cap = 0;
     for (size_t i = 0; i < tc && keys[i] != none;) {

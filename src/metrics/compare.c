@@ -463,7 +463,7 @@ double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
         return NAN;
     for (size_t i = 0; i < b_vertex_count; i++)
         keys[i] = ((uint64_t)b_origin[i] << 32) | i;
-    if (mr_radix_sort_u64(keys, NULL, b_vertex_count, 64, NULL) != MR_OK) {
+    if (mr_radix_sort_u64(keys, NULL, b_vertex_count, 64, 0, NULL) != MR_OK) {
         free(keys);
         return NAN;
     }
