@@ -70,11 +70,73 @@ static uint32_t walk_fan(const mr_collapse_mesh *m, uint32_t v, uint32_t t0, boo
     return steps;
 }
 
+/* Fans up to this many triangles are classified on local copies of their
+ * edges (classify_small); larger ones by walking the lists. */
+#define SMALL_FAN 64
+
+/*
+ * classify_vertex for a fan of n <= SMALL_FAN triangles, the same answer
+ * from each triangle's edges at v, copied out once: triangle i runs
+ * v -> nx[i] and pv[i] -> v. An edge is non-manifold (or inconsistently
+ * oriented) when two triangles run it the same way: when two nx, or two
+ * pv, are equal. Otherwise (v, w) is manifold when w is some nx and some
+ * pv, a boundary edge when only one of them; the unmatched nx and pv are
+ * equally many, so the boundary edges are twice the triangles without a
+ * successor. The fan is one when stepping from triangle i to its
+ * successor, the one whose pv is nx[i] (or back), reaches all n.
+ */
+static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
+{
+    uint32_t nx[SMALL_FAN], pv[SMALL_FAN];
+    int succ[SMALL_FAN], pred[SMALL_FAN];
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t j = list[i] % 3, *tri = m->tris + (list[i] - j);
+        nx[i] = tri[j == 2 ? 0 : j + 1];
+        pv[i] = tri[j == 0 ? 2 : j - 1];
+        pred[i] = -1;
+    }
+    uint32_t open = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        bool dup = false;
+        for (uint32_t j = i + 1; j < n; j++)
+            dup |= (nx[j] == nx[i]) | (pv[j] == pv[i]);
+        if (dup)
+            return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
+        int s = -1;
+        for (uint32_t j = 0; j < n; j++)
+            s = pv[j] == nx[i] ? (int)j : s;
+        succ[i] = s;
+        if (s >= 0)
+            pred[s] = (int)i;
+        open += s < 0;
+    }
+    if (open > 1)
+        return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* more than two boundary edges */
+    uint32_t seen = 1;
+    bool closed = false;
+    for (int t = succ[0]; t >= 0 && seen <= n; t = succ[t]) {
+        if (t == 0) {
+            closed = true;
+            break;
+        }
+        seen++;
+    }
+    if (!closed)
+        for (int t = pred[0]; t >= 0 && t != 0 && seen <= n; t = pred[t])
+            seen++;
+    if (seen != n)
+        return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* several fans */
+    return open ? MR_VF_BOUNDARY : 0;
+}
+
 /* MR_VF_BOUNDARY, MR_VF_NONMANIFOLD | MR_VF_LOCKED, or 0 for an inner
  * manifold vertex. */
 static uint8_t classify_vertex(const mr_collapse_mesh *m, uint32_t v)
 {
     const uint32_t n = m->count[v];
+    if (n <= SMALL_FAN)
+        return classify_small(m, v, n);
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     uint32_t boundary_edges = 0;
     for (uint32_t i = 0; i < n; i++) {
@@ -142,34 +204,19 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     if (stride == 0)
         stride = 3 * sizeof(float);
 
-    /* Lists first, while nothing else is allocated: growing the triangle
-     * array of the table to refs' capacity may copy it. */
-    mr_vertex_triangles vt;
-    mr_status st = mr_vertex_triangles_build(&vt, indices, tc, vc, err);
-    if (st != MR_OK)
-        return st;
-    const size_t total = vt.offsets[vc];
-    const size_t capacity = total + total / 32 + 64;
-    uint32_t *refs = mr_realloc_array(vt.triangles, capacity, sizeof *refs);
-    if (!refs) {
-        mr_vertex_triangles_free(&vt);
-        return mr_fail_nomem(err, NULL, capacity * sizeof *refs);
-    }
-    m->refs = refs;
-    m->refs_capacity = capacity;
-    m->refs_size = total;
-    m->start = vt.offsets; /* vc + 1 entries; the last is unused */
+    /* The triangle array, with degenerate input triangles marked dead,
+     * and each vertex's count of live triangles (in start[v + 1]). */
     m->vertex_count = vc;
     m->triangle_count = tc;
+    m->start = mr_calloc_array(vc + 1, sizeof *m->start);
     m->count = mr_alloc_array(vc, sizeof *m->count);
     m->pos = mr_alloc_array(3 * vc, sizeof *m->pos);
     m->tris = mr_alloc_array(3 * tc, sizeof *m->tris);
     m->flags = mr_calloc_array(vc, sizeof *m->flags);
-    if (!m->count || !m->pos || !m->tris || !m->flags) {
+    if (!m->start || !m->count || !m->pos || !m->tris || !m->flags) {
         mr_collapse_mesh_free(m);
-        return mr_fail_nomem(err, NULL, vc * 20 + tc * 12);
+        return mr_fail_nomem(err, NULL, vc * 21 + tc * 12);
     }
-
     size_t live_tris = 0;
     for (size_t t = 0; t < tc; t++) {
         const uint32_t *src = indices + 3 * t;
@@ -178,33 +225,46 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
             dst[0] = dst[1] = dst[2] = MR_COLLAPSE_NONE;
             continue;
         }
-        dst[0] = src[0];
-        dst[1] = src[1];
-        dst[2] = src[2];
+        for (int k = 0; k < 3; k++) {
+            dst[k] = src[k];
+            m->start[src[k] + 1]++;
+        }
         live_tris++;
     }
     m->live_triangles = live_tris;
 
-    /* Drop the degenerate triangles from the lists (the gaps they leave
-     * are garbage that compaction reclaims), and store corner ids. */
-    size_t live_vertices = 0;
+    /* Lists of corner ids, in triangle order, with room to grow. */
+    size_t total = 0, live_vertices = 0;
     for (size_t v = 0; v < vc; v++) {
-        const uint32_t s = m->start[v], e = m->start[v + 1];
-        uint32_t n = 0;
-        for (uint32_t i = s; i < e; i++) {
-            const uint32_t t = refs[i];
-            const uint32_t *tri = m->tris + 3 * (size_t)t;
-            if (tri[0] != MR_COLLAPSE_NONE)
-                refs[s + n++] = 3 * t + (tri[0] == v ? 0 : tri[1] == v ? 1 : 2);
-        }
-        m->count[v] = n;
-        live_vertices += n > 0;
+        const uint32_t c = m->start[v + 1];
+        m->start[v] = (uint32_t)total;
+        m->count[v] = 0;
+        total += c;
+        live_vertices += c > 0;
+    }
+    const size_t capacity = total + total / 32 + 64;
+    m->refs = mr_alloc_array(capacity, sizeof *m->refs);
+    if (!m->refs) {
+        mr_collapse_mesh_free(m);
+        return mr_fail_nomem(err, NULL, capacity * sizeof *m->refs);
+    }
+    m->refs_capacity = capacity;
+    m->refs_size = total;
+    for (size_t t = 0; t < tc; t++) {
+        const uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] == MR_COLLAPSE_NONE)
+            continue;
+        for (uint32_t k = 0; k < 3; k++)
+            m->refs[m->start[tri[k]] + m->count[tri[k]]++] = 3 * (uint32_t)t + k;
+    }
+    for (size_t v = 0; v < vc; v++) {
         float p[3];
         memcpy(p, (const char *)positions + v * stride, sizeof p);
         for (int k = 0; k < 3; k++)
             m->pos[3 * v + k] = (float)((p[k] - centre[k]) * scale);
     }
     m->live_vertices = live_vertices;
+
     for (size_t v = 0; v < vc; v++)
         m->flags[v] = m->count[v] ? classify_vertex(m, (uint32_t)v) : MR_VF_REMOVED;
     return MR_OK;

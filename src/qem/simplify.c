@@ -586,13 +586,29 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
     const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
     for (uint32_t i = 0; i < m->count[v]; i++) {
         const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
-        double p[3][3], n[3];
+        double p[3][3];
         for (int k = 0; k < 3; k++)
             mr_collapse_load(m, tri[k], p[k]);
-        const double area = mr_triangle_normal(p[0], p[1], p[2], n);
-        mr_quadric_add_plane_through_origin(&q, n, area);
+        /* area * n n^T for the unit normal n = c / |c| and area |c| / 2 of
+         * the cross product c: c c^T / (2 |c|), one division */
+        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                             u[0] * w[1] - u[1] * w[0]};
+        const double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (!(len > 0))
+            continue; /* no area, no normal: nothing to add */
+        const double f = 0.5 / len;
+        q.a00 += f * c[0] * c[0];
+        q.a01 += f * c[0] * c[1];
+        q.a02 += f * c[0] * c[2];
+        q.a11 += f * c[1] * c[1];
+        q.a12 += f * c[1] * c[2];
+        q.a22 += f * c[2] * c[2];
+        q.w += 0.5 * len;
         if (!border)
             continue;
+        const double n[3] = {c[0] / len, c[1] / len, c[2] / len};
         const uint32_t k = list[i] % 3;
         const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
         for (int e = 0; e < 2; e++) {
