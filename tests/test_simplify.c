@@ -304,6 +304,61 @@ static void test_blocked_edges_requeued(void **state)
     mr_mesh_free(&m);
 }
 
+/* A closed cylinder of n segments whose caps are fans: each cap's centre
+ * has n triangles, as in CAD exports. */
+static void fan_cylinder(size_t n, mr_mesh *m)
+{
+    mr_mesh_init(m);
+    assert_int_equal(mr_mesh_alloc(m, 2 * n + 2, 4 * n, 0, NULL), MR_OK);
+    for (size_t i = 0; i < n; i++) {
+        const double a = 2 * 3.14159265358979323846 * (double)i / (double)n;
+        for (int z = 0; z < 2; z++) {
+            float *p = m->positions + 3 * (i + (size_t)z * n);
+            p[0] = (float)cos(a), p[1] = (float)sin(a), p[2] = (float)z;
+        }
+    }
+    float *c = m->positions + 6 * n;
+    c[0] = c[1] = c[2] = c[3] = c[4] = 0, c[5] = 1;
+    const uint32_t c0 = (uint32_t)(2 * n), c1 = c0 + 1;
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t a = (uint32_t)i, b = (uint32_t)((i + 1) % n);
+        const uint32_t a2 = a + (uint32_t)n, b2 = b + (uint32_t)n;
+        const uint32_t t[12] = {a, b, b2, a, b2, a2, c0, b, a, c1, a2, b2};
+        memcpy(m->indices + 12 * i, t, sizeof t);
+    }
+}
+
+/* Fan centres of more triangles than a collapse may touch: below the
+ * limit the merged list must still fit the triangle lists' room (a
+ * 127-triangle fan on a small mesh overran it), and above it the cheap
+ * but blocked spokes must not hold back the rim, whose collapses bring
+ * the centre under the limit (the batched passes stopped at 99 %). */
+static void test_fan_caps(void **state)
+{
+    (void)state;
+    const size_t sizes[] = {127, 200, 400};
+    for (size_t i = 0; i < 3; i++) {
+        mr_mesh m;
+        fan_cylinder(sizes[i], &m);
+        mr_stats in = stats_of(m.positions, m.vertex_count, m.indices, m.triangle_count);
+        assert_true(in.closed && in.manifold);
+        for (int strategy = 0; strategy < 2; strategy++) {
+            mr_simplify_options o;
+            mr_simplify_options_default(&o);
+            o.strategy = strategy ? MR_STRATEGY_BATCHED : MR_STRATEGY_GREEDY;
+            o.target_ratio = 0.1;
+            mr_simplified r;
+            simplify_ok(&m, &o, &r);
+            assert_int_equal(r.vertex_count, (2 * sizes[i] + 2 + 5) / 10);
+            mr_stats s = stats_of(r.positions, r.vertex_count, r.indices, r.triangle_count);
+            assert_true(s.closed && s.manifold);
+            assert_int_equal(s.euler_characteristic, 2);
+            mr_simplified_free(&r);
+        }
+        mr_mesh_free(&m);
+    }
+}
+
 /* The batched strategy takes nearly the greedy collapses: on the scan its
  * surface error stays within a few percent of the greedy one, and no
  * collapse costs much more than the greedy run's worst (an edge costed
@@ -642,6 +697,7 @@ int main(void)
         cmocka_unit_test(test_vertex_lock),
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_blocked_edges_requeued),
+        cmocka_unit_test(test_fan_caps),
         cmocka_unit_test(test_batched_close_to_greedy),
         cmocka_unit_test(test_max_error),
         cmocka_unit_test(test_target_triangles),

@@ -123,7 +123,12 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
 
 /* Every live edge whose collapse may happen (cost finite and within the
  * limit), as (cost key << 32 | half-edge), in vertex order. Returns how
- * many were written (at most s->cand_cap). */
+ * many were written (at most s->cand_cap). Edges at a vertex of more than
+ * MR_COLLAPSE_MAX_DEGREE triangles are left out: they cannot collapse yet
+ * (mr_collapse_valid), and as candidates the cheap ones would hold back
+ * every edge around them -- the spokes of a flat fan cost nothing, so the
+ * rim of a 200-triangle fan would never collapse, and the fan's centre
+ * loses a triangle with every rim collapse. */
 static size_t gather(mr_simplifier *s, double limit)
 {
     const mr_collapse_mesh *m = &s->m;
@@ -131,15 +136,18 @@ static size_t gather(mr_simplifier *s, double limit)
     const size_t cap = s->cand_cap;
     size_t n = 0;
     for (uint32_t v = 0; v < m->vertex_count; v++) {
-        if (m->flags[v] & MR_VF_REMOVED)
+        if (m->flags[v] & MR_VF_REMOVED || m->count[v] > MR_COLLAPSE_MAX_DEGREE)
             continue;
         FOR_EACH_EDGE(m, v, h, {
-            uint32_t r, k;
-            double target[3];
-            const double c = mr_simplifier_plan_edge(s, m->tris[h], mr_collapse_he_dst(m, h),
-                                                     &r, &k, target);
-            if (c <= limit && n < cap)
-                out[n++] = (uint64_t)float_key((float)c) << 32 | h;
+            /* h runs a -> b: from v, or to v on a boundary edge */
+            const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
+            if (m->count[a] <= MR_COLLAPSE_MAX_DEGREE && m->count[b] <= MR_COLLAPSE_MAX_DEGREE) {
+                uint32_t r, k;
+                double target[3];
+                const double c = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
+                if (c <= limit && n < cap)
+                    out[n++] = (uint64_t)float_key((float)c) << 32 | h;
+            }
         });
     }
     return n;

@@ -242,7 +242,10 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
         total += c;
         live_vertices += c > 0;
     }
-    const size_t capacity = total + total / 32 + 64;
+    /* Live lists never take more than `total` entries, so after a
+     * compaction there is always room for the merged list of two vertices
+     * of MR_COLLAPSE_MAX_DEGREE triangles each. */
+    const size_t capacity = total + total / 32 + 2 * MR_COLLAPSE_MAX_DEGREE + 64;
     m->refs = mr_alloc_array(capacity, sizeof *m->refs);
     if (!m->refs) {
         mr_collapse_mesh_free(m);

@@ -120,7 +120,9 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                        const double target[3], const mr_collapse_limits *limits);
 
 /* Room for one more collapse of u and v in refs: compacts refs when
- * needed. Needs exclusive access to the whole mesh. */
+ * needed. Needs exclusive access to the whole mesh. u and v must have at
+ * most MR_COLLAPSE_MAX_DEGREE triangles each (as mr_collapse_valid
+ * requires): refs keeps room for two such lists beyond all live ones. */
 void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v);
 
 /*
