@@ -69,24 +69,14 @@
  * rms_rel: fractions of the input's bounding-box diagonal. A value that was
  * not measured is an empty field.
  */
-#include "benchutil.h"
+#include "benchpeers.h"
 
-#include <float.h>
 #include <math.h>
 #include <omp.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
-#include <sys/types.h>
-#include <sys/wait.h>
 #include <unistd.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
-#ifdef MR_HAVE_MESHOPT
-#include <meshoptimizer.h>
-#endif
 
 /* Ours first: ALG_FULL (the default options) is the row the others are
  * compared with; ALG_FULL..ALG_GREEDY_HALF are all meshreduce's. */
@@ -134,92 +124,6 @@ typedef struct config {
 } config;
 
 /* ------------------------------------------------------------------------ */
-/* Memory                                                                   */
-/* ------------------------------------------------------------------------ */
-
-/* A /proc/self/status field ("VmRSS", "VmHWM") in bytes, or -1. */
-static long long status_bytes(const char *field)
-{
-    FILE *f = fopen("/proc/self/status", "r");
-    if (!f)
-        return -1;
-    char line[256];
-    long long kb = -1;
-    size_t n = strlen(field);
-    while (fgets(line, sizeof line, f))
-        if (!strncmp(line, field, n) && line[n] == ':') {
-            kb = atoll(line + n + 1);
-            break;
-        }
-    fclose(f);
-    return kb < 0 ? -1 : kb * 1024;
-}
-
-/* Reset VmHWM to the current resident set (Linux >= 4.0). */
-static int reset_peak(void)
-{
-    FILE *f = fopen("/proc/self/clear_refs", "w");
-    if (!f)
-        return 0;
-    int ok = fputs("5", f) >= 0;
-    return fclose(f) == 0 && ok;
-}
-
-typedef void (*job_fn)(void *ctx);
-
-/* Peak memory growth in bytes of job(ctx) run once in a forked child, or -1. */
-static double child_peak(job_fn job, void *ctx)
-{
-    int fd[2];
-    if (pipe(fd) != 0)
-        return -1;
-    long long parent_rss = status_bytes("VmRSS");
-    fflush(stdout);
-    fflush(stderr);
-    pid_t pid = fork();
-    if (pid < 0) {
-        close(fd[0]);
-        close(fd[1]);
-        return -1;
-    }
-    if (pid == 0) {
-        close(fd[0]);
-        omp_set_num_threads(1);
-#ifdef __GLIBC__
-        malloc_trim(0);
-#endif
-        long long peak = -1;
-        if (reset_peak()) {
-            long long base = status_bytes("VmRSS");
-            job(ctx);
-            long long hwm = status_bytes("VmHWM");
-            if (base >= 0 && hwm >= base)
-                peak = hwm - base;
-        } else {
-            /* Fallback: this child's own peak (it starts at the parent's
-             * resident set at the fork) minus that resident set. */
-            job(ctx);
-            struct rusage ru;
-            getrusage(RUSAGE_SELF, &ru);
-            long long maxrss = (long long)ru.ru_maxrss * 1024;
-            if (parent_rss >= 0 && maxrss >= parent_rss)
-                peak = maxrss - parent_rss;
-        }
-        ssize_t w = write(fd[1], &peak, sizeof peak);
-        _exit(w == (ssize_t)sizeof peak ? 0 : 1);
-    }
-    close(fd[1]);
-    long long peak = -1;
-    if (read(fd[0], &peak, sizeof peak) != (ssize_t)sizeof peak)
-        peak = -1;
-    close(fd[0]);
-    int status = 0;
-    if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        return -1;
-    return (double)peak;
-}
-
-/* ------------------------------------------------------------------------ */
 /* Quality                                                                  */
 /* ------------------------------------------------------------------------ */
 
@@ -250,197 +154,65 @@ static void measure_quality(const config *cfg, const mr_mesh *in, const float *p
 /* meshreduce                                                               */
 /* ------------------------------------------------------------------------ */
 
-typedef struct ours_job {
-    const mr_mesh *in;
-    mr_simplify_options opt;
-} ours_job;
-
-static void ours_once(void *ctx)
-{
-    ours_job *j = ctx;
-    mr_simplified out;
-    mr_error err;
-    if (mr_simplify(j->in->positions, 0, j->in->vertex_count, j->in->indices,
-                    j->in->triangle_count, &j->opt, &out, &err) == MR_OK)
-        mr_simplified_free(&out);
-}
-
 static void run_ours(const config *cfg, const mr_mesh *in, double ratio, int alg, row *r)
 {
-    ours_job j;
-    j.in = in;
-    mr_simplify_options_default(&j.opt);
-    j.opt.target_ratio = ratio;
-    j.opt.collapse = alg == ALG_HALF || alg == ALG_GREEDY_HALF ? MR_COLLAPSE_HALF
-                                                               : MR_COLLAPSE_FULL;
+    mr_simplify_options opt;
+    mr_simplify_options_default(&opt);
+    opt.target_ratio = ratio;
+    opt.collapse = alg == ALG_HALF || alg == ALG_GREEDY_HALF ? MR_COLLAPSE_HALF
+                                                             : MR_COLLAPSE_FULL;
     if (alg == ALG_GREEDY_FULL || alg == ALG_GREEDY_HALF)
-        j.opt.strategy = MR_STRATEGY_GREEDY;
-    j.opt.threads = 1;
-    double *t = malloc(sizeof(double) * (size_t)cfg->runs);
+        opt.strategy = MR_STRATEGY_GREEDY;
+    opt.threads = 1;
     mr_simplified out;
-    memset(&out, 0, sizeof out);
-    for (int k = 0; k < cfg->runs; k++) {
-        mr_error err;
-        if (k > 0)
-            mr_simplified_free(&out);
-        double t0 = bench_now();
-        bench_check(mr_simplify(in->positions, 0, in->vertex_count, in->indices,
-                                in->triangle_count, &j.opt, &out, &err),
-                    &err);
-        t[k] = bench_now() - t0;
-    }
-    r->time = bench_summarize(t, cfg->runs);
     r->runs = cfg->runs;
-    free(t);
+    bench_run_ours(in, &opt, r->runs, &r->time, &r->peak_bytes, &out);
     r->out_vertices = out.vertex_count;
     r->out_triangles = out.triangle_count;
-    r->peak_bytes = child_peak(ours_once, &j);
     measure_quality(cfg, in, out.positions, out.vertex_count, out.indices, out.triangle_count, r);
     mr_simplified_free(&out);
     r->done = 1;
 }
 
 /* ------------------------------------------------------------------------ */
-/* meshoptimizer                                                            */
+/* Peers (benchpeers.h)                                                     */
 /* ------------------------------------------------------------------------ */
 
-#ifdef MR_HAVE_MESHOPT
-typedef struct meshopt_job {
-    const mr_mesh *in;
-    size_t target_indices;
-    int sloppy;
-    unsigned int *dst; /* 3 * input triangles */
-} meshopt_job;
-
-static size_t meshopt_call(meshopt_job *j, unsigned int *dst)
+/* A peer's output (ok: it ran) into r, with its quality; frees out. */
+static void finish_peer(const config *cfg, const mr_mesh *in, int ok, bench_output *out, row *r)
 {
-    const mr_mesh *in = j->in;
-    float result_error = 0;
-    if (j->sloppy)
-        return meshopt_simplifySloppy(dst, in->indices, 3 * in->triangle_count, in->positions,
-                                      in->vertex_count, 3 * sizeof(float), j->target_indices,
-                                      FLT_MAX, &result_error);
-    return meshopt_simplify(dst, in->indices, 3 * in->triangle_count, in->positions,
-                            in->vertex_count, 3 * sizeof(float), j->target_indices, FLT_MAX, 0,
-                            &result_error);
-}
-
-/* The child's run: the destination buffer is part of what it needs. */
-static void meshopt_once(void *ctx)
-{
-    meshopt_job *j = ctx;
-    unsigned int *dst = malloc(sizeof(unsigned int) * 3 * j->in->triangle_count);
-    if (dst)
-        meshopt_call(j, dst);
-    free(dst);
+    if (ok) {
+        r->out_vertices = out->vertex_count;
+        r->out_triangles = out->triangle_count;
+        measure_quality(cfg, in, out->positions, out->vertex_count, out->indices,
+                        out->triangle_count, r);
+        r->done = 1;
+    }
+    bench_output_free(out);
 }
 
 static void run_meshopt(const config *cfg, const mr_mesh *in, size_t target_triangles,
                         int sloppy, row *r)
 {
-    meshopt_job j = {in, 3 * target_triangles, sloppy, NULL};
-    j.dst = malloc(sizeof(unsigned int) * 3 * in->triangle_count);
-    double *t = malloc(sizeof(double) * (size_t)cfg->runs);
-    size_t n = 0;
-    for (int k = 0; k < cfg->runs; k++) {
-        double t0 = bench_now();
-        n = meshopt_call(&j, j.dst);
-        t[k] = bench_now() - t0;
-    }
-    r->time = bench_summarize(t, cfg->runs);
-    r->runs = cfg->runs;
-    free(t);
-    r->peak_bytes = child_peak(meshopt_once, &j);
-
-    /* Compact: the output refers to the input vertex array. */
-    uint32_t *remap = malloc(sizeof(uint32_t) * (in->vertex_count ? in->vertex_count : 1));
-    memset(remap, 0xff, sizeof(uint32_t) * in->vertex_count);
-    size_t nv = 0;
-    for (size_t i = 0; i < n; i++)
-        if (remap[j.dst[i]] == UINT32_MAX)
-            remap[j.dst[i]] = (uint32_t)nv++;
-    float *pos = malloc(sizeof(float) * 3 * (nv ? nv : 1));
-    uint32_t *idx = malloc(sizeof(uint32_t) * (n ? n : 1));
-    for (size_t v = 0; v < in->vertex_count; v++)
-        if (remap[v] != UINT32_MAX)
-            memcpy(pos + 3 * (size_t)remap[v], in->positions + 3 * v, 3 * sizeof(float));
-    for (size_t i = 0; i < n; i++)
-        idx[i] = remap[j.dst[i]];
-    r->out_vertices = nv;
-    r->out_triangles = n / 3;
-    measure_quality(cfg, in, pos, nv, idx, n / 3, r);
-    free(remap);
-    free(pos);
-    free(idx);
-    free(j.dst);
-    r->done = 1;
+    bench_output out = {0};
+    int ok = bench_run_meshopt(in, target_triangles, sloppy, cfg->runs, &r->time, &r->runs,
+                               &r->peak_bytes, &out);
+    finish_peer(cfg, in, ok, &out, r);
 }
-#endif
 
-/* ------------------------------------------------------------------------ */
-/* OpenMesh (subprocess)                                                    */
-/* ------------------------------------------------------------------------ */
-
-#ifdef MR_OPENMESH_DRIVER
 /* OpenMesh is an order of magnitude slower: its repeated runs stop once they
  * add up to this many seconds (at least one run). */
 #define OPENMESH_BUDGET 20.0
 
-static int run_openmesh(const config *cfg, const mr_mesh *in, const char *in_path,
-                        const char *out_path, size_t target_vertices, row *r)
+static void run_openmesh(const config *cfg, const mr_mesh *in, const char *in_path,
+                         const char *out_path, size_t target_vertices, row *r)
 {
-    char cmd[3 * 4096 + 64];
-    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' %zu %d %g", MR_OPENMESH_DRIVER, in_path, out_path,
-             target_vertices, cfg->runs, OPENMESH_BUDGET);
-    char *text = bench_capture(cmd);
-    if (!text) {
-        fprintf(stderr, "bench: the OpenMesh driver failed: %s\n", cmd);
-        return 0;
-    }
-    double *t = malloc(sizeof(double) * (size_t)cfg->runs);
-    int nt = 0;
-    double peak = -1;
-    size_t in_v = 0, in_f = 0;
-    for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
-        double x;
-        if (sscanf(line, "seconds %lf", &x) == 1 && nt < cfg->runs)
-            t[nt++] = x;
-        else if (sscanf(line, "peak_bytes %lf", &x) == 1)
-            peak = x;
-        else
-            sscanf(line, "input %zu %zu", &in_v, &in_f);
-    }
-    free(text);
-    if (nt == 0) {
-        free(t);
-        fprintf(stderr, "bench: no timing from the OpenMesh driver\n");
-        return 0;
-    }
-    if (in_v != in->vertex_count || in_f != in->triangle_count)
-        fprintf(stderr, "bench: note: OpenMesh read %zu vertices, %zu faces (ours: %zu, %zu)\n",
-                in_v, in_f, in->vertex_count, in->triangle_count);
-    r->time = bench_summarize(t, nt);
-    r->runs = nt;
-    free(t);
-    r->peak_bytes = peak;
-
-    mr_mesh out;
-    mr_error err;
-    if (mr_mesh_read(out_path, NULL, &out, &err) != MR_OK) {
-        fprintf(stderr, "bench: reading OpenMesh's output: %s\n", err.message);
-        return 0;
-    }
-    mr_mesh_remove_unreferenced(&out, NULL, &err);
-    r->out_vertices = out.vertex_count;
-    r->out_triangles = out.triangle_count;
-    measure_quality(cfg, in, out.positions, out.vertex_count, out.indices, out.triangle_count, r);
-    mr_mesh_free(&out);
-    if (!cfg->keep)
-        unlink(out_path);
-    r->done = 1;
-    return 1;
+    bench_output out = {0};
+    int ok = bench_run_openmesh(in, in_path, out_path, target_vertices, cfg->runs,
+                                OPENMESH_BUDGET, cfg->keep, &r->time, &r->runs, &r->peak_bytes,
+                                &out);
+    finish_peer(cfg, in, ok, &out, r);
 }
-#endif
 
 /* ------------------------------------------------------------------------ */
 /* Output                                                                   */
@@ -750,8 +522,7 @@ int main(int argc, char **argv)
                      "time_median,time_min,time_max,triangles_per_second,"
                      "peak_bytes_per_triangle,hausdorff_rel,rms_rel\n");
     }
-#ifdef MR_OPENMESH_DRIVER
-    {
+    if (bench_have_openmesh()) {
         char cmd[4200];
         snprintf(cmd, sizeof cmd, "mkdir -p '%s'", cfg.dir);
         if (system(cmd) != 0) {
@@ -759,7 +530,6 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-#endif
 
     bench_print_machine(stdout);
     printf("simplification to 25/10/1 %% of the referenced vertices; 1 thread; time: median "
@@ -769,18 +539,12 @@ int main(int argc, char **argv)
            "(> 1: meshreduce is faster / closer)\n",
            cfg.runs, cfg.runs == 1 ? "" : "s", cfg.samples);
     printf("peers: meshopt %s; OpenMesh %s\n",
-#ifdef MR_HAVE_MESHOPT
-           "0.18-style C API, meshopt_simplify (options 0, target_error FLT_MAX, same triangle "
-           "count) and meshopt_simplifySloppy",
-#else
-           "not built in (meshoptimizer not found at configure time)",
-#endif
-#ifdef MR_OPENMESH_DRIVER
-           "Decimater + ModQuadric (same vertex count), subprocess"
-#else
-           "not built in (OpenMesh or C++ not found at configure time)"
-#endif
-    );
+           bench_have_meshopt()
+               ? "0.18-style C API, meshopt_simplify (options 0, target_error FLT_MAX, same "
+                 "triangle count) and meshopt_simplifySloppy"
+               : "not built in (meshoptimizer not found at configure time)",
+           bench_have_openmesh() ? "Decimater + ModQuadric (same vertex count), subprocess"
+                                 : "not built in (OpenMesh or C++ not found at configure time)");
     if (access(cfg.data, R_OK) != 0)
         printf("data folder %s absent: only the generated meshes\n", cfg.data);
 
@@ -797,12 +561,10 @@ int main(int argc, char **argv)
         mesh_result *m = &results[n_results++];
         snprintf(m->name, sizeof m->name, "%s", s->name);
         m->input_triangles = mesh.triangle_count;
-#ifdef MR_OPENMESH_DRIVER
         char om_in[4200], om_out[4200];
         snprintf(om_in, sizeof om_in, "%s/simplify-%s.ply", cfg.dir, s->name);
         snprintf(om_out, sizeof om_out, "%s/simplify-%s-openmesh.ply", cfg.dir, s->name);
         int om_ready = 0;
-#endif
         print_header();
         for (int ti = 0; ti < TARGET_COUNT; ti++) {
             double ratio = target_ratio[ti];
@@ -815,13 +577,14 @@ int main(int argc, char **argv)
                 run_ours(&cfg, &mesh, ratio, a, &rows[a]);
                 print_row(m, ti, a);
             }
-#ifdef MR_HAVE_MESHOPT
-            run_meshopt(&cfg, &mesh, rows[ALG_FULL].out_triangles, 0, &rows[ALG_MESHOPT]);
-            print_row(m, ti, ALG_MESHOPT);
-            run_meshopt(&cfg, &mesh, rows[ALG_FULL].out_triangles, 1, &rows[ALG_SLOPPY]);
-            print_row(m, ti, ALG_SLOPPY);
-#endif
-#ifdef MR_OPENMESH_DRIVER
+            if (bench_have_meshopt()) {
+                run_meshopt(&cfg, &mesh, rows[ALG_FULL].out_triangles, 0, &rows[ALG_MESHOPT]);
+                print_row(m, ti, ALG_MESHOPT);
+                run_meshopt(&cfg, &mesh, rows[ALG_FULL].out_triangles, 1, &rows[ALG_SLOPPY]);
+                print_row(m, ti, ALG_SLOPPY);
+            }
+            if (!bench_have_openmesh())
+                continue;
             if (!om_ready) {
                 mr_write_options wo;
                 mr_write_options_default(&wo);
@@ -834,12 +597,9 @@ int main(int argc, char **argv)
             run_openmesh(&cfg, &mesh, om_in, om_out, rows[ALG_FULL].out_vertices,
                          &rows[ALG_OPENMESH]);
             print_row(m, ti, ALG_OPENMESH);
-#endif
         }
-#ifdef MR_OPENMESH_DRIVER
         if (om_ready && !cfg.keep)
             unlink(om_in);
-#endif
         if (csv)
             write_csv_rows(csv, m);
         mr_mesh_free(&mesh);

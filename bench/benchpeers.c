@@ -1,4 +1,5 @@
-/* Peer simplifiers and peak-memory measurement: see benchpeers.h. */
+/* Timed runs of our simplifier and the peers, peak-memory measurement:
+ * see benchpeers.h. */
 #include "benchpeers.h"
 
 #include <float.h>
@@ -34,6 +35,7 @@ static long long status_bytes(const char *field)
     return kb < 0 ? -1 : kb * 1024;
 }
 
+/* Reset VmHWM to the current resident set (Linux >= 4.0). */
 static int reset_peak(void)
 {
     FILE *f = fopen("/proc/self/clear_refs", "w");
@@ -71,6 +73,8 @@ double bench_child_peak(bench_job_fn job, void *ctx, int threads)
             if (base >= 0 && hwm >= base)
                 peak = hwm - base;
         } else {
+            /* Fallback: this child's own peak (it starts at the parent's
+             * resident set at the fork) minus that resident set. */
             job(ctx);
             struct rusage ru;
             getrusage(RUSAGE_SELF, &ru);
@@ -90,6 +94,43 @@ double bench_child_peak(bench_job_fn job, void *ctx, int threads)
     if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
         return -1;
     return (double)peak;
+}
+
+typedef struct ours_job {
+    const mr_mesh *in;
+    mr_simplify_options opt;
+} ours_job;
+
+static void ours_once(void *ctx)
+{
+    ours_job *j = ctx;
+    mr_simplified out;
+    mr_error err;
+    if (mr_simplify(j->in->positions, 0, j->in->vertex_count, j->in->indices,
+                    j->in->triangle_count, &j->opt, &out, &err) == MR_OK)
+        mr_simplified_free(&out);
+}
+
+void bench_run_ours(const mr_mesh *in, const mr_simplify_options *opt, int runs,
+                    bench_summary *timing, double *peak_bytes, mr_simplified *out)
+{
+    double *times = malloc(sizeof(double) * (size_t)runs);
+    memset(out, 0, sizeof *out);
+    for (int k = 0; k < runs; k++) {
+        mr_error err;
+        if (k > 0)
+            mr_simplified_free(out);
+        double t0 = bench_now();
+        bench_check(mr_simplify(in->positions, 0, in->vertex_count, in->indices,
+                                in->triangle_count, opt, out, &err),
+                    &err);
+        times[k] = bench_now() - t0;
+    }
+    *timing = bench_summarize(times, runs);
+    free(times);
+    ours_job one = {in, *opt};
+    one.opt.threads = 1;
+    *peak_bytes = bench_child_peak(ours_once, &one, 1);
 }
 
 void bench_output_free(bench_output *o)
@@ -161,24 +202,29 @@ int bench_have_meshopt(void)
 }
 
 int bench_run_meshopt(const mr_mesh *in, size_t target_triangles, int sloppy, int runs,
-                      double *times, double *peak_bytes, bench_output *out)
+                      bench_summary *timing, int *runs_done, double *peak_bytes,
+                      bench_output *out)
 {
 #ifdef MR_HAVE_MESHOPT
     meshopt_job j = {in, 3 * target_triangles, sloppy};
     unsigned int *dst = malloc(sizeof(unsigned int) * 3 * (in->triangle_count + 1));
+    double *times = malloc(sizeof(double) * (size_t)runs);
     size_t n = 0;
     for (int k = 0; k < runs; k++) {
         double t0 = bench_now();
         n = meshopt_call(&j, dst);
         times[k] = bench_now() - t0;
     }
+    *timing = bench_summarize(times, runs);
+    *runs_done = runs;
+    free(times);
     *peak_bytes = bench_child_peak(meshopt_once, &j, 1);
     compact(in, dst, n, out);
     free(dst);
     return 1;
 #else
-    (void)in, (void)target_triangles, (void)sloppy, (void)runs, (void)times, (void)peak_bytes,
-        (void)out;
+    (void)in, (void)target_triangles, (void)sloppy, (void)runs, (void)timing, (void)runs_done,
+        (void)peak_bytes, (void)out;
     return 0;
 #endif
 }
@@ -193,8 +239,9 @@ int bench_have_openmesh(void)
 }
 
 int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_path,
-                       size_t target_vertices, int runs, double budget, double *times,
-                       int *runs_done, double *peak_bytes, bench_output *out)
+                       size_t target_vertices, int runs, double budget, int keep_output,
+                       bench_summary *timing, int *runs_done, double *peak_bytes,
+                       bench_output *out)
 {
 #ifdef MR_OPENMESH_DRIVER
     char cmd[3 * 4096 + 64];
@@ -205,7 +252,9 @@ int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_p
         fprintf(stderr, "bench: the OpenMesh driver failed: %s\n", cmd);
         return 0;
     }
+    double *times = malloc(sizeof(double) * (size_t)runs);
     int nt = 0;
+    size_t in_v = 0, in_f = 0;
     *peak_bytes = -1;
     for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
         double x;
@@ -213,11 +262,21 @@ int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_p
             times[nt++] = x;
         else if (sscanf(line, "peak_bytes %lf", &x) == 1)
             *peak_bytes = x;
+        else
+            sscanf(line, "input %zu %zu", &in_v, &in_f);
     }
     free(text);
     *runs_done = nt;
-    if (nt == 0)
+    if (nt == 0) {
+        free(times);
+        fprintf(stderr, "bench: no timing from the OpenMesh driver\n");
         return 0;
+    }
+    *timing = bench_summarize(times, nt);
+    free(times);
+    if (in_v != in->vertex_count || in_f != in->triangle_count)
+        fprintf(stderr, "bench: note: OpenMesh read %zu vertices, %zu faces (ours: %zu, %zu)\n",
+                in_v, in_f, in->vertex_count, in->triangle_count);
     mr_mesh m;
     mr_error err;
     if (mr_mesh_read(out_path, NULL, &m, &err) != MR_OK) {
@@ -232,12 +291,12 @@ int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_p
     m.positions = NULL;
     m.indices = NULL;
     mr_mesh_free(&m);
-    unlink(out_path);
-    (void)in;
+    if (!keep_output)
+        unlink(out_path);
     return 1;
 #else
     (void)in, (void)in_path, (void)out_path, (void)target_vertices, (void)runs, (void)budget,
-        (void)times, (void)runs_done, (void)peak_bytes, (void)out;
+        (void)keep_output, (void)timing, (void)runs_done, (void)peak_bytes, (void)out;
     return 0;
 #endif
 }

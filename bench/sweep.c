@@ -95,56 +95,18 @@ struct algorithm {
 
 /* ---- ours ------------------------------------------------------------------ */
 
-typedef struct ours_job {
-    const mr_mesh *in;
-    mr_simplify_options opt;
-} ours_job;
-
-static void ours_once(void *ctx)
-{
-    ours_job *j = ctx;
-    mr_simplified out;
-    mr_error err;
-    if (mr_simplify(j->in->positions, 0, j->in->vertex_count, j->in->indices,
-                    j->in->triangle_count, &j->opt, &out, &err) == MR_OK)
-        mr_simplified_free(&out);
-}
-
 static int run_simplify(const algorithm *alg, target_state *ts, int threads, result *r)
 {
-    const mr_mesh *in = ts->in;
-    ours_job j;
-    memset(&j, 0, sizeof j);
-    j.in = in;
-    mr_simplify_options_default(&j.opt);
-    j.opt.target_ratio = ts->ratio;
-    j.opt.collapse = alg->collapse;
-    j.opt.strategy = alg->strategy;
-    j.opt.threads = threads;
+    mr_simplify_options opt;
+    mr_simplify_options_default(&opt);
+    opt.target_ratio = ts->ratio;
+    opt.collapse = alg->collapse;
+    opt.strategy = alg->strategy;
+    opt.threads = threads;
     omp_set_num_threads(threads);
-    int runs = ts->cfg->runs;
-    double *t = malloc(sizeof(double) * (size_t)runs);
     mr_simplified out;
-    memset(&out, 0, sizeof out);
-    for (int k = 0; k < runs; k++) {
-        mr_error err;
-        if (k > 0)
-            mr_simplified_free(&out);
-        double t0 = bench_now();
-        bench_check(mr_simplify(in->positions, 0, in->vertex_count, in->indices,
-                                in->triangle_count, &j.opt, &out, &err),
-                    &err);
-        t[k] = bench_now() - t0;
-    }
-    r->time = bench_summarize(t, runs);
-    r->runs = runs;
-    free(t);
-    /* libgomp cannot start a thread team in a forked child of a process
-     * that already ran one (it hangs), so the peak is measured on one
-     * thread: the data structures, which dominate, are the same. */
-    ours_job one = j;
-    one.opt.threads = 1;
-    r->peak_bytes = bench_child_peak(ours_once, &one, 1);
+    r->runs = ts->cfg->runs;
+    bench_run_ours(ts->in, &opt, r->runs, &r->time, &r->peak_bytes, &out);
     r->out.vertex_count = out.vertex_count;
     r->out.triangle_count = out.triangle_count;
     r->out.positions = out.positions;
@@ -174,16 +136,8 @@ static int run_meshopt(const algorithm *alg, target_state *ts, int threads, resu
     (void)threads;
     if (!bench_have_meshopt())
         return 0;
-    int runs = ts->cfg->runs;
-    double *t = malloc(sizeof(double) * (size_t)runs);
-    int ok = bench_run_meshopt(ts->in, peer_target_triangles(ts), alg->sloppy, runs, t,
-                               &r->peak_bytes, &r->out);
-    if (ok) {
-        r->time = bench_summarize(t, runs);
-        r->runs = runs;
-    }
-    free(t);
-    return ok;
+    return bench_run_meshopt(ts->in, peer_target_triangles(ts), alg->sloppy, ts->cfg->runs,
+                             &r->time, &r->runs, &r->peak_bytes, &r->out);
 }
 
 /* OpenMesh is an order of magnitude slower: its repeated runs stop once
@@ -200,17 +154,9 @@ static int run_openmesh(const algorithm *alg, target_state *ts, int threads, res
                                  : (size_t)(ts->ratio * (double)ts->in->vertex_count);
     char out_path[4200];
     snprintf(out_path, sizeof out_path, "%s/sweep-openmesh-out.ply", ts->cfg->dir);
-    int runs = ts->cfg->runs, done = 0;
-    double *t = malloc(sizeof(double) * (size_t)runs);
-    int ok = bench_run_openmesh(ts->in, ts->ply_path, out_path, target_vertices, runs,
-                                ts->cfg->quick ? 2.0 : OPENMESH_BUDGET, t, &done,
-                                &r->peak_bytes, &r->out);
-    if (ok) {
-        r->time = bench_summarize(t, done);
-        r->runs = done;
-    }
-    free(t);
-    return ok;
+    return bench_run_openmesh(ts->in, ts->ply_path, out_path, target_vertices, ts->cfg->runs,
+                              ts->cfg->quick ? 2.0 : OPENMESH_BUDGET, 0, &r->time, &r->runs,
+                              &r->peak_bytes, &r->out);
 }
 
 /* The algorithms, in run order: the greedy references first (the others
