@@ -79,4 +79,84 @@ int cli_check_output_path(const char *cmd, const char *out);
 /* Format name for messages. */
 const char *cli_format_name(mr_format f);
 
+/*
+ * Commands that write one mesh (clean, cluster, convert, generate, simplify,
+ * weld) share their file arguments, -q/--quiet and, as each accepts them,
+ * -o/--output, the output options and --stats/--json.
+ */
+enum {
+    CLI_ACCEPT_OUTPUT = 1u << 0, /* -o/--output FILE; without it OUT is the second file */
+    CLI_ACCEPT_WRITE = 1u << 1,  /* the output options (CLI_OUTPUT_OPTIONS_HELP) */
+    CLI_ACCEPT_REPORT = 1u << 2, /* --stats and --json */
+};
+
+/* Returned by option matchers for an argument that is not theirs. */
+enum { CLI_NO_MATCH = -1 };
+
+typedef struct cli_io {
+    const char *cmd;        /* the command's name, for messages */
+    unsigned accepts;       /* CLI_ACCEPT_* */
+    const char *in, *out;   /* in NULL: nothing is read */
+    bool stats, json, quiet;
+    mr_write_options write;
+} cli_io;
+
+/* Empty arguments with the default output options. */
+void cli_io_init(cli_io *io, const char *cmd, unsigned accepts);
+
+/* Match one shared option at argv[*i]: CLI_OK when it was one (*i advanced),
+ * CLI_USAGE when it lacks its value (message printed), else CLI_NO_MATCH. */
+int cli_io_option(cli_io *io, int argc, char **argv, int *i);
+
+/* A command's own options, with the contract of cli_io_option. */
+typedef int (*cli_option_fn)(int argc, char **argv, int *i, void *user);
+
+/*
+ * Parse a whole command line "IN -o OUT" (or "IN OUT") with the shared
+ * options and the command's own (`option`, may be NULL). Returns CLI_OK when
+ * both files are given, else the usage status (message printed). The output
+ * path is not checked here: see cli_check_output_path.
+ */
+int cli_io_parse(cli_io *io, int argc, char **argv, cli_option_fn option, void *user);
+
+/* Seconds spent reading the input, working, and writing the output. */
+typedef struct cli_times {
+    double read, work, write;
+} cli_times;
+
+/* How a command prints what a successful run did. */
+typedef void (*cli_report_fn)(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                              void *user);
+
+/* The work of a mesh-writing command and its reports. */
+typedef struct cli_job {
+    /* Make *result (empty on entry) from *mesh (what was read; empty when
+     * io->in is NULL). May change *mesh or move it into *result. On failure
+     * prints the message and returns the exit status. */
+    int (*work)(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user);
+    cli_report_fn json;    /* on stdout with --json */
+    cli_report_fn stats;   /* on stderr with --stats */
+    cli_report_fn summary; /* on stderr otherwise, unless --quiet or --json */
+} cli_job;
+
+/*
+ * Read io->in (unless NULL), run the job's work, write the result to
+ * io->out with io->write (complete or not at all) and print the reports.
+ * Returns the exit status.
+ */
+int cli_run_job(const cli_io *io, const cli_job *job, void *user);
+
+/* Print "OUT: V vertices, T triangles (DETAIL)" on stderr: the line that
+ * tells what a command wrote; DETAIL is formatted from fmt. */
+void cli_summary(const char *out, size_t vertices, size_t triangles, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* Print the opening of a command's JSON report on stdout:
+ * {"input": IN, "output": OUT (the caller goes on and closes it). */
+void cli_json_io(const cli_io *io);
+
+/* The bounding-box diagonal of a mesh's positions; CLI_OK, else CLI_FAIL
+ * with the message printed. */
+int cli_bbox_diagonal(const mr_mesh *m, double *diagonal);
+
 #endif

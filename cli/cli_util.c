@@ -214,3 +214,124 @@ int cli_check_output_path(const char *cmd, const char *out)
                                     "(use .obj, .ply, .stl or .xyz)", out);
     return CLI_OK;
 }
+
+void cli_io_init(cli_io *io, const char *cmd, unsigned accepts)
+{
+    memset(io, 0, sizeof *io);
+    io->cmd = cmd;
+    io->accepts = accepts;
+    mr_write_options_default(&io->write);
+}
+
+int cli_io_option(cli_io *io, int argc, char **argv, int *i)
+{
+    const char *v;
+    const bool report = (io->accepts & CLI_ACCEPT_REPORT) != 0;
+    if ((io->accepts & CLI_ACCEPT_WRITE) && cli_output_option(argc, argv, i, &io->write))
+        return CLI_OK;
+    if ((io->accepts & CLI_ACCEPT_OUTPUT) &&
+        (cli_value(argc, argv, i, "-o", &v) || cli_value(argc, argv, i, "--output", &v))) {
+        if (!v)
+            return cli_usage_error(io->cmd, "-o needs a file name");
+        io->out = v;
+    } else if (report && cli_flag(argc, argv, i, "--stats")) {
+        io->stats = true;
+    } else if (report && cli_flag(argc, argv, i, "--json")) {
+        io->json = true;
+    } else if (cli_flag(argc, argv, i, "-q") || cli_flag(argc, argv, i, "--quiet")) {
+        io->quiet = true;
+    } else {
+        return CLI_NO_MATCH;
+    }
+    return CLI_OK;
+}
+
+int cli_io_parse(cli_io *io, int argc, char **argv, cli_option_fn option, void *user)
+{
+    const bool out_is_file = !(io->accepts & CLI_ACCEPT_OUTPUT);
+    for (int i = 1; i < argc;) {
+        int rc = cli_io_option(io, argc, argv, &i);
+        if (rc == CLI_NO_MATCH && option)
+            rc = option(argc, argv, &i, user);
+        if (rc == CLI_OK)
+            continue;
+        if (rc != CLI_NO_MATCH)
+            return rc;
+        if (argv[i][0] == '-' && argv[i][1] != '\0')
+            return cli_usage_error(io->cmd, "unknown option '%s'", argv[i]);
+        if (!io->in)
+            io->in = argv[i++];
+        else if (out_is_file && !io->out)
+            io->out = argv[i++];
+        else if (out_is_file)
+            return cli_usage_error(io->cmd, "too many files ('%s')", argv[i]);
+        else
+            return cli_usage_error(io->cmd, "one input file at a time (use -o for the output)");
+    }
+    if (out_is_file && !io->out)
+        return cli_usage_error(io->cmd, "needs an input and an output file");
+    if (!io->in)
+        return cli_usage_error(io->cmd, "no input file given");
+    if (!io->out)
+        return cli_usage_error(io->cmd, "no output file given (-o FILE)");
+    return CLI_OK;
+}
+
+int cli_run_job(const cli_io *io, const cli_job *job, void *user)
+{
+    mr_mesh mesh, result;
+    mr_error err;
+    mr_mesh_init(&mesh);
+    mr_mesh_init(&result);
+    double t0 = cli_now();
+    if (io->in && mr_mesh_read(io->in, NULL, &mesh, &err) != MR_OK)
+        return cli_fail_err(&err);
+    double t1 = cli_now();
+    int rc = job->work(io, &mesh, &result, user);
+    double t2 = cli_now();
+    /* The input is no longer needed: free it before the output is written. */
+    mr_mesh_free(&mesh);
+    if (rc == CLI_OK && mr_mesh_write(io->out, &result, &io->write, &err) != MR_OK)
+        rc = cli_fail_err(&err);
+    double t3 = cli_now();
+    if (rc == CLI_OK) {
+        const cli_times t = {t1 - t0, t2 - t1, t3 - t2};
+        if (io->json && job->json)
+            job->json(io, &result, &t, user);
+        if (io->stats && job->stats)
+            job->stats(io, &result, &t, user);
+        else if (!io->quiet && !io->json && job->summary)
+            job->summary(io, &result, &t, user);
+    }
+    mr_mesh_free(&result);
+    return rc;
+}
+
+void cli_summary(const char *out, size_t vertices, size_t triangles, const char *fmt, ...)
+{
+    char a[32], b[32], detail[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(detail, sizeof detail, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "%s: %s vertices, %s triangles (%s)\n", out,
+            cli_count(a, sizeof a, vertices), cli_count(b, sizeof b, triangles), detail);
+}
+
+void cli_json_io(const cli_io *io)
+{
+    printf("{\"input\": ");
+    cli_json_string(stdout, io->in);
+    printf(", \"output\": ");
+    cli_json_string(stdout, io->out);
+}
+
+int cli_bbox_diagonal(const mr_mesh *m, double *diagonal)
+{
+    mr_stats s;
+    mr_error err;
+    if (mr_stats_compute(m->positions, 0, m->vertex_count, NULL, 0, &s, &err) != MR_OK)
+        return cli_fail_err(&err);
+    *diagonal = s.bbox_diagonal;
+    return CLI_OK;
+}

@@ -30,30 +30,33 @@ static int clean_mesh(mr_mesh *m, const clean_steps *c, bool quiet)
     return CLI_OK;
 }
 
-static int read_clean_write(const char *in, const char *out, const mr_write_options *w,
-                            const clean_steps *clean, bool quiet)
+/* What convert and clean do between reading and writing. */
+typedef struct clean_job {
+    clean_steps steps;
+    bool clean; /* run the steps; else the mesh is written as read */
+} clean_job;
+
+static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
 {
-    mr_mesh mesh;
-    mr_error err;
-    double t0 = cli_now();
-    if (mr_mesh_read(in, NULL, &mesh, &err) != MR_OK)
-        return cli_fail_err(&err);
-    double t1 = cli_now();
-    int rc = clean ? clean_mesh(&mesh, clean, quiet) : CLI_OK;
-    double t2 = cli_now();
-    if (rc == CLI_OK && mr_mesh_write(out, &mesh, w, &err) != MR_OK)
-        rc = cli_fail_err(&err);
-    double t3 = cli_now();
-    if (rc == CLI_OK && !quiet) {
-        char a[32], b[32];
-        fprintf(stderr, "%s: %s vertices, %s triangles (read %.3f s, %s%.3f s, write %.3f s)\n",
-                out, cli_count(a, sizeof a, mesh.vertex_count),
-                cli_count(b, sizeof b, mesh.triangle_count), t1 - t0,
-                clean ? "clean " : "", clean ? t2 - t1 : 0.0, t3 - t2);
+    const clean_job *job = user;
+    int rc = job->clean ? clean_mesh(mesh, &job->steps, io->quiet) : CLI_OK;
+    if (rc == CLI_OK) {
+        *result = *mesh;
+        mr_mesh_init(mesh);
     }
-    mr_mesh_free(&mesh);
     return rc;
 }
+
+static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                          void *user)
+{
+    const clean_job *job = user;
+    cli_summary(io->out, result->vertex_count, result->triangle_count,
+                "read %.3f s, %s%.3f s, write %.3f s", t->read, job->clean ? "clean " : "",
+                job->clean ? t->work : 0.0, t->write);
+}
+
+static const cli_job clean_and_write = {work, NULL, NULL, print_summary};
 
 static const char convert_usage[] =
     "usage: meshreduce convert IN OUT [options]\n"
@@ -65,34 +68,23 @@ static const char convert_usage[] =
     "                   duplicate triangles and unreferenced vertices\n"
     "  -q, --quiet      print nothing on success\n";
 
+static int convert_option(int argc, char **argv, int *i, void *user)
+{
+    if (!cli_flag(argc, argv, i, "--clean"))
+        return CLI_NO_MATCH;
+    ((clean_job *)user)->clean = true;
+    return CLI_OK;
+}
+
 static int run_convert(int argc, char **argv)
 {
-    const char *paths[2] = {NULL, NULL};
-    int npaths = 0;
-    bool quiet = false, clean = false;
-    mr_write_options w;
-    mr_write_options_default(&w);
-    for (int i = 1; i < argc;) {
-        if (cli_output_option(argc, argv, &i, &w))
-            continue;
-        if (cli_flag(argc, argv, &i, "--clean"))
-            clean = true;
-        else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet"))
-            quiet = true;
-        else if (argv[i][0] == '-' && argv[i][1] != '\0')
-            return cli_usage_error("convert", "unknown option '%s'", argv[i]);
-        else if (npaths == 2)
-            return cli_usage_error("convert", "too many files ('%s')", argv[i]);
-        else
-            paths[npaths++] = argv[i++];
-    }
-    if (npaths < 2)
-        return cli_usage_error("convert", "needs an input and an output file");
-    int rc = cli_check_output_path("convert", paths[1]);
-    if (rc != CLI_OK)
-        return rc;
-    clean_steps steps = {.weld = true};
-    return read_clean_write(paths[0], paths[1], &w, clean ? &steps : NULL, quiet);
+    cli_io io;
+    cli_io_init(&io, "convert", CLI_ACCEPT_WRITE);
+    clean_job job = {.steps = {.weld = true}, .clean = false};
+    int rc = cli_io_parse(&io, argc, argv, convert_option, &job);
+    if (rc == CLI_OK)
+        rc = cli_check_output_path(io.cmd, io.out);
+    return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
 }
 
 static const char clean_usage[] =
@@ -112,48 +104,33 @@ static const char clean_usage[] =
     "  -q, --quiet             print nothing on success\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
+static int clean_option(int argc, char **argv, int *i, void *user)
+{
+    clean_steps *c = &((clean_job *)user)->steps;
+    if (cli_flag(argc, argv, i, "--no-weld"))
+        c->weld = false;
+    else if (cli_flag(argc, argv, i, "--weld-attributes"))
+        c->weld_attributes = true;
+    else if (cli_flag(argc, argv, i, "--keep-duplicates"))
+        c->keep_duplicates = true;
+    else if (cli_flag(argc, argv, i, "--keep-degenerate"))
+        c->keep_degenerate = true;
+    else if (cli_flag(argc, argv, i, "--keep-unreferenced"))
+        c->keep_unreferenced = true;
+    else
+        return CLI_NO_MATCH;
+    return CLI_OK;
+}
+
 static int run_clean(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL;
-    bool quiet = false;
-    clean_steps c = {.weld = true};
-    mr_write_options w;
-    mr_write_options_default(&w);
-    for (int i = 1; i < argc;) {
-        const char *v;
-        if (cli_output_option(argc, argv, &i, &w))
-            continue;
-        if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
-            if (!v)
-                return cli_usage_error("clean", "-o needs a file name");
-            out = v;
-        } else if (cli_flag(argc, argv, &i, "--no-weld"))
-            c.weld = false;
-        else if (cli_flag(argc, argv, &i, "--weld-attributes"))
-            c.weld_attributes = true;
-        else if (cli_flag(argc, argv, &i, "--keep-duplicates"))
-            c.keep_duplicates = true;
-        else if (cli_flag(argc, argv, &i, "--keep-degenerate"))
-            c.keep_degenerate = true;
-        else if (cli_flag(argc, argv, &i, "--keep-unreferenced"))
-            c.keep_unreferenced = true;
-        else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet"))
-            quiet = true;
-        else if (argv[i][0] == '-' && argv[i][1] != '\0')
-            return cli_usage_error("clean", "unknown option '%s'", argv[i]);
-        else if (in)
-            return cli_usage_error("clean", "one input file at a time (use -o for the output)");
-        else
-            in = argv[i++];
-    }
-    if (!in)
-        return cli_usage_error("clean", "no input file given");
-    if (!out)
-        return cli_usage_error("clean", "no output file given (-o FILE)");
-    int rc = cli_check_output_path("clean", out);
-    if (rc != CLI_OK)
-        return rc;
-    return read_clean_write(in, out, &w, &c, quiet);
+    cli_io io;
+    cli_io_init(&io, "clean", CLI_ACCEPT_OUTPUT | CLI_ACCEPT_WRITE);
+    clean_job job = {.steps = {.weld = true}, .clean = true};
+    int rc = cli_io_parse(&io, argc, argv, clean_option, &job);
+    if (rc == CLI_OK)
+        rc = cli_check_output_path(io.cmd, io.out);
+    return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
 }
 
 const cli_command cli_cmd_convert = {"convert", "convert between OBJ, PLY, STL and XYZ",

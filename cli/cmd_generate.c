@@ -20,31 +20,55 @@ static const char usage[] =
     "  --ascii             text PLY/STL instead of binary\n"
     "  -q, --quiet         print nothing on success\n";
 
+/* The mesh to make. */
+typedef struct generate_job {
+    mr_generator kind;
+    uint64_t triangles, seed;
+} generate_job;
+
+static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
+{
+    const generate_job *job = user;
+    mr_error err;
+    if (mr_generate(job->kind, (size_t)job->triangles, job->seed, result, &err) != MR_OK)
+        return cli_fail_err(&err);
+    return CLI_OK;
+}
+
+static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                          void *user)
+{
+    const generate_job *job = user;
+    char a[32], b[32], c[32];
+    fprintf(stderr, "%s: %s %s vertices, %s triangles, %s (generate %.3f s, write %.3f s)\n",
+            io->out, mr_generator_name(job->kind), cli_count(a, sizeof a, result->vertex_count),
+            cli_count(b, sizeof b, result->triangle_count),
+            cli_bytes(c, sizeof c, cli_file_size(io->out)), t->work, t->write);
+}
+
 static int run(int argc, char **argv)
 {
-    const char *kind_name = NULL, *out = NULL;
-    uint64_t triangles = 1000000, seed = 1;
-    bool quiet = false;
-    mr_write_options w;
-    mr_write_options_default(&w);
+    const char *kind_name = NULL;
+    generate_job job = {.triangles = 1000000, .seed = 1};
+    cli_io io;
+    cli_io_init(&io, "generate", CLI_ACCEPT_OUTPUT);
     for (int i = 1; i < argc;) {
         const char *v;
-        if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
-            if (!v)
-                return cli_usage_error("generate", "-o needs a file name");
-            out = v;
-        } else if (cli_value(argc, argv, &i, "--triangles", &v)) {
-            if (!cli_parse_count(v, &triangles) || triangles == 0)
+        int rc = cli_io_option(&io, argc, argv, &i);
+        if (rc == CLI_OK)
+            continue;
+        if (rc != CLI_NO_MATCH)
+            return rc;
+        if (cli_value(argc, argv, &i, "--triangles", &v)) {
+            if (!cli_parse_count(v, &job.triangles) || job.triangles == 0)
                 return cli_usage_error("generate", "--triangles needs a positive count, "
                                                    "got '%s'", v ? v : "");
         } else if (cli_value(argc, argv, &i, "--seed", &v)) {
-            if (!cli_parse_count(v, &seed))
+            if (!cli_parse_count(v, &job.seed))
                 return cli_usage_error("generate", "--seed needs a non-negative integer, "
                                                    "got '%s'", v ? v : "");
         } else if (cli_flag(argc, argv, &i, "--ascii"))
-            w.encoding = MR_ENCODING_ASCII;
-        else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet"))
-            quiet = true;
+            io.write.encoding = MR_ENCODING_ASCII;
         else if (argv[i][0] == '-' && argv[i][1] != '\0')
             return cli_usage_error("generate", "unknown option '%s'", argv[i]);
         else if (kind_name)
@@ -52,38 +76,19 @@ static int run(int argc, char **argv)
         else
             kind_name = argv[i++];
     }
-    mr_generator kind;
     if (!kind_name)
         return cli_usage_error("generate", "no kind given (sphere, torus or scan)");
-    if (mr_generator_from_name(kind_name, &kind) != 0)
+    if (mr_generator_from_name(kind_name, &job.kind) != 0)
         return cli_usage_error("generate", "unknown kind '%s' (sphere, torus or scan)",
                                kind_name);
-    if (!out)
+    if (!io.out)
         return cli_usage_error("generate", "no output file given (-o FILE)");
-    int rc = cli_check_output_path("generate", out);
+    int rc = cli_check_output_path(io.cmd, io.out);
     if (rc != CLI_OK)
         return rc;
-
-    mr_mesh mesh;
-    mr_error err;
-    double t0 = cli_now();
-    if (mr_generate(kind, (size_t)triangles, seed, &mesh, &err) != MR_OK)
-        return cli_fail_err(&err);
-    double t1 = cli_now();
-    if (mr_mesh_write(out, &mesh, &w, &err) != MR_OK) {
-        mr_mesh_free(&mesh);
-        return cli_fail_err(&err);
-    }
-    double t2 = cli_now();
-    if (!quiet) {
-        char a[32], b[32], c[32];
-        fprintf(stderr, "%s: %s %s vertices, %s triangles, %s (generate %.3f s, write %.3f s)\n",
-                out, mr_generator_name(kind), cli_count(a, sizeof a, mesh.vertex_count),
-                cli_count(b, sizeof b, mesh.triangle_count),
-                cli_bytes(c, sizeof c, cli_file_size(out)), t1 - t0, t2 - t1);
-    }
-    mr_mesh_free(&mesh);
-    return CLI_OK;
+    /* io.in stays NULL: nothing is read, the work makes the mesh. */
+    static const cli_job steps = {work, NULL, NULL, print_summary};
+    return cli_run_job(&io, &steps, &job);
 }
 
 const cli_command cli_cmd_generate = {"generate", "write a procedural sphere, torus or scan",

@@ -88,8 +88,90 @@ static bool parse_ratio(const char *s, double *out)
     return true;
 }
 
-static void print_stats(const mr_simplify_stats *s, double t_read, double t_write)
+/* The options and the statistics of one run. */
+typedef struct simplify_job {
+    mr_simplify_options o;
+    mr_simplify_stats s;
+} simplify_job;
+
+static int option(int argc, char **argv, int *i, void *user)
 {
+    mr_simplify_options *o = &((simplify_job *)user)->o;
+    const char *v;
+    uint64_t n;
+    double x;
+    if (cli_value(argc, argv, i, "--ratio", &v)) {
+        if (!parse_ratio(v, &x) || !(x > 0.0 && x <= 1.0))
+            return cli_usage_error("simplify", "--ratio needs a fraction in (0, 1] or a "
+                                               "percentage in (0%%, 100%%], got '%s'",
+                                   v ? v : "");
+        o->target_ratio = x;
+    } else if (cli_value(argc, argv, i, "--vertices", &v)) {
+        if (!cli_parse_count(v, &n) || n == 0)
+            return cli_usage_error("simplify", "--vertices needs a positive count");
+        o->target_vertices = (size_t)n;
+    } else if (cli_value(argc, argv, i, "--triangles", &v)) {
+        if (!cli_parse_count(v, &n) || n == 0)
+            return cli_usage_error("simplify", "--triangles needs a positive count");
+        o->target_triangles = (size_t)n;
+    } else if (cli_value(argc, argv, i, "--max-error", &v)) {
+        if (!cli_parse_double(v, &x) || !(x > 0))
+            return cli_usage_error("simplify", "--max-error needs a positive number");
+        o->max_error = x;
+    } else if (cli_flag(argc, argv, i, "--absolute")) {
+        o->error_absolute = 1;
+    } else if (cli_value(argc, argv, i, "--collapse", &v)) {
+        if (v && !strcmp(v, "full"))
+            o->collapse = MR_COLLAPSE_FULL;
+        else if (v && !strcmp(v, "half"))
+            o->collapse = MR_COLLAPSE_HALF;
+        else
+            return cli_usage_error("simplify", "--collapse is full or half");
+    } else if (cli_value(argc, argv, i, "--strategy", &v)) {
+        if (v && !strcmp(v, "greedy"))
+            o->strategy = MR_STRATEGY_GREEDY;
+        else if (v && !strcmp(v, "batched"))
+            o->strategy = MR_STRATEGY_BATCHED;
+        else
+            return cli_usage_error("simplify", "--strategy is greedy or batched");
+    } else if (cli_flag(argc, argv, i, "--lock-border")) {
+        o->lock_border = 1;
+    } else if (cli_value(argc, argv, i, "--boundary-weight", &v)) {
+        if (!cli_parse_double(v, &x) || x < 0)
+            return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
+        o->boundary_weight = x;
+    } else if (cli_value(argc, argv, i, "--max-normal-turn", &v)) {
+        if (!cli_parse_double(v, &x) || !(x > 0 && x <= 180))
+            return cli_usage_error("simplify", "--max-normal-turn needs degrees in "
+                                               "(0, 180]");
+        o->max_normal_turn = x * 3.14159265358979323846 / 180.0;
+    } else {
+        return CLI_NO_MATCH;
+    }
+    return CLI_OK;
+}
+
+static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
+{
+    simplify_job *job = user;
+    mr_error err;
+    progress prog = {cli_now(), 0, -1};
+    if (!io->quiet && isatty(STDERR_FILENO)) {
+        job->o.progress = show_progress;
+        job->o.progress_user = &prog;
+    }
+    mr_status st = mr_mesh_simplify(mesh, &job->o, result, NULL, &job->s, &err);
+    job->o.progress = NULL;
+    job->o.progress_user = NULL;
+    if (prog.shown)
+        fprintf(stderr, "\r%60s\r", "");
+    return st == MR_OK ? CLI_OK : cli_fail_err(&err);
+}
+
+static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                        void *user)
+{
+    const mr_simplify_stats *s = &((simplify_job *)user)->s;
     char a[32], b[32], c[32], d[32];
     fprintf(stderr, "vertices   %s -> %s\n", cli_count(a, sizeof a, s->input_vertices),
             cli_count(b, sizeof b, s->output_vertices));
@@ -99,154 +181,48 @@ static void print_stats(const mr_simplify_stats *s, double t_read, double t_writ
             s->max_error);
     fprintf(stderr, "time       read %.3f s, setup %.3f s, collapse %.3f s, output %.3f s, "
                     "write %.3f s\n",
-            t_read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t_write);
+            t->read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t->write);
 }
 
-static void print_json(const char *in, const char *out, const mr_simplify_stats *s,
-                       double t_read, double t_write)
+static void print_json(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                       void *user)
 {
-    printf("{\"input\": ");
-    cli_json_string(stdout, in);
-    printf(", \"output\": ");
-    cli_json_string(stdout, out);
+    const mr_simplify_stats *s = &((simplify_job *)user)->s;
+    cli_json_io(io);
     printf(", \"input_vertices\": %zu, \"input_triangles\": %zu, \"output_vertices\": %zu, "
            "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
            "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
            "\"output\": %.6f, \"write\": %.6f}}\n",
            s->input_vertices, s->input_triangles, s->output_vertices, s->output_triangles,
-           s->collapses, s->max_error, t_read, s->seconds_setup, s->seconds_collapse,
-           s->seconds_output, t_write);
+           s->collapses, s->max_error, t->read, s->seconds_setup, s->seconds_collapse,
+           s->seconds_output, t->write);
+}
+
+static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                          void *user)
+{
+    const mr_simplify_stats *s = &((simplify_job *)user)->s;
+    cli_summary(io->out, s->output_vertices, s->output_triangles, "simplified in %.3f s",
+                s->seconds_setup + s->seconds_collapse + s->seconds_output);
 }
 
 static int run(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL;
-    bool stats = false, json = false, quiet = false;
-    mr_simplify_options o;
-    mr_simplify_options_default(&o);
-    mr_write_options w;
-    mr_write_options_default(&w);
-    for (int i = 1; i < argc;) {
-        const char *v;
-        uint64_t n;
-        double x;
-        if (cli_output_option(argc, argv, &i, &w))
-            continue;
-        if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
-            if (!v)
-                return cli_usage_error("simplify", "-o needs a file name");
-            out = v;
-        } else if (cli_value(argc, argv, &i, "--ratio", &v)) {
-            if (!parse_ratio(v, &x) || !(x > 0.0 && x <= 1.0))
-                return cli_usage_error("simplify", "--ratio needs a fraction in (0, 1] or a "
-                                                   "percentage in (0%%, 100%%], got '%s'",
-                                       v ? v : "");
-            o.target_ratio = x;
-        } else if (cli_value(argc, argv, &i, "--vertices", &v)) {
-            if (!cli_parse_count(v, &n) || n == 0)
-                return cli_usage_error("simplify", "--vertices needs a positive count");
-            o.target_vertices = (size_t)n;
-        } else if (cli_value(argc, argv, &i, "--triangles", &v)) {
-            if (!cli_parse_count(v, &n) || n == 0)
-                return cli_usage_error("simplify", "--triangles needs a positive count");
-            o.target_triangles = (size_t)n;
-        } else if (cli_value(argc, argv, &i, "--max-error", &v)) {
-            if (!cli_parse_double(v, &x) || !(x > 0))
-                return cli_usage_error("simplify", "--max-error needs a positive number");
-            o.max_error = x;
-        } else if (cli_flag(argc, argv, &i, "--absolute")) {
-            o.error_absolute = 1;
-        } else if (cli_value(argc, argv, &i, "--collapse", &v)) {
-            if (v && !strcmp(v, "full"))
-                o.collapse = MR_COLLAPSE_FULL;
-            else if (v && !strcmp(v, "half"))
-                o.collapse = MR_COLLAPSE_HALF;
-            else
-                return cli_usage_error("simplify", "--collapse is full or half");
-        } else if (cli_value(argc, argv, &i, "--strategy", &v)) {
-            if (v && !strcmp(v, "greedy"))
-                o.strategy = MR_STRATEGY_GREEDY;
-            else if (v && !strcmp(v, "batched"))
-                o.strategy = MR_STRATEGY_BATCHED;
-            else
-                return cli_usage_error("simplify", "--strategy is greedy or batched");
-        } else if (cli_flag(argc, argv, &i, "--lock-border")) {
-            o.lock_border = 1;
-        } else if (cli_value(argc, argv, &i, "--boundary-weight", &v)) {
-            if (!cli_parse_double(v, &x) || x < 0)
-                return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
-            o.boundary_weight = x;
-        } else if (cli_value(argc, argv, &i, "--max-normal-turn", &v)) {
-            if (!cli_parse_double(v, &x) || !(x > 0 && x <= 180))
-                return cli_usage_error("simplify", "--max-normal-turn needs degrees in "
-                                                   "(0, 180]");
-            o.max_normal_turn = x * 3.14159265358979323846 / 180.0;
-        } else if (cli_flag(argc, argv, &i, "--stats")) {
-            stats = true;
-        } else if (cli_flag(argc, argv, &i, "--json")) {
-            json = true;
-        } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
-            quiet = true;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error("simplify", "unknown option '%s'", argv[i]);
-        } else if (in) {
-            return cli_usage_error("simplify", "one input file at a time (use -o for the "
-                                               "output)");
-        } else {
-            in = argv[i++];
-        }
-    }
-    if (!in)
-        return cli_usage_error("simplify", "no input file given");
-    if (!out)
-        return cli_usage_error("simplify", "no output file given (-o FILE)");
-    if (o.target_ratio == 0 && o.target_vertices == 0 && o.target_triangles == 0 &&
-        o.max_error == 0)
-        return cli_usage_error("simplify", "no target given (--ratio, --vertices, "
-                                           "--triangles or --max-error)");
-    int rc = cli_check_output_path("simplify", out);
+    cli_io io;
+    cli_io_init(&io, "simplify", CLI_ACCEPT_OUTPUT | CLI_ACCEPT_WRITE | CLI_ACCEPT_REPORT);
+    simplify_job job;
+    mr_simplify_options_default(&job.o);
+    int rc = cli_io_parse(&io, argc, argv, option, &job);
     if (rc != CLI_OK)
         return rc;
-
-    mr_mesh mesh, result;
-    mr_error err;
-    double t0 = cli_now();
-    if (mr_mesh_read(in, NULL, &mesh, &err) != MR_OK)
-        return cli_fail_err(&err);
-    double t_read = cli_now() - t0;
-
-    progress prog = {cli_now(), 0, -1};
-    if (!quiet && isatty(STDERR_FILENO)) {
-        o.progress = show_progress;
-        o.progress_user = &prog;
-    }
-    mr_simplify_stats s;
-    mr_status st = mr_mesh_simplify(&mesh, &o, &result, NULL, &s, &err);
-    if (prog.shown)
-        fprintf(stderr, "\r%60s\r", "");
-    mr_mesh_free(&mesh);
-    if (st != MR_OK)
-        return cli_fail_err(&err);
-
-    t0 = cli_now();
-    st = mr_mesh_write(out, &result, &w, &err);
-    double t_write = cli_now() - t0;
-    mr_mesh_free(&result);
-    if (st != MR_OK)
-        return cli_fail_err(&err);
-
-    if (json)
-        print_json(in, out, &s, t_read, t_write);
-    if (stats)
-        print_stats(&s, t_read, t_write);
-    else if (!quiet && !json) {
-        char a[32], b[32];
-        fprintf(stderr, "%s: %s vertices, %s triangles (simplified in %.3f s)\n", out,
-                cli_count(a, sizeof a, s.output_vertices),
-                cli_count(b, sizeof b, s.output_triangles),
-                s.seconds_setup + s.seconds_collapse + s.seconds_output);
-    }
-    return CLI_OK;
+    if (job.o.target_ratio == 0 && job.o.target_vertices == 0 && job.o.target_triangles == 0 &&
+        job.o.max_error == 0)
+        return cli_usage_error("simplify", "no target given (--ratio, --vertices, "
+                                           "--triangles or --max-error)");
+    if ((rc = cli_check_output_path(io.cmd, io.out)) != CLI_OK)
+        return rc;
+    static const cli_job steps = {work, print_json, print_stats, print_summary};
+    return cli_run_job(&io, &steps, &job);
 }
 
 const cli_command cli_cmd_simplify = {"simplify", "reduce a mesh by quadric-error edge collapse",

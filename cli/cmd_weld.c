@@ -57,8 +57,95 @@ static bool parse_percent(const char *s, double *out)
     return cli_parse_double(buf, out);
 }
 
-static void print_stats(const mr_weld_stats *s, double t_read, double t_find, double t_write)
+/* The options, the radius asked for and the statistics of one run. */
+typedef struct weld_job {
+    mr_weld_options o;
+    int radius_kind; /* 1 eps, 2 eps-rel, 3 reduce */
+    double radius;
+    double t_find; /* seconds of the radius search (--reduce) */
+    mr_weld_stats s;
+} weld_job;
+
+static int option(int argc, char **argv, int *i, void *user)
 {
+    weld_job *job = user;
+    const char *v;
+    double x;
+    if (cli_value(argc, argv, i, "--eps", &v)) {
+        if (!cli_parse_double(v, &x) || !(x >= 0) || isinf(x))
+            return cli_usage_error("weld", "--eps needs a finite number >= 0, got '%s'",
+                                   v ? v : "");
+        job->radius_kind = 1, job->radius = x;
+    } else if (cli_value(argc, argv, i, "--eps-rel", &v)) {
+        if (!cli_parse_double(v, &x) || !(x >= 0) || isinf(x))
+            return cli_usage_error("weld", "--eps-rel needs a finite number >= 0, got '%s'",
+                                   v ? v : "");
+        job->radius_kind = 2, job->radius = x;
+    } else if (cli_value(argc, argv, i, "--reduce", &v)) {
+        if (!parse_percent(v, &x) || !(x >= 0 && x < 100))
+            return cli_usage_error("weld", "--reduce needs a percentage in [0, 100), "
+                                           "got '%s'",
+                                   v ? v : "");
+        job->radius_kind = 3, job->radius = x;
+    } else if (cli_value(argc, argv, i, "--algorithm", &v)) {
+        if (v && !strcmp(v, "serial"))
+            job->o.algorithm = MR_WELD_SERIAL;
+        else if (v && !strcmp(v, "pweld"))
+            job->o.algorithm = MR_WELD_PWELD;
+        else if (v && !strcmp(v, "pweld-async"))
+            job->o.algorithm = MR_WELD_PWELD_ASYNC;
+        else
+            return cli_usage_error("weld", "--algorithm is serial, pweld or pweld-async");
+    } else if (cli_value(argc, argv, i, "--order", &v)) {
+        if (v && !strcmp(v, "index"))
+            job->o.order = MR_WELD_ORDER_INDEX;
+        else if (v && !strcmp(v, "grade"))
+            job->o.order = MR_WELD_ORDER_GRADE;
+        else
+            return cli_usage_error("weld", "--order is index or grade");
+    } else if (cli_flag(argc, argv, i, "--strict")) {
+        job->o.strict = 1;
+    } else if (cli_flag(argc, argv, i, "--drop-degenerate")) {
+        job->o.drop_degenerate = 1;
+    } else {
+        return CLI_NO_MATCH;
+    }
+    return CLI_OK;
+}
+
+/* Settle the radius (absolute, relative to the bounding box, or searched
+ * for) and weld. */
+static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
+{
+    weld_job *job = user;
+    mr_error err;
+    if (job->radius_kind == 1) {
+        job->o.eps = job->radius;
+    } else if (job->radius_kind == 2) {
+        double diagonal;
+        if (mesh->vertex_count == 0)
+            return cli_fail("%s: no vertices to weld", io->in);
+        int rc = cli_bbox_diagonal(mesh, &diagonal);
+        if (rc != CLI_OK)
+            return rc;
+        job->o.eps = job->radius * diagonal;
+    } else {
+        double t0 = cli_now();
+        if (mr_weld_find_eps(mesh->positions, 0, mesh->vertex_count, job->radius / 100.0,
+                             &job->o, &job->o.eps, NULL, &err) != MR_OK)
+            return cli_fail_err(&err);
+        job->t_find = cli_now() - t0;
+    }
+    if (mr_mesh_weld(mesh, &job->o, result, NULL, &job->s, &err) != MR_OK)
+        return cli_fail_err(&err);
+    return CLI_OK;
+}
+
+static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                        void *user)
+{
+    const weld_job *job = user;
+    const mr_weld_stats *s = &job->s;
     char a[32], b[32];
     fprintf(stderr, "vertices   %s -> %s (%.3f%% removed)\n",
             cli_count(a, sizeof a, s->input_vertices), cli_count(b, sizeof b, s->output_vertices),
@@ -73,19 +160,18 @@ static void print_stats(const mr_weld_stats *s, double t_read, double t_find, do
             s->threads, s->rounds);
     fprintf(stderr, "time       read %.3f s, eps search %.3f s, order %.3f s, graph %.3f s, "
                     "mapping %.3f s, reduction %.3f s, retriangulation %.3f s, write %.3f s\n",
-            t_read, t_find, s->seconds_order, s->seconds_graph, s->seconds_mapping,
-            s->seconds_reduction, s->seconds_retriangulation, t_write);
+            t->read, job->t_find, s->seconds_order, s->seconds_graph, s->seconds_mapping,
+            s->seconds_reduction, s->seconds_retriangulation, t->write);
     fprintf(stderr, "memory     %.1f bytes per input vertex (working set)\n",
             s->input_vertices ? (double)s->peak_bytes / (double)s->input_vertices : 0.0);
 }
 
-static void print_json(const char *in, const char *out, const mr_weld_stats *s, double t_read,
-                       double t_find, double t_write)
+static void print_json(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                       void *user)
 {
-    printf("{\"input\": ");
-    cli_json_string(stdout, in);
-    printf(", \"output\": ");
-    cli_json_string(stdout, out);
+    const weld_job *job = user;
+    const mr_weld_stats *s = &job->s;
+    cli_json_io(io);
     printf(", \"algorithm\": \"%s\", \"threads\": %d, \"eps\": %.17g, \"input_vertices\": %zu, "
            "\"input_triangles\": %zu, \"output_vertices\": %zu, \"output_triangles\": %zu, "
            "\"graph_edges\": %zu, \"rounds\": %u, \"peak_bytes_per_vertex\": %.2f, "
@@ -95,142 +181,34 @@ static void print_json(const char *in, const char *out, const mr_weld_stats *s, 
            algorithm_name(s->algorithm), s->threads, s->eps, s->input_vertices,
            s->input_triangles, s->output_vertices, s->output_triangles, s->graph_edges,
            s->rounds,
-           s->input_vertices ? (double)s->peak_bytes / (double)s->input_vertices : 0.0, t_read,
-           t_find, s->seconds_order, s->seconds_graph, s->seconds_mapping, s->seconds_reduction,
-           s->seconds_retriangulation, s->seconds_total, t_write);
+           s->input_vertices ? (double)s->peak_bytes / (double)s->input_vertices : 0.0, t->read,
+           job->t_find, s->seconds_order, s->seconds_graph, s->seconds_mapping,
+           s->seconds_reduction, s->seconds_retriangulation, s->seconds_total, t->write);
+}
+
+static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,
+                          void *user)
+{
+    const mr_weld_stats *s = &((const weld_job *)user)->s;
+    cli_summary(io->out, s->output_vertices, s->output_triangles, "eps %.9g, welded in %.3f s",
+                s->eps, s->seconds_total);
 }
 
 static int run(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL;
-    bool stats = false, json = false, quiet = false;
-    int radius_kind = 0; /* 1 eps, 2 eps-rel, 3 reduce */
-    double radius = 0;
-    mr_weld_options o;
-    mr_weld_options_default(&o);
-    mr_write_options w;
-    mr_write_options_default(&w);
-    for (int i = 1; i < argc;) {
-        const char *v;
-        double x;
-        if (cli_output_option(argc, argv, &i, &w))
-            continue;
-        if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
-            if (!v)
-                return cli_usage_error("weld", "-o needs a file name");
-            out = v;
-        } else if (cli_value(argc, argv, &i, "--eps", &v)) {
-            if (!cli_parse_double(v, &x) || !(x >= 0) || isinf(x))
-                return cli_usage_error("weld", "--eps needs a finite number >= 0, got '%s'",
-                                       v ? v : "");
-            radius_kind = 1, radius = x;
-        } else if (cli_value(argc, argv, &i, "--eps-rel", &v)) {
-            if (!cli_parse_double(v, &x) || !(x >= 0) || isinf(x))
-                return cli_usage_error("weld", "--eps-rel needs a finite number >= 0, got '%s'",
-                                       v ? v : "");
-            radius_kind = 2, radius = x;
-        } else if (cli_value(argc, argv, &i, "--reduce", &v)) {
-            if (!parse_percent(v, &x) || !(x >= 0 && x < 100))
-                return cli_usage_error("weld", "--reduce needs a percentage in [0, 100), "
-                                               "got '%s'",
-                                       v ? v : "");
-            radius_kind = 3, radius = x;
-        } else if (cli_value(argc, argv, &i, "--algorithm", &v)) {
-            if (v && !strcmp(v, "serial"))
-                o.algorithm = MR_WELD_SERIAL;
-            else if (v && !strcmp(v, "pweld"))
-                o.algorithm = MR_WELD_PWELD;
-            else if (v && !strcmp(v, "pweld-async"))
-                o.algorithm = MR_WELD_PWELD_ASYNC;
-            else
-                return cli_usage_error("weld", "--algorithm is serial, pweld or pweld-async");
-        } else if (cli_value(argc, argv, &i, "--order", &v)) {
-            if (v && !strcmp(v, "index"))
-                o.order = MR_WELD_ORDER_INDEX;
-            else if (v && !strcmp(v, "grade"))
-                o.order = MR_WELD_ORDER_GRADE;
-            else
-                return cli_usage_error("weld", "--order is index or grade");
-        } else if (cli_flag(argc, argv, &i, "--strict")) {
-            o.strict = 1;
-        } else if (cli_flag(argc, argv, &i, "--drop-degenerate")) {
-            o.drop_degenerate = 1;
-        } else if (cli_flag(argc, argv, &i, "--stats")) {
-            stats = true;
-        } else if (cli_flag(argc, argv, &i, "--json")) {
-            json = true;
-        } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
-            quiet = true;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_usage_error("weld", "unknown option '%s'", argv[i]);
-        } else if (in) {
-            return cli_usage_error("weld", "one input file at a time (use -o for the output)");
-        } else {
-            in = argv[i++];
-        }
-    }
-    if (!in)
-        return cli_usage_error("weld", "no input file given");
-    if (!out)
-        return cli_usage_error("weld", "no output file given (-o FILE)");
-    if (!radius_kind)
-        return cli_usage_error("weld", "no radius given (--eps, --eps-rel or --reduce)");
-    int rc = cli_check_output_path("weld", out);
+    cli_io io;
+    cli_io_init(&io, "weld", CLI_ACCEPT_OUTPUT | CLI_ACCEPT_WRITE | CLI_ACCEPT_REPORT);
+    weld_job job = {.radius_kind = 0};
+    mr_weld_options_default(&job.o);
+    int rc = cli_io_parse(&io, argc, argv, option, &job);
     if (rc != CLI_OK)
         return rc;
-
-    mr_mesh mesh, result;
-    mr_error err;
-    double t0 = cli_now();
-    if (mr_mesh_read(in, NULL, &mesh, &err) != MR_OK)
-        return cli_fail_err(&err);
-    double t_read = cli_now() - t0, t_find = 0;
-    if (radius_kind == 1) {
-        o.eps = radius;
-    } else if (radius_kind == 2) {
-        mr_stats s;
-        if (mesh.vertex_count == 0) {
-            mr_mesh_free(&mesh);
-            return cli_fail("%s: no vertices to weld", in);
-        }
-        if (mr_stats_compute(mesh.positions, 0, mesh.vertex_count, NULL, 0, &s, &err) != MR_OK) {
-            mr_mesh_free(&mesh);
-            return cli_fail_err(&err);
-        }
-        o.eps = radius * s.bbox_diagonal;
-    } else {
-        t0 = cli_now();
-        if (mr_weld_find_eps(mesh.positions, 0, mesh.vertex_count, radius / 100.0, &o, &o.eps,
-                             NULL, &err) != MR_OK) {
-            mr_mesh_free(&mesh);
-            return cli_fail_err(&err);
-        }
-        t_find = cli_now() - t0;
-    }
-
-    mr_weld_stats s;
-    mr_status st = mr_mesh_weld(&mesh, &o, &result, NULL, &s, &err);
-    mr_mesh_free(&mesh);
-    if (st != MR_OK)
-        return cli_fail_err(&err);
-    t0 = cli_now();
-    st = mr_mesh_write(out, &result, &w, &err);
-    double t_write = cli_now() - t0;
-    mr_mesh_free(&result);
-    if (st != MR_OK)
-        return cli_fail_err(&err);
-
-    if (json)
-        print_json(in, out, &s, t_read, t_find, t_write);
-    if (stats)
-        print_stats(&s, t_read, t_find, t_write);
-    else if (!quiet && !json) {
-        char a[32], b[32];
-        fprintf(stderr, "%s: %s vertices, %s triangles (eps %.9g, welded in %.3f s)\n", out,
-                cli_count(a, sizeof a, s.output_vertices),
-                cli_count(b, sizeof b, s.output_triangles), s.eps, s.seconds_total);
-    }
-    return CLI_OK;
+    if (!job.radius_kind)
+        return cli_usage_error("weld", "no radius given (--eps, --eps-rel or --reduce)");
+    if ((rc = cli_check_output_path(io.cmd, io.out)) != CLI_OK)
+        return rc;
+    static const cli_job steps = {work, print_json, print_stats, print_summary};
+    return cli_run_job(&io, &steps, &job);
 }
 
 const cli_command cli_cmd_weld = {"weld", "merge vertices within a radius (exact, parallel)",
