@@ -5,7 +5,8 @@
 
 /* The cleanup steps, in the order that makes each one's result final. */
 typedef struct clean_steps {
-    bool weld, weld_attributes, keep_degenerate, keep_duplicates, keep_unreferenced;
+    bool weld, weld_attributes, keep_degenerate, keep_duplicates, keep_unreferenced,
+        keep_winding;
 } clean_steps;
 
 static int clean_mesh(mr_mesh *m, const clean_steps *c, bool quiet)
@@ -19,6 +20,9 @@ static int clean_mesh(mr_mesh *m, const clean_steps *c, bool quiet)
         return cli_fail_err(&err);
     if (!c->keep_unreferenced && mr_mesh_remove_unreferenced(m, &unreferenced, &err) != MR_OK)
         return cli_fail_err(&err);
+    size_t flipped = 0, nonorientable = 0;
+    if (!c->keep_winding && mr_mesh_orient(m, &flipped, &nonorientable, &err) != MR_OK)
+        return cli_fail_err(&err);
     if (!quiet) {
         char a[32], b[32], d[32];
         fprintf(stderr,
@@ -26,6 +30,13 @@ static int clean_mesh(mr_mesh *m, const clean_steps *c, bool quiet)
                 "unreferenced vertices removed\n",
                 cli_count(a, sizeof a, welded), cli_count(b, sizeof b, degenerate),
                 cli_count(d, sizeof d, unreferenced));
+        if (flipped)
+            fprintf(stderr, "cleaned: %s triangles flipped to their neighbours' winding\n",
+                    cli_count(a, sizeof a, flipped));
+        if (nonorientable)
+            fprintf(stderr, "cleaned: %s part%s cannot be oriented (left as %s)\n",
+                    cli_count(a, sizeof a, nonorientable), nonorientable == 1 ? "" : "s",
+                    nonorientable == 1 ? "it is" : "they are");
     }
     return CLI_OK;
 }
@@ -64,8 +75,9 @@ static const char convert_usage[] =
     "Convert a mesh or point cloud between OBJ, PLY, STL and XYZ (formats by\n"
     "extension). Vertex order and triangles are kept as read.\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP
-    "  --clean          also weld exact duplicates and remove degenerate,\n"
-    "                   duplicate triangles and unreferenced vertices\n"
+    "  --clean          also clean the mesh as `meshreduce clean` does (weld exact\n"
+    "                   duplicates; remove degenerate, duplicate triangles and\n"
+    "                   unreferenced vertices; make the winding consistent)\n"
     "  -q, --quiet      print nothing on success\n";
 
 static int convert_option(int argc, char **argv, int *i, void *user)
@@ -92,7 +104,10 @@ static const char clean_usage[] =
     "\n"
     "Repair a mesh for processing: weld vertices at bitwise-equal positions,\n"
     "remove triangles that repeat a vertex, duplicate triangles (either\n"
-    "orientation) and vertices no triangle uses. The order of what stays is kept.\n"
+    "orientation) and vertices no triangle uses, and wind every triangle like\n"
+    "its neighbours (each connected part keeps its majority winding; the\n"
+    "simplifier cannot move a vertex whose triangles disagree). The order of\n"
+    "what stays is kept.\n"
     "\n"
     "  -o, --output FILE       output file (required)\n"
     "  --no-weld               do not weld duplicate positions\n"
@@ -101,6 +116,7 @@ static const char clean_usage[] =
     "  --keep-duplicates       keep duplicate triangles\n"
     "  --keep-degenerate       keep triangles that repeat a vertex\n"
     "  --keep-unreferenced     keep unreferenced vertices\n"
+    "  --keep-winding          leave every triangle's winding as it is\n"
     "  -q, --quiet             print nothing on success\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
@@ -117,6 +133,8 @@ static int clean_option(int argc, char **argv, int *i, void *user)
         c->keep_degenerate = true;
     else if (cli_flag(argc, argv, i, "--keep-unreferenced"))
         c->keep_unreferenced = true;
+    else if (cli_flag(argc, argv, i, "--keep-winding"))
+        c->keep_winding = true;
     else
         return CLI_NO_MATCH;
     return CLI_OK;
@@ -135,5 +153,5 @@ static int run_clean(int argc, char **argv)
 
 const cli_command cli_cmd_convert = {"convert", "convert between OBJ, PLY, STL and XYZ",
                                      run_convert, convert_usage};
-const cli_command cli_cmd_clean = {"clean", "weld duplicates, drop degenerate and unused",
+const cli_command cli_cmd_clean = {"clean", "weld duplicates, drop degenerate and unused, fix winding",
                                    run_clean, clean_usage};

@@ -49,6 +49,7 @@ static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
     printf("%-22s %s\n", "non-manifold edges", cli_count(a, sizeof a, s->nonmanifold_edges));
     printf("%-22s %s\n", "non-manifold vertices",
            cli_count(a, sizeof a, s->nonmanifold_vertices));
+    printf("%-22s %s\n", "misoriented edges", cli_count(a, sizeof a, s->misoriented_edges));
     printf("%-22s %s degenerate, %s duplicate\n", "bad triangles",
            cli_count(a, sizeof a, s->degenerate_triangles),
            cli_count(b, sizeof b, s->duplicate_triangles));
@@ -57,8 +58,10 @@ static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
     long long g = genus_of(s);
     if (g >= 0)
         printf("%-22s %lld\n", "genus", g);
-    printf("%-22s %s, %s\n", "topology", s->closed ? "closed" : "open",
-           s->manifold ? "manifold" : "non-manifold");
+    printf("%-22s %s, %s%s\n", "topology", s->closed ? "closed" : "open",
+           s->manifold ? "manifold" : "non-manifold",
+           !s->manifold ? "" : s->oriented ? ", consistently oriented"
+                                           : ", not consistently oriented");
     printf("%-22s [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]\n", "bounding box", s->bbox_min[0],
            s->bbox_min[1], s->bbox_min[2], s->bbox_max[0], s->bbox_max[1], s->bbox_max[2]);
     printf("%-22s %.6g\n", "bbox diagonal", s->bbox_diagonal);
@@ -82,6 +85,7 @@ static void print_json(const char *path, const mr_mesh *m, const mr_stats *s, do
            s->boundary_edges, s->boundary_loops);
     printf(", \"nonmanifold_edges\": %zu, \"nonmanifold_vertices\": %zu",
            s->nonmanifold_edges, s->nonmanifold_vertices);
+    printf(", \"misoriented_edges\": %zu", s->misoriented_edges);
     printf(", \"components\": %zu, \"euler_characteristic\": %lld", s->components,
            s->euler_characteristic);
     long long g = genus_of(s);
@@ -89,8 +93,8 @@ static void print_json(const char *path, const mr_mesh *m, const mr_stats *s, do
         printf(", \"genus\": %lld", g);
     else
         printf(", \"genus\": null");
-    printf(", \"closed\": %s, \"manifold\": %s", s->closed ? "true" : "false",
-           s->manifold ? "true" : "false");
+    printf(", \"closed\": %s, \"manifold\": %s, \"oriented\": %s", s->closed ? "true" : "false",
+           s->manifold ? "true" : "false", s->oriented ? "true" : "false");
     printf(", \"bbox_min\": [%.9g, %.9g, %.9g], \"bbox_max\": [%.9g, %.9g, %.9g]",
            s->bbox_min[0], s->bbox_min[1], s->bbox_min[2], s->bbox_max[0], s->bbox_max[1],
            s->bbox_max[2]);

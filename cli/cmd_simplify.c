@@ -165,7 +165,17 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     job->o.progress_user = NULL;
     if (prog.shown)
         fprintf(stderr, "\r%60s\r", "");
-    return st == MR_OK ? CLI_OK : cli_fail_err(&err);
+    if (st != MR_OK)
+        return cli_fail_err(&err);
+    if (!io->quiet && job->s.locked_vertices) {
+        char a[32];
+        fprintf(stderr,
+                "note: %s vertices stayed in place: their triangles are not one consistently "
+                "wound fan (`meshreduce info` counts non-manifold and misoriented edges; "
+                "`meshreduce clean` fixes the winding)\n",
+                cli_count(a, sizeof a, job->s.locked_vertices));
+    }
+    return CLI_OK;
 }
 
 static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times *t,
@@ -179,6 +189,8 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
             cli_count(d, sizeof d, s->output_triangles));
     fprintf(stderr, "collapses  %s, largest error %.6g\n", cli_count(a, sizeof a, s->collapses),
             s->max_error);
+    fprintf(stderr, "locked     %s vertices (non-manifold or misoriented fans)\n",
+            cli_count(a, sizeof a, s->locked_vertices));
     fprintf(stderr, "time       read %.3f s, setup %.3f s, collapse %.3f s, output %.3f s, "
                     "write %.3f s\n",
             t->read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t->write);
@@ -191,11 +203,12 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
     cli_json_io(io);
     printf(", \"input_vertices\": %zu, \"input_triangles\": %zu, \"output_vertices\": %zu, "
            "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
+           "\"locked_vertices\": %zu, "
            "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
            "\"output\": %.6f, \"write\": %.6f}}\n",
            s->input_vertices, s->input_triangles, s->output_vertices, s->output_triangles,
-           s->collapses, s->max_error, t->read, s->seconds_setup, s->seconds_collapse,
-           s->seconds_output, t->write);
+           s->collapses, s->max_error, s->locked_vertices, t->read, s->seconds_setup,
+           s->seconds_collapse, s->seconds_output, t->write);
 }
 
 static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,

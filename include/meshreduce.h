@@ -191,6 +191,18 @@ mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes,
 mr_status mr_mesh_remove_degenerate(mr_mesh *mesh, int remove_duplicates,
                                     size_t *removed, mr_error *err);
 
+/* Make the winding of the triangles consistent: across every edge shared
+ * by exactly two triangles, one runs it one way and the other the other
+ * way (edges of one triangle or of three or more do not link triangles).
+ * A closed connected part is wound to face outwards (positive enclosed
+ * volume); an open one keeps the winding of most of its triangles (ties:
+ * of its first triangle). Triangles are flipped by swapping their second
+ * and third corners. A part that cannot be oriented (a Moebius strip) is
+ * left as it is and counted in *nonorientable (may be NULL); *flipped
+ * (may be NULL) gets the number of triangles flipped. Deterministic. */
+mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
+                         mr_error *err);
+
 /* ------------------------------------------------------------------------ */
 /* Statistics                                                               */
 /* ------------------------------------------------------------------------ */
@@ -206,6 +218,9 @@ typedef struct mr_stats {
                                        triangles contribute none) */
     size_t boundary_edges;          /* edges with one incident triangle */
     size_t nonmanifold_edges;       /* edges with three or more */
+    size_t misoriented_edges;       /* edges of two triangles that run them
+                                       the same way (inconsistent winding:
+                                       the simplifier locks their vertices) */
     size_t nonmanifold_vertices;    /* referenced vertices whose triangles form
                                        more than one fan, or touch a
                                        non-manifold edge */
@@ -218,6 +233,7 @@ typedef struct mr_stats {
                                        (and at least one edge) */
     int manifold;                   /* no non-manifold edge or vertex (and at
                                        least one edge) */
+    int oriented;                   /* manifold and no misoriented edge */
     double bbox_min[3], bbox_max[3];/* over all vertices */
     double bbox_diagonal;
     double surface_area;
@@ -315,6 +331,10 @@ void mr_simplify_options_default(mr_simplify_options *options);
 /* What a simplification produced and how long each phase took. */
 typedef struct mr_simplify_stats {
     size_t input_vertices;      /* referenced input vertices */
+    size_t locked_vertices;     /* input vertices that could not move: their
+                                   triangles are not one consistently wound
+                                   fan (non-manifold, or misoriented edges:
+                                   mr_mesh_orient fixes the latter) */
     size_t input_triangles;
     size_t output_vertices;
     size_t output_triangles;

@@ -2,12 +2,15 @@
  * duplicate triangles. */
 #include "testutil.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+
+#define COUNT_OF(a) (sizeof(a) / sizeof *(a))
 
 static const float cube_pos[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0,
                                  0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1};
@@ -520,6 +523,123 @@ static void test_remove_duplicates_large(void **state)
 
 /* ---- arguments ---------------------------------------------------------------- */
 
+/* ---- orientation ---------------------------------------------------------- */
+
+static void flip_triangle(uint32_t *idx, size_t t)
+{
+    const uint32_t x = idx[3 * t + 1];
+    idx[3 * t + 1] = idx[3 * t + 2];
+    idx[3 * t + 2] = x;
+}
+
+/* A cube with some triangles flipped comes back as it was, and a cube
+ * wound inward throughout is turned outward (closed parts face out). */
+static void test_orient_cube(void **state)
+{
+    (void)state;
+    const size_t sets[][3] = {{0, 5, 11}, {3, 3, 3}, {1, 2, 7}};
+    for (size_t k = 0; k < COUNT_OF(sets); k++) {
+        uint32_t idx[36];
+        memcpy(idx, cube_idx, sizeof idx);
+        size_t want = 0;
+        for (size_t i = 0; i < 3; i++) {
+            if (i > 0 && sets[k][i] == sets[k][i - 1])
+                continue;
+            flip_triangle(idx, sets[k][i]);
+            want++;
+        }
+        mr_mesh m;
+        make_mesh(&m, cube_pos, 8, idx, 12, 0);
+        mr_stats before = mesh_stats(&m);
+        assert_true(before.manifold);
+        assert_false(before.oriented);
+        assert_int_equal(before.misoriented_edges, 3 * want - (k == 2 ? 2 : 0));
+        size_t flipped = 99, bad = 99;
+        assert_int_equal(mr_mesh_orient(&m, &flipped, &bad, NULL), MR_OK);
+        assert_int_equal(flipped, want);
+        assert_int_equal(bad, 0);
+        assert_memory_equal(m.indices, cube_idx, sizeof cube_idx);
+        mr_stats after = mesh_stats(&m);
+        assert_true(after.oriented);
+        assert_int_equal(after.misoriented_edges, 0);
+        mr_mesh_free(&m);
+    }
+    uint32_t inward[36];
+    memcpy(inward, cube_idx, sizeof inward);
+    for (size_t t = 0; t < 12; t++)
+        flip_triangle(inward, t);
+    mr_mesh m;
+    make_mesh(&m, cube_pos, 8, inward, 12, 0);
+    assert_true(mesh_stats(&m).oriented);
+    size_t flipped = 99;
+    assert_int_equal(mr_mesh_orient(&m, &flipped, NULL, NULL), MR_OK);
+    assert_int_equal(flipped, 12);
+    assert_memory_equal(m.indices, cube_idx, sizeof cube_idx);
+    mr_mesh_free(&m);
+    /* open: the majority's winding, here the inward one of 9 of 10 */
+    uint32_t open[30];
+    memcpy(open, inward + 6, sizeof open);
+    flip_triangle(open, 4);
+    make_mesh(&m, cube_pos, 8, open, 10, 0);
+    assert_int_equal(mr_mesh_orient(&m, &flipped, NULL, NULL), MR_OK);
+    assert_int_equal(flipped, 1);
+    assert_memory_equal(m.indices, inward + 6, sizeof open);
+    mr_mesh_free(&m);
+}
+
+/* A Moebius strip cannot be oriented: it is left as it is and counted; a
+ * separate, flipped triangle pair next to it is still fixed. */
+static void test_orient_moebius(void **state)
+{
+    (void)state;
+    /* a strip of 6 quads around a loop, joined with a half twist */
+    const size_t n = 6;
+    float pos[3 * 12 + 3 * 4];
+    uint32_t idx[3 * 12 + 6];
+    for (size_t i = 0; i < n; i++) {
+        const double a = 2 * 3.14159265358979323846 * (double)i / (double)n;
+        const double h = 0.3 * cos(a / 2), r = 0.3 * sin(a / 2);
+        for (int side = 0; side < 2; side++) {
+            const double s = side ? 1 : -1;
+            float *p = pos + 3 * (2 * i + (size_t)side);
+            p[0] = (float)((1 + s * r) * cos(a));
+            p[1] = (float)((1 + s * r) * sin(a));
+            p[2] = (float)(s * h);
+        }
+    }
+    for (size_t i = 0; i < n; i++) {
+        uint32_t a0 = (uint32_t)(2 * i), a1 = a0 + 1;
+        uint32_t b0 = (uint32_t)(2 * ((i + 1) % n)), b1 = b0 + 1;
+        if (i == n - 1) { /* the half twist */
+            const uint32_t x = b0;
+            b0 = b1;
+            b1 = x;
+        }
+        const uint32_t q[6] = {a0, b0, b1, a0, b1, a1};
+        memcpy(idx + 6 * i, q, sizeof q);
+    }
+    /* the separate pair: a square of two triangles, the second flipped */
+    const float sq[12] = {5, 0, 0, 6, 0, 0, 6, 1, 0, 5, 1, 0};
+    memcpy(pos + 36, sq, sizeof sq);
+    const uint32_t pair[6] = {12, 13, 14, 12, 15, 14};
+    memcpy(idx + 36, pair, sizeof pair);
+    mr_mesh m, copy;
+    make_mesh(&m, pos, 16, idx, 14, 0);
+    mr_mesh_init(&copy);
+    assert_int_equal(mr_mesh_copy(&copy, &m, NULL), MR_OK);
+    size_t flipped = 99, bad = 99;
+    assert_int_equal(mr_mesh_orient(&m, &flipped, &bad, NULL), MR_OK);
+    assert_int_equal(bad, 1);
+    assert_int_equal(flipped, 1);
+    /* the strip untouched; the pair's second triangle (a tie: the first
+     * one's winding wins) flipped */
+    assert_memory_equal(m.indices, copy.indices, 36 * sizeof(uint32_t));
+    const uint32_t fixed[6] = {12, 13, 14, 12, 14, 15};
+    assert_memory_equal(m.indices + 36, fixed, sizeof fixed);
+    mr_mesh_free(&copy);
+    mr_mesh_free(&m);
+}
+
 static void test_bad_arguments(void **state)
 {
     (void)state;
@@ -532,6 +652,7 @@ static void test_bad_arguments(void **state)
     assert_int_equal(mr_mesh_remove_degenerate(NULL, 0, &removed, &err),
                      MR_ERR_INVALID_ARGUMENT);
     assert_int_equal(mr_mesh_remove_unreferenced(NULL, NULL, NULL), MR_ERR_INVALID_ARGUMENT);
+    assert_int_equal(mr_mesh_orient(NULL, &removed, NULL, &err), MR_ERR_INVALID_ARGUMENT);
 
     /* An index out of range is reported, and the mesh is left as it was. */
     const uint32_t idx[] = {0, 1, 2, 3, 2, 8};
@@ -544,6 +665,8 @@ static void test_bad_arguments(void **state)
     assert_int_equal(mr_mesh_weld_exact(&m, 1, &removed, &err), MR_ERR_INVALID_ARGUMENT);
     tu_assert_contains(err.message, "triangle 1");
     assert_int_equal(mr_mesh_remove_degenerate(&m, 1, &removed, &err), MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "triangle 1");
+    assert_int_equal(mr_mesh_orient(&m, &removed, NULL, &err), MR_ERR_INVALID_ARGUMENT);
     tu_assert_contains(err.message, "triangle 1");
     tu_assert_mesh_equal(&m, &copy);
     mr_mesh_free(&copy);
@@ -562,6 +685,8 @@ int main(void)
         cmocka_unit_test(test_remove_degenerate),
         cmocka_unit_test(test_remove_duplicates_long_run),
         cmocka_unit_test(test_remove_duplicates_large),
+        cmocka_unit_test(test_orient_cube),
+        cmocka_unit_test(test_orient_moebius),
         cmocka_unit_test(test_bad_arguments),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,6 +1,8 @@
 /* The command-line tool end to end: exit statuses, messages, outputs. */
 #include "testutil.h"
 
+#include <math.h>
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -99,6 +101,67 @@ static void test_convert_and_clean(void **state)
     assert_int_equal(m.vertex_count, 4);   /* duplicate welded, (9,9,9) dropped */
     assert_int_equal(m.triangle_count, 2); /* duplicates and the degenerate gone */
     mr_mesh_free(&m);
+}
+
+/* A closed fan-capped cylinder whose side is wound against its caps: every
+ * rim vertex is locked, and simplify says so; clean rewinds the side, and
+ * then it simplifies; --keep-winding leaves it alone. */
+static void test_misoriented_winding(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("cli-wound.obj");
+    char text[8192];
+    size_t len = 0;
+    const int n = 24;
+    for (int z = 0; z < 2; z++)
+        for (int i = 0; i < n; i++) {
+            const double a = 2 * 3.14159265358979323846 * i / n;
+            len += (size_t)snprintf(text + len, sizeof text - len, "v %.6f %.6f %d\n", cos(a),
+                                    sin(a), z);
+        }
+    len += (size_t)snprintf(text + len, sizeof text - len, "v 0 0 0\nv 0 0 1\n");
+    for (int i = 0; i < n; i++) {
+        const int a = i + 1, b = (i + 1) % n + 1, a2 = a + n, b2 = b + n;
+        const int c0 = 2 * n + 1, c1 = 2 * n + 2;
+        /* the side wound inward, the caps outward */
+        len += (size_t)snprintf(text + len, sizeof text - len,
+                                "f %d %d %d\nf %d %d %d\nf %d %d %d\nf %d %d %d\n", a, b2, b, a,
+                                a2, b2, c0, b, a, c1, a2, b2);
+    }
+    tu_write_file(in, text, len);
+    char *out;
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", in), &out), 0);
+    tu_assert_contains(out, "not consistently oriented");
+    free(out);
+    const char *simple = tu_tmp_path("cli-wound-10.obj");
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 10%%", in, simple), &out), 0);
+    tu_assert_contains(out, "48 vertices stayed in place");
+    tu_assert_contains(out, "meshreduce clean");
+    free(out);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 10%% --json -q", in, simple), &out), 0);
+    tu_assert_contains(out, "\"locked_vertices\": 48");
+    free(out);
+
+    const char *kept = tu_tmp_path("cli-wound-kept.obj");
+    assert_int_equal(tu_run_cli(tu_fmt("clean '%s' -o '%s' --keep-winding", in, kept), &out), 0);
+    free(out);
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", kept), &out), 0);
+    tu_assert_contains(out, "not consistently oriented");
+    free(out);
+
+    const char *fixed = tu_tmp_path("cli-wound-fixed.obj");
+    assert_int_equal(tu_run_cli(tu_fmt("clean '%s' -o '%s'", in, fixed), &out), 0);
+    tu_assert_contains(out, "48 triangles flipped");
+    free(out);
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", fixed), &out), 0);
+    tu_assert_contains(out, "closed, manifold, consistently oriented");
+    free(out);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 10%% --stats", fixed, simple), &out), 0);
+    tu_assert_contains(out, "50 -> 5");
+    tu_assert_contains(out, "locked     0 vertices");
+    free(out);
 }
 
 static void test_bad_inputs_fail_cleanly(void **state)
@@ -225,6 +288,7 @@ int main(void)
         cmocka_unit_test(test_generate_info_json),
         cmocka_unit_test(test_torus_info),
         cmocka_unit_test(test_convert_and_clean),
+        cmocka_unit_test(test_misoriented_winding),
         cmocka_unit_test(test_bad_inputs_fail_cleanly),
         cmocka_unit_test(test_demo_small),
         cmocka_unit_test(test_simplify_cli),

@@ -76,6 +76,8 @@ static void assert_closed_genus0(mr_stats s)
     assert_int_equal(s.components, 1);
     assert_int_equal(s.degenerate_triangles, 0);
     assert_int_equal(s.duplicate_triangles, 0);
+    assert_int_equal(s.misoriented_edges, 0);
+    assert_true(s.oriented);
 }
 
 static void test_tetrahedron(void **state)
@@ -104,6 +106,23 @@ static void test_cube(void **state)
     assert_closed_genus0(s);
     assert_int_equal(s.edge_count, 18);
     assert_true(s.surface_area == 6.0);
+}
+
+/* One triangle wound the other way: its three edges are misoriented, the
+ * mesh still a closed manifold. */
+static void test_cube_misoriented(void **state)
+{
+    (void)state;
+    uint32_t idx[36];
+    memcpy(idx, cube_idx, sizeof idx);
+    const uint32_t x = idx[4];
+    idx[4] = idx[5];
+    idx[5] = x;
+    mr_stats s = stats_of(cube_pos, 8, idx, 12);
+    assert_true(s.closed);
+    assert_true(s.manifold);
+    assert_int_equal(s.misoriented_edges, 3);
+    assert_false(s.oriented);
 }
 
 static void test_cube_missing_face(void **state)
@@ -748,6 +767,7 @@ int main(void)
         cmocka_unit_test(test_tetrahedron),
         cmocka_unit_test(test_octahedron),
         cmocka_unit_test(test_cube),
+        cmocka_unit_test(test_cube_misoriented),
         cmocka_unit_test(test_cube_missing_face),
         cmocka_unit_test(test_open_cylinder),
         cmocka_unit_test(test_nonmanifold_edge),

@@ -373,3 +373,137 @@ mr_status mr_mesh_remove_degenerate(mr_mesh *mesh, int remove_duplicates, size_t
         *removed = tc - kept;
     return MR_OK;
 }
+
+/* ---- orientation ---------------------------------------------------------- */
+
+/*
+ * Each corner's half-edge links its triangle to the triangle across it
+ * (when the edge has exactly two): across[c] = (t << 1) | same, where same
+ * says both run the edge the same way, i.e. one of the two must flip for
+ * them to agree. A breadth-first walk over those links from each part's
+ * first triangle gives every triangle its flip relative to that one; a
+ * link that disagrees with the walk makes the part non-orientable.
+ */
+mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
+                         mr_error *err)
+{
+    if (flipped)
+        *flipped = 0;
+    if (nonorientable)
+        *nonorientable = 0;
+    mr_status st = check_mesh(mesh, err);
+    if (st != MR_OK)
+        return st;
+    const size_t tc = mesh->triangle_count;
+    if (tc == 0)
+        return MR_OK;
+    uint32_t *idx = mesh->indices;
+    mr_edge_table et;
+    if ((st = mr_edge_table_build(&et, idx, tc, mesh->vertex_count, err)) != MR_OK)
+        return st;
+    const uint32_t NO_LINK = UINT32_MAX;
+    uint32_t *across = mr_alloc_array(3 * tc, sizeof *across);
+    uint32_t *queue = mr_alloc_array(tc, sizeof *queue);
+    uint32_t *part = mr_alloc_array(tc, sizeof *part); /* order of the walk */
+    uint8_t *flip = mr_alloc_array(tc, 1);             /* 2: not reached yet */
+    if (!across || !queue || !part || !flip) {
+        st = mr_fail_nomem(err, NULL, tc * 21);
+        goto done;
+    }
+    for (size_t c = 0; c < 3 * tc; c++)
+        across[c] = NO_LINK;
+    for (uint32_t lo = 0; lo < et.vertex_count; lo++) {
+        for (size_t i = et.offsets[lo], j; i < et.offsets[lo + 1]; i = j) {
+            j = mr_edge_run_end(&et, lo, i);
+            if (j - i != 2)
+                continue;
+            const uint32_t c0 = mr_edge_corner(et.entries[i]);
+            const uint32_t c1 = mr_edge_corner(et.entries[i + 1]);
+            const uint32_t same = (idx[c0] == lo) == (idx[c1] == lo);
+            across[c0] = (c1 / 3) << 1 | same;
+            across[c1] = (c0 / 3) << 1 | same;
+        }
+    }
+    mr_edge_table_free(&et);
+    memset(flip, 2, tc);
+    size_t total_flipped = 0, bad_parts = 0;
+    for (size_t seed = 0; seed < tc; seed++) {
+        if (flip[seed] != 2)
+            continue;
+        size_t head = 0, tail = 0, count = 0;
+        bool orientable = true, closed = true;
+        flip[seed] = 0;
+        queue[tail++] = (uint32_t)seed;
+        while (head < tail) {
+            const uint32_t t = queue[head++];
+            part[count++] = t;
+            for (uint32_t k = 0; k < 3; k++) {
+                const uint32_t link = across[3 * (size_t)t + k];
+                if (link == NO_LINK) {
+                    closed = false;
+                    continue;
+                }
+                const uint32_t u = link >> 1;
+                const uint8_t want = (uint8_t)(flip[t] ^ (link & 1));
+                if (flip[u] == 2) {
+                    flip[u] = want;
+                    queue[tail++] = u;
+                } else if (flip[u] != want) {
+                    orientable = false;
+                }
+            }
+        }
+        if (!orientable) {
+            bad_parts++;
+            continue;
+        }
+        /* A closed part faces out (positive volume); an open one keeps the
+         * winding of most of its triangles (ties: the seed's). */
+        uint8_t invert;
+        if (closed) {
+            double volume = 0;
+            for (size_t i = 0; i < count; i++) {
+                const uint32_t *tri = idx + 3 * (size_t)part[i];
+                const float *a = mesh->positions + 3 * (size_t)tri[0];
+                const float *b = mesh->positions + 3 * (size_t)tri[flip[part[i]] ? 2 : 1];
+                const float *c = mesh->positions + 3 * (size_t)tri[flip[part[i]] ? 1 : 2];
+                const double ab[3] = {(double)b[0] - a[0], (double)b[1] - a[1],
+                                      (double)b[2] - a[2]};
+                const double ac[3] = {(double)c[0] - a[0], (double)c[1] - a[1],
+                                      (double)c[2] - a[2]};
+                /* 6 x the signed volume of (origin at a's part, a, b, c):
+                 * a . (ab x ac) */
+                volume += a[0] * (ab[1] * ac[2] - ab[2] * ac[1]) +
+                          a[1] * (ab[2] * ac[0] - ab[0] * ac[2]) +
+                          a[2] * (ab[0] * ac[1] - ab[1] * ac[0]);
+            }
+            invert = volume < 0;
+        } else {
+            size_t ones = 0;
+            for (size_t i = 0; i < count; i++)
+                ones += flip[part[i]];
+            invert = 2 * ones > count;
+        }
+        for (size_t i = 0; i < count; i++) {
+            const uint32_t t = part[i];
+            if ((flip[t] ^ invert) == 0)
+                continue;
+            uint32_t *tri = idx + 3 * (size_t)t;
+            const uint32_t x = tri[1];
+            tri[1] = tri[2];
+            tri[2] = x;
+            total_flipped++;
+        }
+    }
+    if (flipped)
+        *flipped = total_flipped;
+    if (nonorientable)
+        *nonorientable = bad_parts;
+done:
+    mr_edge_table_free(&et);
+    free(across);
+    free(queue);
+    free(part);
+    free(flip);
+    return st;
+}

@@ -203,9 +203,9 @@ static void scan_edges(topo *tp, mr_stats *s)
     const uint32_t *idx = tp->indices;
     const bool par = tp->par;
     const size_t vc = et->vertex_count;
-    size_t edges = 0, boundary_edges = 0, nonmanifold = 0, dups = 0;
+    size_t edges = 0, boundary_edges = 0, nonmanifold = 0, dups = 0, misoriented = 0;
 #pragma omp parallel for schedule(dynamic, 4096) if (par) \
-    reduction(+ : edges, boundary_edges, nonmanifold, dups)
+    reduction(+ : edges, boundary_edges, nonmanifold, dups, misoriented)
     for (size_t v = 0; v < vc; v++) {
         const uint32_t lo = (uint32_t)v;
         for (size_t i = et->offsets[lo], j; i < et->offsets[lo + 1]; i = j) {
@@ -222,6 +222,9 @@ static void scan_edges(topo *tp, mr_stats *s)
                 uf_union(tp->fan, corner_at(idx, c0, hi), corner_at(idx, c1, hi), par);
                 const uint32_t o0 = opposite(idx, run[0]), o1 = opposite(idx, run[1]);
                 dups += o0 == o1 && o0 > hi;
+                /* consistent winding: one half-edge runs lo -> hi, the
+                 * other hi -> lo */
+                misoriented += (idx[c0] == lo) == (idx[c1] == lo);
             } else {
                 nonmanifold++;
             }
@@ -231,6 +234,7 @@ static void scan_edges(topo *tp, mr_stats *s)
     s->boundary_edges = boundary_edges;
     s->nonmanifold_edges = nonmanifold;
     s->duplicate_triangles = dups;
+    s->misoriented_edges = misoriented;
 }
 
 /* Phase 2: boundary half-edges, vertices of non-manifold edges, duplicates
@@ -480,6 +484,7 @@ mr_status mr_stats_compute(const float *positions, size_t stride, size_t vertex_
                              (long long)s.triangle_count;
     s.closed = s.edge_count > 0 && s.boundary_edges == 0 && s.nonmanifold_edges == 0;
     s.manifold = s.edge_count > 0 && s.nonmanifold_edges == 0 && s.nonmanifold_vertices == 0;
+    s.oriented = s.manifold && s.misoriented_edges == 0;
     *stats = s;
     return MR_OK;
 }

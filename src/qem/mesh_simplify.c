@@ -382,7 +382,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
             t2i++;
         }
     }
-    const size_t input_vertices = s.input_vertices;
+    const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     mr_simplifier_free(&s);
     free(geo);
     free_ctx(&a);
@@ -392,6 +392,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         *origin = org;
     if (stats) {
         stats->input_vertices = input_vertices;
+        stats->locked_vertices = blocked;
         stats->input_triangles = tc;
         stats->output_vertices = nv;
         stats->output_triangles = nt;

@@ -737,6 +737,8 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         return st;
     mr_collapse_mesh *m = &s->m;
     s->input_vertices = m->live_vertices;
+    for (size_t v = 0; v < vertex_count; v++)
+        s->blocked_vertices += (m->flags[v] & MR_VF_NONMANIFOLD) != 0;
     st = mr_simplify_check_options(o, m->live_vertices, triangle_count, err);
     if (st != MR_OK) {
         mr_simplifier_free(s);
@@ -1002,13 +1004,14 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     free(s.q);
     s.q = NULL;
     st = mr_simplifier_output(&s, positions, stride, out, err);
-    const size_t input_vertices = s.input_vertices;
+    const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;
     const double t3 = mr_now_seconds();
     mr_simplify_stats *stats = &out->stats;
     stats->input_vertices = input_vertices;
+    stats->locked_vertices = blocked;
     stats->input_triangles = triangle_count;
     stats->output_vertices = out->vertex_count;
     stats->output_triangles = out->triangle_count;

@@ -30,6 +30,7 @@ struct mr_simplifier {
                                 that end (MR_VF_SEAM with attributes) */
     double centre[3], scale, diagonal;
     size_t input_vertices;
+    size_t blocked_vertices; /* non-manifold or inconsistently wound: locked */
     /* Attribute hooks (mr_mesh_simplify): extra validity, and an action
      * before a collapse r -> k to target is applied. */
     bool (*attr_valid)(mr_simplifier *s, uint32_t r, uint32_t k);
