@@ -151,6 +151,32 @@ static void test_key_order(void **state)
     assert_true(mr_heap_key_bits(NAN) == mr_heap_key_bits(INFINITY));
 }
 
+/* Heapify of tiny heaps, sized to exactly their items: an empty or
+ * one-item heap was sifted from a slot past its end (a write through a
+ * garbage id when the simplifier found no collapsible edge). */
+static void test_heapify_tiny(void **state)
+{
+    (void)state;
+    for (uint32_t n = 0; n < 10; n++) {
+        mr_heap h;
+        assert_int_equal(mr_heap_init_sized(&h, 16, n, NULL), MR_OK);
+        for (uint32_t i = 0; i < n; i++)
+            mr_heap_append(&h, 15 - i, (float)((i * 5) % 7));
+        mr_heap_heapify(&h);
+        check_invariant(&h);
+        for (uint32_t id = 0; id < 16; id++)
+            assert_int_equal(mr_heap_contains(&h, id), id >= 16 - n);
+        float last = -INFINITY;
+        while (!mr_heap_empty(&h)) {
+            const float k = mr_heap_top_key(&h);
+            assert_true(k >= last);
+            last = k;
+            mr_heap_pop(&h);
+        }
+        mr_heap_free(&h);
+    }
+}
+
 /* Bulk build: append in any order, heapify, then pops come in (key, id)
  * order and the heap stays indexed for updates; sized heaps hold fewer
  * items than ids. */
@@ -206,6 +232,7 @@ int main(void)
         cmocka_unit_test(test_random_operations),
         cmocka_unit_test(test_random_operations_wide),
         cmocka_unit_test(test_large_positions),
+        cmocka_unit_test(test_heapify_tiny),
         cmocka_unit_test(test_heapify),
         cmocka_unit_test(test_key_order),
     };

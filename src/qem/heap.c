@@ -100,7 +100,11 @@ void mr_heap_heapify(mr_heap *h)
 {
     for (uint32_t i = 0; i < h->size; i++)
         mr_heap_set_slot(h, (uint32_t)h->items[i], i);
-    for (uint32_t i = h->size / MR_HEAP_ARITY + 1; i-- > 0;)
+    /* from the last slot with a child down to the root (sift_down reads
+     * the item at its slot: never start past the end) */
+    if (h->size < 2)
+        return;
+    for (uint32_t i = (h->size - 2) / MR_HEAP_ARITY + 1; i-- > 0;)
         sift_down(h, i);
 }
 
