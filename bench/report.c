@@ -392,8 +392,12 @@ static int draw_plot(const plot *p, const char *path)
         return -1;
     const int ts = 3;               /* text scale on the canvas: 1.5x after filtering */
     const int tts = 2 * SS;         /* title */
-    /* Plot area (canvas pixels). */
-    double L = 80 * SS, R = (W - 200) * SS, T = 50 * SS, B = (H - 60) * SS;
+    /* Plot area (canvas pixels); the legend on the right as wide as its
+     * longest label needs. */
+    double legend = 200 * SS;
+    for (int i = 0; i < p->ns; i++)
+        legend = fmax(legend, 42 * SS + text_w(p->s[i].label, SS) + 12 * SS);
+    double L = 80 * SS, R = W * SS - legend, T = 50 * SS, B = (H - 60) * SS;
 
     double xl = INFINITY, xh = -INFINITY, yl = INFINITY, yh = -INFINITY;
     for (int i = 0; i < p->ns; i++)
@@ -829,8 +833,15 @@ int main(int argc, char **argv)
                "bounding-box diagonal; vertex similarity is the share of output vertices "
                "that the sequential greedy reference of the same collapse kind also has.\n\n");
     fprintf(f, "Meshes:");
-    for (int m = 0; m < r.n_meshes; m++)
-        fprintf(f, "%s `%s` (%s)", m ? "," : "", r.mesh_name[m], r.mesh_source[m]);
+    for (int m = 0; m < r.n_meshes; m++) {
+        /* a shared mesh by its file name: the path is this machine's */
+        const char *src = r.mesh_source[m];
+        const char *slash = strrchr(src, '/');
+        if (strncmp(src, "file:", 5) == 0 && slash)
+            fprintf(f, "%s `%s` (../shared/data/%s)", m ? "," : "", r.mesh_name[m], slash + 1);
+        else
+            fprintf(f, "%s `%s` (%s)", m ? "," : "", r.mesh_name[m], src);
+    }
     fprintf(f, ".\n\n## Threads\n\n![time vs threads](report/time-threads.png)\n\n"
                "![speedup vs threads](report/speedup-threads.png)\n\n"
                "## Ours vs peers\n\n![ours vs peers](report/peers.png)\n\n"
