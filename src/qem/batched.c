@@ -151,7 +151,8 @@ static size_t gather(mr_simplifier *s, double limit)
                 uint32_t r, k;
                 double target[3];
                 const double c = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
-                if (c <= limit && n < cap)
+                /* an infinite cost is a collapse that must not happen */
+                if (c <= limit && c < INFINITY && n < cap)
                     out[n++] = (uint64_t)float_key((float)c) << 32 | h;
             }
         });
@@ -213,7 +214,7 @@ static bool try_collapse(mr_simplifier *s, uint64_t c, double limit, double *wor
     uint32_t r, k;
     double target[3];
     const double cost = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
-    if (!(cost <= limit) || !mr_collapse_valid(m, r, k, target, &s->limits) ||
+    if (!(cost <= limit && cost < INFINITY) || !mr_collapse_valid(m, r, k, target, &s->limits) ||
         (s->attr_valid && !s->attr_valid(s, r, k)))
         return false;
     mr_simplifier_collapse(s, r, k, target);

@@ -66,8 +66,10 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
     const mr_collapse_mesh *m = &s->m;
     const uint8_t fu = m->flags[u], fw = m->flags[w];
     const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
-    if ((fu & pin) && (fw & pin) && (fu & MR_VF_LOCKED || fw & MR_VF_LOCKED))
+    if ((fu & pin) && (fw & pin) && (fu & MR_VF_LOCKED || fw & MR_VF_LOCKED)) {
+        x[0] = x[1] = x[2] = 0; /* no collapse: w stays where it is */
         return INFINITY;
+    }
     mr_quadric qu, qw;
     load_quadric(s, u, &qu);
     load_quadric(s, w, &qw);
