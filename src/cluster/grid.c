@@ -153,7 +153,8 @@ static inline bool within(const sweep *s, uint32_t a, uint32_t b)
     return s->strict ? d2 < s->eps2 : d2 <= s->eps2;
 }
 
-/* A thread's larger-neighbour lists, in the order it searched its blocks. */
+/* A thread's pairs within the radius, each as (smaller id, larger id), in
+ * the order it searched its blocks. */
 typedef struct edge_buf {
     uint32_t *data;
     size_t len, cap;
@@ -376,18 +377,11 @@ static void sort_list(uint32_t *list, size_t len)
  * rounding.
  */
 static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, int strict,
-                             const double *box, int threads, size_t *peak, mr_error *err)
+                             const double box[6], int threads, size_t *peak, mr_error *err)
 {
     memset(s, 0, sizeof *s);
     s->n = n;
-    double lo[3], hi[3];
-    if (box) {
-        memcpy(lo, box, sizeof lo);
-        memcpy(hi, box + 3, sizeof hi);
-    } else {
-        size_t bad;
-        mr_points_bounds(pos, n, threads, lo, hi, &bad);
-    }
+    const double *lo = box, *hi = box + 3;
     mr_grid grid;
     mr_grid_init(&grid, lo, hi, ROW_CELLS * eps * (1.0 + 1e-8));
     unsigned ax = 0;
@@ -524,7 +518,7 @@ static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, i
 }
 
 mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, double eps,
-                                int strict, const double *box, int threads, mr_error *err)
+                                int strict, const double box[6], int threads, mr_error *err)
 {
     memset(g, 0, sizeof *g);
     g->n = n;

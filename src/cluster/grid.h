@@ -29,13 +29,13 @@ typedef struct mr_radius_graph {
  * Build the graph of the n packed points `pos` for the radius eps >= 0:
  * i and j are neighbours when their squared distance, computed in double
  * as dx*dx + dy*dy + dz*dz, is <= eps*eps (or < eps*eps when strict).
- * Points must be finite (checked by the caller). `box` is their bounds as
- * lo[3] then hi[3] when the caller has them (else NULL: computed here).
- * Parallel with `threads` threads; the result does not depend on the
- * thread count. On failure the graph is left empty (safe to free).
+ * Points must be finite, and `box` their bounds as lo[3] then hi[3], both
+ * from the caller's mr_points_bounds. Parallel with `threads` threads; the
+ * result does not depend on the thread count. On failure the graph is left
+ * empty (safe to free).
  */
 mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, double eps,
-                                int strict, const double *box, int threads, mr_error *err);
+                                int strict, const double box[6], int threads, mr_error *err);
 void mr_radius_graph_free(mr_radius_graph *g);
 
 /* Axis-aligned bounds of packed points, in double; returns false (and the

@@ -187,6 +187,15 @@ void mr_edge_table_free(mr_edge_table *et);
 static inline uint32_t mr_edge_hi(uint64_t entry) { return (uint32_t)(entry >> 32); }
 static inline uint32_t mr_edge_corner(uint64_t entry) { return (uint32_t)entry; }
 
+/* Whether the half-edges of corners c0 and c1, both on the edge whose
+ * smaller end is lo, run it the same way: two triangles wound against
+ * each other across that edge. */
+static inline bool mr_edge_same_way(const uint32_t *indices, uint32_t c0, uint32_t c1,
+                                    uint32_t lo)
+{
+    return (indices[c0] == lo) == (indices[c1] == lo);
+}
+
 /* End of the run that starts at entry i of vertex lo's range. */
 static inline size_t mr_edge_run_end(const mr_edge_table *et, uint32_t lo, size_t i)
 {

@@ -403,11 +403,10 @@ mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
         return st;
     const uint32_t NO_LINK = UINT32_MAX;
     uint32_t *across = mr_alloc_array(3 * tc, sizeof *across);
-    uint32_t *queue = mr_alloc_array(tc, sizeof *queue);
-    uint32_t *part = mr_alloc_array(tc, sizeof *part); /* order of the walk */
-    uint8_t *flip = mr_alloc_array(tc, 1);             /* 2: not reached yet */
-    if (!across || !queue || !part || !flip) {
-        st = mr_fail_nomem(err, NULL, tc * 21);
+    uint32_t *queue = mr_alloc_array(tc, sizeof *queue); /* one part, in walk order */
+    uint8_t *flip = mr_alloc_array(tc, 1);               /* 2: not reached yet */
+    if (!across || !queue || !flip) {
+        st = mr_fail_nomem(err, NULL, tc * 17);
         goto done;
     }
     for (size_t c = 0; c < 3 * tc; c++)
@@ -419,7 +418,7 @@ mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
                 continue;
             const uint32_t c0 = mr_edge_corner(et.entries[i]);
             const uint32_t c1 = mr_edge_corner(et.entries[i + 1]);
-            const uint32_t same = (idx[c0] == lo) == (idx[c1] == lo);
+            const uint32_t same = mr_edge_same_way(idx, c0, c1, lo);
             across[c0] = (c1 / 3) << 1 | same;
             across[c1] = (c0 / 3) << 1 | same;
         }
@@ -430,13 +429,12 @@ mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
     for (size_t seed = 0; seed < tc; seed++) {
         if (flip[seed] != 2)
             continue;
-        size_t head = 0, tail = 0, count = 0;
+        size_t head = 0, tail = 0;
         bool orientable = true, closed = true;
         flip[seed] = 0;
         queue[tail++] = (uint32_t)seed;
         while (head < tail) {
             const uint32_t t = queue[head++];
-            part[count++] = t;
             for (uint32_t k = 0; k < 3; k++) {
                 const uint32_t link = across[3 * (size_t)t + k];
                 if (link == NO_LINK) {
@@ -462,17 +460,17 @@ mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
         uint8_t invert;
         if (closed) {
             double volume = 0;
-            for (size_t i = 0; i < count; i++) {
-                const uint32_t *tri = idx + 3 * (size_t)part[i];
+            for (size_t i = 0; i < tail; i++) {
+                const uint32_t *tri = idx + 3 * (size_t)queue[i];
                 const float *a = mesh->positions + 3 * (size_t)tri[0];
-                const float *b = mesh->positions + 3 * (size_t)tri[flip[part[i]] ? 2 : 1];
-                const float *c = mesh->positions + 3 * (size_t)tri[flip[part[i]] ? 1 : 2];
+                const float *b = mesh->positions + 3 * (size_t)tri[flip[queue[i]] ? 2 : 1];
+                const float *c = mesh->positions + 3 * (size_t)tri[flip[queue[i]] ? 1 : 2];
                 const double ab[3] = {(double)b[0] - a[0], (double)b[1] - a[1],
                                       (double)b[2] - a[2]};
                 const double ac[3] = {(double)c[0] - a[0], (double)c[1] - a[1],
                                       (double)c[2] - a[2]};
-                /* 6 x the signed volume of (origin at a's part, a, b, c):
-                 * a . (ab x ac) */
+                /* 6 x the signed volume of the tetrahedron (origin, a, b,
+                 * c): a . (ab x ac) */
                 volume += a[0] * (ab[1] * ac[2] - ab[2] * ac[1]) +
                           a[1] * (ab[2] * ac[0] - ab[0] * ac[2]) +
                           a[2] * (ab[0] * ac[1] - ab[1] * ac[0]);
@@ -480,12 +478,12 @@ mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
             invert = volume < 0;
         } else {
             size_t ones = 0;
-            for (size_t i = 0; i < count; i++)
-                ones += flip[part[i]];
-            invert = 2 * ones > count;
+            for (size_t i = 0; i < tail; i++)
+                ones += flip[queue[i]];
+            invert = 2 * ones > tail;
         }
-        for (size_t i = 0; i < count; i++) {
-            const uint32_t t = part[i];
+        for (size_t i = 0; i < tail; i++) {
+            const uint32_t t = queue[i];
             if ((flip[t] ^ invert) == 0)
                 continue;
             uint32_t *tri = idx + 3 * (size_t)t;
@@ -503,7 +501,6 @@ done:
     mr_edge_table_free(&et);
     free(across);
     free(queue);
-    free(part);
     free(flip);
     return st;
 }

@@ -222,9 +222,7 @@ static void scan_edges(topo *tp, mr_stats *s)
                 uf_union(tp->fan, corner_at(idx, c0, hi), corner_at(idx, c1, hi), par);
                 const uint32_t o0 = opposite(idx, run[0]), o1 = opposite(idx, run[1]);
                 dups += o0 == o1 && o0 > hi;
-                /* consistent winding: one half-edge runs lo -> hi, the
-                 * other hi -> lo */
-                misoriented += (idx[c0] == lo) == (idx[c1] == lo);
+                misoriented += mr_edge_same_way(idx, c0, c1, lo);
             } else {
                 nonmanifold++;
             }

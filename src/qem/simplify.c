@@ -739,8 +739,6 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         return st;
     mr_collapse_mesh *m = &s->m;
     s->input_vertices = m->live_vertices;
-    for (size_t v = 0; v < vertex_count; v++)
-        s->blocked_vertices += (m->flags[v] & MR_VF_NONMANIFOLD) != 0;
     st = mr_simplify_check_options(o, m->live_vertices, triangle_count, err);
     if (st != MR_OK) {
         mr_simplifier_free(s);
@@ -752,6 +750,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     double c = cos(o->max_normal_turn);
     s->limits.min_cos_turn = c > 0 ? c : 0;
     for (size_t v = 0; v < vertex_count; v++) {
+        s->blocked_vertices += (m->flags[v] & MR_VF_NONMANIFOLD) != 0;
         if (o->lock_border && (m->flags[v] & MR_VF_BOUNDARY))
             m->flags[v] |= MR_VF_LOCKED;
         if (o->vertex_lock && o->vertex_lock[v])
