@@ -104,12 +104,13 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
     }
     s->cand_cap = edges + 1;
     s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
-    s->cand_tmp = mr_alloc_array(s->cand_cap, sizeof *s->cand_tmp);
     s->mark = mr_calloc_array(m->vertex_count, 1);
     s->hist = mr_alloc_array(HIST_BUCKETS, sizeof *s->hist);
     s->best64 = mr_alloc_array(m->vertex_count, sizeof *s->best64);
-    if (!s->cand || !s->cand_tmp || !s->mark || !s->hist || !s->best64)
-        return mr_fail_nomem(err, NULL, s->cand_cap * 16 + m->vertex_count);
+    if (s->best64) /* the rounds keep every entry at UINT64_MAX between uses */
+        memset(s->best64, 0xFF, m->vertex_count * sizeof *s->best64);
+    if (!s->cand || !s->mark || !s->hist || !s->best64)
+        return mr_fail_nomem(err, NULL, s->cand_cap * sizeof *s->cand + m->vertex_count * 9);
     return MR_OK;
 }
 
@@ -128,7 +129,7 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
 }
 
 /* Every live edge whose collapse may happen (cost finite and within the
- * limit), as (cost key << 32 | half-edge), in vertex order. Returns how
+ * limit), with its ends and cost, in vertex order. Returns how
  * many were written (at most s->cand_cap). Edges at a vertex of more than
  * MR_COLLAPSE_MAX_DEGREE triangles are left out: they cannot collapse yet
  * (mr_collapse_valid), and as candidates the cheap ones would hold back
@@ -138,9 +139,26 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
 static size_t gather(mr_simplifier *s, double limit)
 {
     const mr_collapse_mesh *m = &s->m;
-    uint64_t *out = s->cand;
+    mr_candidate *out = s->cand;
     const size_t cap = s->cand_cap;
     size_t n = 0;
+    /* edges go through the cost kernel in batches, in gathering order */
+    enum { B = 256 };
+    uint32_t ea[B], eb[B];
+    double cost[B];
+    size_t nb = 0;
+#define FLUSH()                                                                       \
+    do {                                                                              \
+        if (nb == 0)                                                                  \
+            break;                                                                    \
+        mr_simplifier_edge_costs(s, nb, ea, eb, cost);                                \
+        for (size_t i = 0; i < nb; i++) {                                             \
+            /* an infinite cost is a collapse that must not happen */                 \
+            if (cost[i] <= limit && cost[i] < INFINITY && n < cap)                    \
+                out[n++] = (mr_candidate){float_key((float)cost[i]), ea[i], eb[i]};   \
+        }                                                                             \
+        nb = 0;                                                                       \
+    } while (0)
     for (uint32_t v = 0; v < m->vertex_count; v++) {
         if (m->flags[v] & MR_VF_REMOVED || m->count[v] > MR_COLLAPSE_MAX_DEGREE)
             continue;
@@ -148,15 +166,15 @@ static size_t gather(mr_simplifier *s, double limit)
             /* h runs a -> b: from v, or to v on a boundary edge */
             const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
             if (m->count[a] <= MR_COLLAPSE_MAX_DEGREE && m->count[b] <= MR_COLLAPSE_MAX_DEGREE) {
-                uint32_t r, k;
-                double target[3];
-                const double c = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
-                /* an infinite cost is a collapse that must not happen */
-                if (c <= limit && c < INFINITY && n < cap)
-                    out[n++] = (uint64_t)float_key((float)c) << 32 | h;
+                ea[nb] = a;
+                eb[nb] = b;
+                if (++nb == B)
+                    FLUSH();
             }
         });
     }
+    FLUSH();
+#undef FLUSH
     return n;
 }
 
@@ -167,7 +185,7 @@ static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
     uint32_t *hist = s->hist;
     memset(hist, 0, HIST_BUCKETS * sizeof *hist);
     for (size_t i = 0; i < n; i++)
-        hist[s->cand[i] >> 48]++;
+        hist[s->cand[i].key >> 16]++;
     size_t acc = 0;
     for (uint32_t b = 0; b < HIST_BUCKETS; b++) {
         acc += hist[b];
@@ -177,43 +195,56 @@ static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
     return UINT32_MAX;
 }
 
-/* Stable sort of a[0..n) by the key in the high 32 bits (11-bit digits;
- * keys are non-negative floats, so the top bit is 0). tmp holds n items.
- * Returns the array holding the result. */
-static uint64_t *sort_by_key(uint64_t *a, uint64_t *tmp, size_t n, uint32_t *hist)
+/* Candidates in order of cost; ties by their ends (an edge is one
+ * candidate, so the order is total). */
+static inline bool cand_less(const mr_candidate *x, const mr_candidate *y)
 {
-    for (unsigned shift = 32; shift < 64; shift += 11) {
-        const unsigned bits = shift + 11 <= 64 ? 11 : 64 - shift;
-        const uint32_t buckets = 1u << bits, mask = buckets - 1;
-        memset(hist, 0, buckets * sizeof *hist);
-        for (size_t i = 0; i < n; i++)
-            hist[(a[i] >> shift) & mask]++;
-        if (n == 0 || hist[(a[0] >> shift) & mask] == n)
-            continue; /* this digit is the same everywhere */
-        uint32_t sum = 0;
-        for (uint32_t b = 0; b < buckets; b++) {
-            const uint32_t c = hist[b];
-            hist[b] = sum;
-            sum += c;
-        }
-        for (size_t i = 0; i < n; i++)
-            tmp[hist[(a[i] >> shift) & mask]++] = a[i];
-        uint64_t *t = a;
-        a = tmp;
-        tmp = t;
+    if (x->key != y->key)
+        return x->key < y->key;
+    return x->a != y->a ? x->a < y->a : x->b < y->b;
+}
+
+static void sift_down(mr_candidate *a, size_t i, size_t n)
+{
+    const mr_candidate x = a[i];
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= n)
+            break;
+        if (c + 1 < n && cand_less(&a[c], &a[c + 1]))
+            c++;
+        if (!cand_less(&x, &a[c]))
+            break;
+        a[i] = a[c];
+        i = c;
     }
-    return a;
+    a[i] = x;
+}
+
+/* Heap sort of a[0..n) by cand_less, in place: the winners of a round are
+ * sorted only when they are more than the target needs, and then no
+ * second array of candidates is kept for it. */
+static void sort_candidates(mr_candidate *a, size_t n)
+{
+    if (n < 2)
+        return;
+    for (size_t i = n / 2; i-- > 0;)
+        sift_down(a, i, n);
+    for (size_t e = n - 1; e > 0; e--) {
+        const mr_candidate t = a[0];
+        a[0] = a[e];
+        a[e] = t;
+        sift_down(a, 0, e);
+    }
 }
 
 /* Apply the collapse of candidate c if it is still valid. */
-static bool try_collapse(mr_simplifier *s, uint64_t c, double limit, double *worst)
+static bool try_collapse(mr_simplifier *s, const mr_candidate *c, double limit, double *worst)
 {
     mr_collapse_mesh *m = &s->m;
-    const uint32_t h = (uint32_t)c;
-    const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
     uint32_t r, k;
     double target[3];
-    const double cost = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
+    const double cost = mr_simplifier_plan_edge(s, c->a, c->b, &r, &k, target);
     if (!(cost <= limit && cost < INFINITY) || !mr_collapse_valid(m, r, k, target, &s->limits) ||
         (s->attr_valid && !s->attr_valid(s, r, k)))
         return false;
@@ -244,74 +275,71 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
 
         /* This pass's candidates: up to the goal-th cheapest cost, with
          * slack, in gathering order. */
+        mr_candidate *cand = s->cand;
         const double goal = ceil(share * (double)needed_collapses(s, &g));
         size_t nsel = n;
         if (goal < (double)n) {
             const uint32_t kth = rank_key(s, n, (size_t)goal);
-            const float bound = key_float(kth) * PASS_SLACK;
-            const uint64_t lim = (uint64_t)float_key(bound) << 32 | 0xFFFFFFFFu;
+            const uint32_t lim = float_key(key_float(kth) * PASS_SLACK);
             nsel = 0;
             for (size_t i = 0; i < n; i++)
-                if (s->cand[i] <= lim)
-                    s->cand[nsel++] = s->cand[i];
+                if (cand[i].key <= lim)
+                    cand[nsel++] = cand[i];
         }
         const bool partial = nsel < n;
 
-        /* Rounds: a candidate cheaper (ties: smaller id) than every other
+        /* Rounds: a candidate cheaper (ties: earlier) than every other
          * candidate at its two ends collapses; its ends are then marked,
          * which retires the candidates around them, and the next round
          * looks again among the rest. Iterated, this takes the same edges
          * as taking them in order of cost, skipping those at a marked end;
          * but the collapses of a round run in gathering (vertex) order,
-         * so they walk the mesh in memory order. */
+         * so they walk the mesh in memory order. A candidate whose ends
+         * are both unmarked is still an edge of the mesh with its cost:
+         * only the ends of a collapse move, and the triangles it deletes
+         * hold both of them. */
         memset(s->mark, 0, m->vertex_count);
         size_t pass_done = 0;
         for (int round = 0, productive = 0;
              round < MAX_ROUNDS_TOTAL && productive < MAX_ROUNDS && nsel && !finished;
              round++) {
+            /* best[v]: the least (key, index) among v's candidates; every
+             * entry is UINT64_MAX between rounds */
             size_t live = 0;
             for (size_t i = 0; i < nsel; i++) {
-                const uint32_t h = (uint32_t)s->cand[i];
-                if (m->tris[h - h % 3] == NONE)
+                const mr_candidate c = cand[i];
+                if (s->mark[c.a] | s->mark[c.b])
                     continue;
-                const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
-                if (s->mark[a] | s->mark[b])
-                    continue;
-                best[a] = best[b] = UINT64_MAX;
-                s->cand[live++] = s->cand[i];
+                const uint64_t id = (uint64_t)c.key << 32 | live;
+                best[c.a] = id < best[c.a] ? id : best[c.a];
+                best[c.b] = id < best[c.b] ? id : best[c.b];
+                cand[live++] = c;
             }
             nsel = live;
-            for (size_t i = 0; i < nsel; i++) {
-                const uint64_t c = s->cand[i];
-                const uint32_t h = (uint32_t)c;
-                const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
-                best[a] = c < best[a] ? c : best[a];
-                best[b] = c < best[b] ? c : best[b];
-            }
             /* The winners, moved to the front (the rest keep their order
              * behind them). Winners share no end, and a collapse changes
              * only its own ends and the triangles on its edge, so each
              * winner's cost is still exact when it is applied. */
             size_t wins = 0;
             for (size_t i = 0; i < nsel; i++) {
-                const uint64_t c = s->cand[i];
-                const uint32_t h = (uint32_t)c;
-                const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
-                if (best[a] == c && best[b] == c) {
-                    s->cand[i] = s->cand[wins];
-                    s->cand[wins++] = c;
+                const mr_candidate c = cand[i];
+                const uint64_t id = (uint64_t)c.key << 32 | i;
+                if (best[c.a] == id && best[c.b] == id) {
+                    cand[i] = cand[wins];
+                    cand[wins++] = c;
                 }
             }
+            for (size_t i = 0; i < nsel; i++)
+                best[cand[i].a] = best[cand[i].b] = UINT64_MAX;
             if (wins == 0)
                 break;
             /* When the winners are more than the target needs, the
              * cheapest go first. */
-            const uint64_t *order = s->cand;
             if (wins > needed_collapses(s, &g))
-                order = sort_by_key(s->cand, s->cand_tmp, wins, s->hist);
+                sort_candidates(cand, wins);
             size_t round_done = 0;
             for (size_t i = 0; i < wins; i++) {
-                if (!try_collapse(s, order[i], g.limit, &worst)) {
+                if (!try_collapse(s, &cand[i], g.limit, &worst)) {
                     /* Out of the pass: mark nothing, so that the other
                      * candidates at its ends can win the next round. */
                     continue;
@@ -332,11 +360,9 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             pass_done += round_done;
             productive += round_done > wins - round_done;
             /* Winners that failed validity leave the candidates. */
-            if (order != s->cand)
-                memcpy(s->cand, order, wins * sizeof *order);
             size_t keep = 0;
             for (size_t i = wins; i < nsel; i++)
-                s->cand[keep++] = s->cand[i];
+                cand[keep++] = cand[i];
             nsel = keep;
         }
         if (pass_done == 0) {

@@ -275,46 +275,53 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
 
 /* ---- validity -------------------------------------------------------------- */
 
-/* Does triangle tri -- with the vertex at corner `moved` replaced by `to`
- * -- keep its normal within the limit, and its area? */
-static bool triangle_ok(const mr_collapse_mesh *m, const uint32_t *tri, uint32_t moved,
-                        const double to[3], double min_cos)
+/*
+ * Condition (2) for n triangles (o, a, b) of the fans, o the vertex that
+ * moves to t: in[k * RING + i] holds, for triangle i, the coordinates of
+ * o (k = 0..2), a (3..5) and b (6..8). Each normal may turn by an angle
+ * whose cosine is at least min_cos (never flip) and the area may not
+ * collapse (ratio 1e-6). Unnormalised normals (twice the area): the tests
+ * are the unit normals' cos > min_cos and the area ratio, squared, without
+ * a square root or a division; a degenerate normal is 0 and fails. A
+ * branch-free loop, vectorised.
+ */
+#define RING (2 * MR_COLLAPSE_MAX_DEGREE)
+
+MR_VECTOR_CLONES static bool fan_ok(const double *in, size_t n, const double t[3],
+                                    double min_cos)
 {
-    double p[3][3], q[3][3];
+    const double mc2 = min_cos * min_cos;
+    int bad = 0;
+#pragma omp simd reduction(| : bad)
+    for (size_t i = 0; i < n; i++) {
+        const double ox = in[i], oy = in[RING + i], oz = in[2 * RING + i];
+        const double ax = in[3 * RING + i], ay = in[4 * RING + i], az = in[5 * RING + i];
+        const double bx = in[6 * RING + i], by = in[7 * RING + i], bz = in[8 * RING + i];
+        const double u0 = ax - ox, u1 = ay - oy, u2 = az - oz;
+        const double v0 = bx - ox, v1 = by - oy, v2 = bz - oz;
+        const double n00 = u1 * v2 - u2 * v1, n01 = u2 * v0 - u0 * v2, n02 = u0 * v1 - u1 * v0;
+        const double s0 = ax - t[0], s1 = ay - t[1], s2 = az - t[2];
+        const double w0 = bx - t[0], w1 = by - t[1], w2 = bz - t[2];
+        const double n10 = s1 * w2 - s2 * w1, n11 = s2 * w0 - s0 * w2, n12 = s0 * w1 - s1 * w0;
+        const double d = n00 * n10 + n01 * n11 + n02 * n12;
+        const double l0 = n00 * n00 + n01 * n01 + n02 * n02;
+        const double l1 = n10 * n10 + n11 * n11 + n12 * n12;
+        bad |= !((d > 0) & (d * d > mc2 * l0 * l1) & (l1 > 1e-12 * l0));
+    }
+    return !bad;
+}
+
+/* Appends triangle (o, a, b) to fan_ok's input. */
+static inline void fan_add(const mr_collapse_mesh *m, double *in, size_t i, uint32_t o,
+                           uint32_t a, uint32_t b)
+{
+    const float *po = m->pos + 3 * (size_t)o, *pa = m->pos + 3 * (size_t)a,
+                *pb = m->pos + 3 * (size_t)b;
     for (int k = 0; k < 3; k++) {
-        mr_collapse_load(m, tri[k], p[k]);
-        q[k][0] = p[k][0];
-        q[k][1] = p[k][1];
-        q[k][2] = p[k][2];
+        in[k * RING + i] = po[k];
+        in[(3 + k) * RING + i] = pa[k];
+        in[(6 + k) * RING + i] = pb[k];
     }
-    q[moved][0] = to[0];
-    q[moved][1] = to[1];
-    q[moved][2] = to[2];
-    /* Unnormalised normals (twice the area): the tests below are the unit
-     * normals' cos > min_cos and area ratio > 1e-6, squared, without a
-     * square root or a division. A degenerate normal is 0 and fails. */
-    double n0[3], n1[3];
-    {
-        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        const double v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        n0[0] = u[1] * v[2] - u[2] * v[1];
-        n0[1] = u[2] * v[0] - u[0] * v[2];
-        n0[2] = u[0] * v[1] - u[1] * v[0];
-    }
-    {
-        const double u[3] = {q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
-        const double v[3] = {q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
-        n1[0] = u[1] * v[2] - u[2] * v[1];
-        n1[1] = u[2] * v[0] - u[0] * v[2];
-        n1[2] = u[0] * v[1] - u[1] * v[0];
-    }
-    const double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
-    const double l0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2];
-    const double l1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2];
-    if (!(d > 0) || !(d * d > min_cos * min_cos * l0 * l1))
-        return false;
-    /* Near-degenerate afterwards: a relative collapse of the area. */
-    return l1 > 1e-12 * l0;
 }
 
 /* Corner id e = 3t + j: its triangle's vertices, and the vertices after and
@@ -398,6 +405,8 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                 return false;
         }
     }
+    double fan[9 * RING];
+    size_t nf = 0;
     for (uint32_t i = 0; i < nu; i++) {
         const uint32_t a = nua[i], b = nub[i];
         if (a == v || b == v)
@@ -411,19 +420,17 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                     return false;
             }
         }
-        /* (2) the triangle's normal under the move of u. */
-        if (!triangle_ok(m, CORNER_TRI(m, lu[i]), lu[i] % 3, t, limits->min_cos_turn))
-            return false;
+        /* (2) the triangle's normal under the move of u */
+        fan_add(m, fan, nf++, u, a, b);
     }
     if (!v_stays) {
         for (uint32_t i = 0; i < nv; i++) {
-            if (nbv[2 * i] == u || nbv[2 * i + 1] == u)
-                continue;
-            if (!triangle_ok(m, CORNER_TRI(m, lv[i]), lv[i] % 3, t, limits->min_cos_turn))
-                return false;
+            const uint32_t a = nbv[2 * i], b = nbv[2 * i + 1];
+            if (a != u && b != u)
+                fan_add(m, fan, nf++, v, a, b);
         }
     }
-    return true;
+    return fan_ok(fan, nf, t, limits->min_cos_turn);
 }
 
 /* ---- apply ------------------------------------------------------------------ */

@@ -57,15 +57,121 @@ static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *
 }
 
 /*
- * The full collapse of edge (u, w): the merged quadric relative to w's
- * position, the target relative to w (x) and the cost. Locked (or, with
- * attributes, seam) ends pin the target.
+ * The full collapse of an edge (u, w) with no pinned end: u's quadric moved
+ * to w's origin and added to w's, the target x (relative to w) at the
+ * optimum of the sum or, where the system is ill-conditioned or its optimum
+ * lies far from the edge, at the best point of the edge; returns the cost.
+ * Input k of the edge is in[k * st] (FREE_*), x[k] is x[k * xst]. Written without branches (every quotient is
+ * computed, then selected), so that a loop over edges vectorises
+ * (mr_simplifier_edge_costs); the scalar path calls the same code, so both
+ * give the same bits.
+ */
+enum { FREE_QU = 0, FREE_QW = 11, FREE_PU = 22, FREE_PW = 25, FREE_INPUTS = 28 };
+
+static inline __attribute__((always_inline)) double free_cost(const float *in, size_t st,
+                                                              double *x, size_t xst)
+{
+#define IN(k) ((double)in[(size_t)(k) * st])
+    const double d0 = IN(FREE_PU) - IN(FREE_PW);
+    const double d1 = IN(FREE_PU + 1) - IN(FREE_PW + 1);
+    const double d2 = IN(FREE_PU + 2) - IN(FREE_PW + 2);
+    const double k0 = -d0, k1 = -d1, k2 = -d2; /* u's origin seen from w */
+    double a00 = IN(0), a01 = IN(1), a02 = IN(2), a11 = IN(3), a12 = IN(4), a22 = IN(5);
+    double b0 = IN(6), b1 = IN(7), b2 = IN(8), c = IN(9), w = IN(10);
+    /* shift u's quadric by k (mr_quadric_shift) */
+    const double ad0 = a00 * k0 + a01 * k1 + a02 * k2;
+    const double ad1 = a01 * k0 + a11 * k1 + a12 * k2;
+    const double ad2 = a02 * k0 + a12 * k1 + a22 * k2;
+    c += k0 * ad0 + k1 * ad1 + k2 * ad2 + 2 * (b0 * k0 + b1 * k1 + b2 * k2);
+    b0 += ad0;
+    b1 += ad1;
+    b2 += ad2;
+    /* add w's (mr_quadric_add) */
+    a00 += IN(FREE_QW + 0); a01 += IN(FREE_QW + 1); a02 += IN(FREE_QW + 2);
+    a11 += IN(FREE_QW + 3); a12 += IN(FREE_QW + 4); a22 += IN(FREE_QW + 5);
+    b0 += IN(FREE_QW + 6); b1 += IN(FREE_QW + 7); b2 += IN(FREE_QW + 8);
+    c += IN(FREE_QW + 9);
+    w += IN(FREE_QW + 10);
+#undef IN
+    /* the optimum (mr_quadric_optimum) */
+    const double c00 = a11 * a22 - a12 * a12;
+    const double c01 = a02 * a12 - a01 * a22;
+    const double c02 = a01 * a12 - a02 * a11;
+    const double det = a00 * c00 + a01 * c01 + a02 * c02;
+    const double diag = a00 * a11 * a22;
+    const double c11 = a00 * a22 - a02 * a02;
+    const double c12 = a01 * a02 - a00 * a12;
+    const double c22 = a00 * a11 - a01 * a01;
+    const double inv = -1.0 / det;
+    const double o0 = inv * (c00 * b0 + c01 * b1 + c02 * b2);
+    const double o1 = inv * (c01 * b0 + c11 * b1 + c12 * b2);
+    const double o2 = inv * (c02 * b0 + c12 * b1 + c22 * b2);
+    /* an optimum far from the edge comes from a barely conditioned system */
+    const double len2 = d0 * d0 + d1 * d1 + d2 * d2;
+    const double e0 = o0 - 0.5 * d0, e1 = o1 - 0.5 * d1, e2 = o2 - 0.5 * d2;
+    const bool ok = (fabs(det) > MR_QUADRIC_DET_EPS * diag) & (diag > 0) &
+                    (e0 * e0 + e1 * e1 + e2 * e2 <= 4 * len2);
+    /* the best point of the edge from w (0) to u (d):
+     * mr_quadric_segment_optimum */
+    const double z = 0;
+    const double sd0 = d0 - z, sd1 = d1 - z, sd2 = d2 - z;
+    const double sa0 = a00 * sd0 + a01 * sd1 + a02 * sd2;
+    const double sa1 = a01 * sd0 + a11 * sd1 + a12 * sd2;
+    const double sa2 = a02 * sd0 + a12 * sd1 + a22 * sd2;
+    const double dad = sd0 * sa0 + sd1 * sa1 + sd2 * sa2;
+    const double g = z * sa0 + z * sa1 + z * sa2 + b0 * sd0 + b1 * sd1 + b2 * sd2;
+    const double sq = -g / dad;
+    const double s0 = sq < 0 ? 0 : sq;
+    const double sc = s0 > 1 ? 1 : s0;
+    const double sg0 = g < 0 ? 1 : 0.5;
+    const double sg = g > 0 ? 0 : sg0;
+    const double s = dad > 0 ? sc : sg;
+    const double x0 = ok ? o0 : z + s * sd0;
+    const double x1 = ok ? o1 : z + s * sd1;
+    const double x2 = ok ? o2 : z + s * sd2;
+    x[0] = x0;
+    x[xst] = x1;
+    x[2 * xst] = x2;
+    /* its cost (mr_quadric_eval) */
+    const double ax = a00 * x0 + a01 * x1 + a02 * x2;
+    const double ay = a01 * x0 + a11 * x1 + a12 * x2;
+    const double az = a02 * x0 + a12 * x1 + a22 * x2;
+    const double q = x0 * ax + x1 * ay + x2 * az + 2 * (b0 * x0 + b1 * x1 + b2 * x2) + c;
+    const double qn = q / w;
+    const double err = w > 0 ? qn : 0;
+    return err > 0 ? err : 0;
+}
+
+/* Gathers free_cost's inputs for edge (u, w) into in[k * st]. */
+static inline void free_cost_inputs(const mr_simplifier *s, uint32_t u, uint32_t w, float *in,
+                                    size_t st)
+{
+    const float *qu = &s->q[u].a00, *qw = &s->q[w].a00;
+    for (int k = 0; k < 11; k++) {
+        in[(size_t)(FREE_QU + k) * st] = qu[k];
+        in[(size_t)(FREE_QW + k) * st] = qw[k];
+    }
+    const float *pu = s->m.pos + 3 * (size_t)u, *pw = s->m.pos + 3 * (size_t)w;
+    for (int k = 0; k < 3; k++) {
+        in[(size_t)(FREE_PU + k) * st] = pu[k];
+        in[(size_t)(FREE_PW + k) * st] = pw[k];
+    }
+}
+
+/*
+ * The full collapse of edge (u, w): the target relative to w's position
+ * (x) and the cost. Locked (or, with attributes, seam) ends pin the target.
  */
 static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x[3])
 {
     const mr_collapse_mesh *m = &s->m;
     const uint8_t fu = m->flags[u], fw = m->flags[w];
     const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
+    if (!((fu | fw) & pin)) {
+        float in[FREE_INPUTS];
+        free_cost_inputs(s, u, w, in, 1);
+        return free_cost(in, 1, x, 1);
+    }
     if ((fu & pin) && (fw & pin) && (fu & MR_VF_LOCKED || fw & MR_VF_LOCKED)) {
         x[0] = x[1] = x[2] = 0; /* no collapse: w stays where it is */
         return INFINITY;
@@ -87,23 +193,10 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
         x[2] = d[2];
     } else if ((fw & pin) && !(fu & pin)) {
         x[0] = x[1] = x[2] = 0;
-    } else if ((fu & pin) && (fw & pin)) {
+    } else {
         /* two seam (not locked) ends: stay on the seam's edge */
         const double zero[3] = {0, 0, 0};
         mr_quadric_segment_optimum(&qu, zero, d, x);
-    } else {
-        const double len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        bool ok = mr_quadric_optimum(&qu, x);
-        if (ok) {
-            /* An optimum far from the edge comes from a barely conditioned
-             * system: do not trust it. */
-            const double e[3] = {x[0] - 0.5 * d[0], x[1] - 0.5 * d[1], x[2] - 0.5 * d[2]};
-            ok = e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= 4 * len2;
-        }
-        if (!ok) {
-            const double zero[3] = {0, 0, 0};
-            mr_quadric_segment_optimum(&qu, zero, d, x);
-        }
     }
     double err = mr_quadric_eval(&qu, x);
     err = qu.w > 0 ? err / qu.w : 0;
@@ -394,6 +487,57 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
     return a_goes ? ca : cb;
 }
 
+/* Edges per batch of mr_simplifier_edge_costs' vector loop. */
+#define COST_BATCH 64
+
+/* The vector loop: costs of n <= COST_BATCH free edges whose inputs are in
+ * in[k * COST_BATCH + i]. */
+MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost)
+{
+    double x[3 * COST_BATCH];
+#pragma omp simd
+    for (size_t i = 0; i < n; i++)
+        cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH);
+}
+
+void mr_simplifier_edge_costs(const mr_simplifier *s, size_t n, const uint32_t *a,
+                              const uint32_t *b, double *cost)
+{
+    if (s->half) {
+        for (size_t i = 0; i < n; i++) {
+            uint32_t r, k;
+            double target[3];
+            cost[i] = mr_simplifier_plan_edge(s, a[i], b[i], &r, &k, target);
+        }
+        return;
+    }
+    const mr_collapse_mesh *m = &s->m;
+    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
+    float in[FREE_INPUTS * COST_BATCH];
+    double out[COST_BATCH];
+    uint32_t lane[COST_BATCH];
+    for (size_t i0 = 0; i0 < n; i0 += COST_BATCH) {
+        const size_t i1 = n - i0 < COST_BATCH ? n : i0 + COST_BATCH;
+        size_t nl = 0;
+        for (size_t i = i0; i < i1; i++) {
+            const uint32_t ea = a[i], eb = b[i];
+            if ((m->flags[ea] | m->flags[eb]) & pin) {
+                uint32_t r, k;
+                double target[3];
+                cost[i] = plan_edge(s, ea, eb, &r, &k, target);
+                continue;
+            }
+            /* plan_edge: the larger id goes */
+            const uint32_t r = ea < eb ? eb : ea, k = ea < eb ? ea : eb;
+            free_cost_inputs(s, r, k, in + nl, COST_BATCH);
+            lane[nl++] = (uint32_t)(i - i0);
+        }
+        free_costs(in, nl, out);
+        for (size_t l = 0; l < nl; l++)
+            cost[i0 + lane[l]] = out[l];
+    }
+}
+
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
 {
     if (s->attr_apply)
@@ -574,45 +718,68 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
 
 /* ---- setup ----------------------------------------------------------------- */
 
+/* Per triangle, for the initial quadrics: g = c / sqrt(2 |c|) for the
+ * cross product c of its edges, so that g g^T = area * n n^T with the unit
+ * normal n = c / |c| and the area |c| / 2; and the area. */
+typedef struct tri_plane {
+    float g[3], area;
+} tri_plane;
+
+static void triangle_plane(const mr_collapse_mesh *m, size_t t, tri_plane *out)
+{
+    const uint32_t *tri = m->tris + 3 * t;
+    out->g[0] = out->g[1] = out->g[2] = out->area = 0;
+    if (tri[0] == NONE)
+        return;
+    double p[3][3];
+    for (int k = 0; k < 3; k++)
+        mr_collapse_load(m, tri[k], p[k]);
+    const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                         u[0] * w[1] - u[1] * w[0]};
+    const double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    if (!(len > 0))
+        return; /* no area, no normal: nothing to add */
+    const double f = 1.0 / sqrt(2 * len);
+    out->g[0] = (float)(f * c[0]);
+    out->g[1] = (float)(f * c[1]);
+    out->g[2] = (float)(f * c[2]);
+    out->area = (float)(0.5 * len);
+}
+
 /* Initial quadric of v, relative to v's position: the planes of its
  * triangles (all through v) and the constraint planes of its boundary
  * edges. */
-static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight)
+static void initial_quadric(mr_simplifier *s, const tri_plane *planes, uint32_t v,
+                            double boundary_weight)
 {
     const mr_collapse_mesh *m = &s->m;
     mr_quadric q;
     mr_quadric_zero(&q);
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
-    double pv[3];
-    mr_collapse_load(m, v, pv);
     const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
     for (uint32_t i = 0; i < m->count[v]; i++) {
-        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
-        double p[3][3];
-        for (int k = 0; k < 3; k++)
-            mr_collapse_load(m, tri[k], p[k]);
-        /* area * n n^T for the unit normal n = c / |c| and area |c| / 2 of
-         * the cross product c: c c^T / (2 |c|), one division */
-        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                             u[0] * w[1] - u[1] * w[0]};
-        const double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        if (!(len > 0))
-            continue; /* no area, no normal: nothing to add */
-        const double f = 0.5 / len;
-        q.a00 += f * c[0] * c[0];
-        q.a01 += f * c[0] * c[1];
-        q.a02 += f * c[0] * c[2];
-        q.a11 += f * c[1] * c[1];
-        q.a12 += f * c[1] * c[2];
-        q.a22 += f * c[2] * c[2];
-        q.w += 0.5 * len;
+        const tri_plane *tp = &planes[list[i] / 3];
+        if (!(tp->area > 0))
+            continue;
+        const double g[3] = {tp->g[0], tp->g[1], tp->g[2]};
+        q.a00 += g[0] * g[0];
+        q.a01 += g[0] * g[1];
+        q.a02 += g[0] * g[2];
+        q.a11 += g[1] * g[1];
+        q.a12 += g[1] * g[2];
+        q.a22 += g[2] * g[2];
+        q.w += tp->area;
         if (!border)
             continue;
-        const double n[3] = {c[0] / len, c[1] / len, c[2] / len};
+        const double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        const double n[3] = {g[0] / gl, g[1] / gl, g[2] / gl};
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
         const uint32_t k = list[i] % 3;
         const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
+        double pv[3];
+        mr_collapse_load(m, v, pv);
         for (int e = 0; e < 2; e++) {
             if (mr_collapse_edge_triangles(m, v, ends[e]) != 1)
                 continue;
@@ -636,7 +803,6 @@ void mr_simplifier_free(mr_simplifier *s)
     free(s->best);
     free(s->stale);
     free(s->cand);
-    free(s->cand_tmp);
     free(s->mark);
     free(s->hist);
     free(s->best64);
@@ -779,14 +945,27 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
             return st;
         }
     }
-    /* A gather over each vertex's own triangles, writing only its own
-     * quadric: the same result on any number of threads. */
+    /* Each triangle's plane once, then a gather over each vertex's own
+     * triangles, writing only its own quadric: the same result on any
+     * number of threads. */
+    tri_plane *planes = mr_alloc_array(triangle_count, sizeof *planes);
+    if (!planes) {
+        mr_simplifier_free(s);
+        return mr_fail_nomem(err, NULL, triangle_count * sizeof *planes);
+    }
     const int nthreads = mr_thread_count(o->threads);
-    const ptrdiff_t nv = (ptrdiff_t)vertex_count;
-#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
-    for (ptrdiff_t v = 0; v < nv; v++)
-        if (!(m->flags[v] & MR_VF_REMOVED))
-            initial_quadric(s, (uint32_t)v, o->boundary_weight);
+    const ptrdiff_t nv = (ptrdiff_t)vertex_count, nt = (ptrdiff_t)triangle_count;
+#pragma omp parallel num_threads(nthreads) if (nthreads > 1 && nv > 65536)
+    {
+#pragma omp for schedule(static)
+        for (ptrdiff_t t = 0; t < nt; t++)
+            triangle_plane(m, (size_t)t, &planes[t]);
+#pragma omp for schedule(static)
+        for (ptrdiff_t v = 0; v < nv; v++)
+            if (!(m->flags[v] & MR_VF_REMOVED))
+                initial_quadric(s, planes, (uint32_t)v, o->boundary_weight);
+    }
+    free(planes);
     return MR_OK;
 }
 

@@ -12,6 +12,11 @@
 
 typedef struct mr_simplifier mr_simplifier;
 
+/* batched.c: an edge (a, b) of a pass and the bits of its (float) cost. */
+typedef struct mr_candidate {
+    uint32_t key, a, b;
+} mr_candidate;
+
 struct mr_simplifier {
     mr_collapse_mesh m;
     mr_quadricf *q;          /* per vertex, relative to its position */
@@ -21,7 +26,7 @@ struct mr_simplifier {
     mr_collapse_limits limits;
     int half;
     int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
-    uint64_t *cand, *cand_tmp; /* batched: a pass's edges (cost << 32 | h) */
+    struct mr_candidate *cand; /* batched: a pass's edges */
     size_t cand_cap;
     uint8_t *mark;           /* batched: per vertex, changed in this pass */
     uint32_t *hist;          /* batched: histogram */
@@ -61,6 +66,10 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
  * when it may not happen). Symmetric in a and b. */
 double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
                                uint32_t *k, double target[3]);
+/* The costs mr_simplifier_plan_edge gives edges (a[i], b[i]), the same
+ * bits, for n edges at once (free edges in a vector loop). */
+void mr_simplifier_edge_costs(const mr_simplifier *s, size_t n, const uint32_t *a,
+                              const uint32_t *b, double *cost);
 /* Apply a valid planned collapse: attribute hook, quadrics, mesh. */
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
 mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
