@@ -395,11 +395,17 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         nbv[nn++] = corner_next(tri, j);
         nbv[nn++] = corner_prev(tri, j);
     }
+    /* Around an inner manifold vertex every neighbour is the vertex after
+     * it in exactly one triangle: then the vertices after u (in its
+     * triangles off the edge; the one after u in an edge triangle is v or
+     * an opposite vertex) and after v are all the neighbours. */
+    const bool inner = !((fu | fv) & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD));
+    const uint32_t step = inner ? 2 : 1;
     for (uint32_t i = 0; i < nu; i++) {
-        const uint32_t a = nua[i], b = nub[i];
-        if (a == v || b == v)
+        const uint32_t a = nua[i], b = inner ? a : nub[i];
+        if (a == v || nub[i] == v)
             continue;
-        for (uint32_t j = 0; j < nn; j++) {
+        for (uint32_t j = 0; j < nn; j += step) {
             const uint32_t x = nbv[j];
             if ((x == a || x == b) && x != opp[0] && x != opp[1])
                 return false;
