@@ -876,20 +876,29 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     if (st != MR_OK)
         return st;
 
-    /* Bounding box of the referenced vertices. */
+    /* Bounding box of the referenced vertices: each vertex once. */
+    uint8_t *used = mr_calloc_array(vertex_count, 1);
+    if (!used)
+        return mr_fail_nomem(err, NULL, vertex_count);
+    for (size_t i = 0; i < 3 * triangle_count; i++)
+        used[indices[i]] = 1;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < 3 * triangle_count; i++) {
+    for (size_t v = 0; v < vertex_count; v++) {
+        if (!used[v])
+            continue;
         float p[3];
-        memcpy(p, (const char *)positions + (size_t)indices[i] * stride, sizeof p);
+        memcpy(p, (const char *)positions + v * stride, sizeof p);
+        if (!is_finite(p[0]) || !is_finite(p[1]) || !is_finite(p[2])) {
+            free(used);
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                                 "simplify: vertex %zu has a non-finite coordinate", v);
+        }
         for (int k = 0; k < 3; k++) {
-            if (!is_finite(p[k]))
-                return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                                     "simplify: vertex %u has a non-finite coordinate",
-                                     indices[i]);
             lo[k] = p[k] < lo[k] ? p[k] : lo[k];
             hi[k] = p[k] > hi[k] ? p[k] : hi[k];
         }
     }
+    free(used);
     double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                        (hi[2] - lo[2]) * (hi[2] - lo[2]));
     if (!(diag > 0))
