@@ -66,11 +66,13 @@ static inline float key_float(uint32_t u)
 }
 
 /*
- * Runs the block once, with h set, for every live edge: the half-edge h from its smaller
- * end (an inner edge's other half-edge runs from the larger end), or, for a
- * boundary edge whose only half-edge runs from the larger end, that one.
+ * Runs the block once for every live edge at v whose smaller end is v, with
+ * (a, b) the edge along a half-edge of the mesh: v and the vertex after it
+ * in one of its triangles (an inner edge's other half-edge runs from the
+ * larger end), or, for a boundary edge whose only half-edge runs from the
+ * larger end, that end and v.
  */
-#define FOR_EACH_EDGE(m, v, h, ...)                                                   \
+#define FOR_EACH_EDGE(m, v, a, b, ...)                                                \
     do {                                                                               \
         const uint32_t *list_ = mr_collapse_vertex_tris((m), (v));                     \
         const bool vb_ = ((m)->flags[(v)] & MR_VF_BOUNDARY) != 0;                      \
@@ -78,15 +80,14 @@ static inline float key_float(uint32_t u)
             const uint32_t c_ = list_[i_], j_ = c_ % 3, base_ = c_ - j_;               \
             const uint32_t nx_ = (m)->tris[base_ + (j_ == 2 ? 0 : j_ + 1)];            \
             if ((v) < nx_) {                                                           \
-                const uint32_t h = c_;                                                 \
+                const uint32_t a = (v), b = nx_;                                       \
                 __VA_ARGS__                                                            \
             }                                                                          \
             if (vb_) {                                                                 \
-                const uint32_t jp_ = j_ == 0 ? 2 : j_ - 1;                             \
-                const uint32_t pv_ = (m)->tris[base_ + jp_];                           \
+                const uint32_t pv_ = (m)->tris[base_ + (j_ == 0 ? 2 : j_ - 1)];        \
                 if ((v) < pv_ && ((m)->flags[pv_] & MR_VF_BOUNDARY) &&                 \
                     mr_collapse_edge_triangles((m), (v), pv_) == 1) {                  \
-                    const uint32_t h = base_ + jp_;                                    \
+                    const uint32_t a = pv_, b = (v);                                   \
                     __VA_ARGS__                                                        \
                 }                                                                      \
             }                                                                          \
@@ -100,7 +101,7 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
     for (uint32_t v = 0; v < m->vertex_count; v++) {
         if (m->flags[v] & MR_VF_REMOVED)
             continue;
-        FOR_EACH_EDGE(m, v, h, { (void)h; edges++; });
+        FOR_EACH_EDGE(m, v, a, b, { (void)a, (void)b, edges++; });
     }
     s->cand_cap = edges + 1;
     s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
@@ -162,10 +163,9 @@ static size_t gather(mr_simplifier *s, double limit)
     for (uint32_t v = 0; v < m->vertex_count; v++) {
         if (m->flags[v] & MR_VF_REMOVED || m->count[v] > MR_COLLAPSE_MAX_DEGREE)
             continue;
-        FOR_EACH_EDGE(m, v, h, {
-            /* h runs a -> b: from v, or to v on a boundary edge */
-            const uint32_t a = m->tris[h], b = mr_collapse_he_dst(m, h);
-            if (m->count[a] <= MR_COLLAPSE_MAX_DEGREE && m->count[b] <= MR_COLLAPSE_MAX_DEGREE) {
+        FOR_EACH_EDGE(m, v, a, b, {
+            /* v's own count is checked above */
+            if (m->count[a == v ? b : a] <= MR_COLLAPSE_MAX_DEGREE) {
                 ea[nb] = a;
                 eb[nb] = b;
                 if (++nb == B)
