@@ -192,7 +192,8 @@ static void test_batched_sharp_creases(void **state)
 }
 
 /* The cost kernel over batches of edges (vectorised for free ends, scalar
- * for pinned ones) gives each edge exactly the cost of the one-edge path,
+ * for pinned ones) gives each edge exactly the plan of the one-edge path
+ * (cost, ends, target),
  * bit for bit, for full and half collapses, with locked vertices in the
  * mix, before and after some collapses have moved vertices and merged
  * quadrics. */
@@ -230,13 +231,18 @@ static void test_edge_cost_kernel(void **state)
                     b[n++] = tri[(k + 1) % 3];
                 }
             }
-            mr_simplifier_edge_costs(&s, n, a, b, cost);
+            uint32_t *pr = malloc(cap * sizeof *pr), *pk = malloc(cap * sizeof *pk);
+            double *pt = malloc(3 * cap * sizeof *pt);
+            mr_simplifier_plan_edges(&s, n, a, b, cost, pr, pk, pt);
             size_t finite = 0;
             for (size_t i = 0; i < n; i++) {
                 uint32_t r, k;
                 double target[3];
                 const double c = mr_simplifier_plan_edge(&s, a[i], b[i], &r, &k, target);
                 assert_memory_equal(&c, &cost[i], sizeof c);
+                assert_int_equal(r, pr[i]);
+                assert_int_equal(k, pk[i]);
+                assert_memory_equal(target, pt + 3 * i, sizeof target);
                 finite += c < INFINITY;
             }
             assert_true(finite > n / 2);
@@ -244,6 +250,9 @@ static void test_edge_cost_kernel(void **state)
             free(a);
             free(b);
             free(cost);
+            free(pr);
+            free(pk);
+            free(pt);
             if (round == 0) {
                 /* move things: a few thousand valid collapses */
                 size_t done = 0;

@@ -152,7 +152,7 @@ static size_t gather(mr_simplifier *s, double limit)
     do {                                                                              \
         if (nb == 0)                                                                  \
             break;                                                                    \
-        mr_simplifier_edge_costs(s, nb, ea, eb, cost);                                \
+        mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);                                \
         for (size_t i = 0; i < nb; i++) {                                             \
             /* an infinite cost is a collapse that must not happen */                 \
             if (cost[i] <= limit && cost[i] < INFINITY && n < cap)                    \
@@ -238,13 +238,12 @@ static void sort_candidates(mr_candidate *a, size_t n)
     }
 }
 
-/* Apply the collapse of candidate c if it is still valid. */
-static bool try_collapse(mr_simplifier *s, const mr_candidate *c, double limit, double *worst)
+/* Apply the planned collapse r -> k (to target, at cost) if it is still
+ * valid. */
+static bool try_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
+                         double cost, double limit, double *worst)
 {
     mr_collapse_mesh *m = &s->m;
-    uint32_t r, k;
-    double target[3];
-    const double cost = mr_simplifier_plan_edge(s, c->a, c->b, &r, &k, target);
     if (!(cost <= limit && cost < INFINITY) || !mr_collapse_valid(m, r, k, target, &s->limits) ||
         (s->attr_valid && !s->attr_valid(s, r, k)))
         return false;
@@ -253,6 +252,9 @@ static bool try_collapse(mr_simplifier *s, const mr_candidate *c, double limit, 
     *worst = cost > *worst ? cost : *worst;
     return true;
 }
+
+/* Winners planned at once (one batch of the vector cost loop). */
+#define PLAN_BATCH 64
 
 size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                                  double *max_error)
@@ -337,33 +339,45 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
              * cheapest go first. */
             if (wins > needed_collapses(s, &g))
                 sort_candidates(cand, wins);
+            /* Winners share no end and a collapse changes only its own
+             * ends, so a batch of them is planned before any of the batch
+             * is applied; validity is tested as each one's turn comes. */
             size_t round_done = 0;
-            for (size_t i = 0; i < wins; i++) {
-                if (!try_collapse(s, &cand[i], g.limit, &worst)) {
-                    /* Out of the pass: mark nothing, so that the other
-                     * candidates at its ends can win the next round. */
-                    continue;
+            for (size_t i0 = 0; i0 < wins && !finished; i0 += PLAN_BATCH) {
+                const size_t nc = wins - i0 < PLAN_BATCH ? wins - i0 : PLAN_BATCH;
+                uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
+                double pc[PLAN_BATCH], pt[3 * PLAN_BATCH];
+                for (size_t j = 0; j < nc; j++) {
+                    pa[j] = cand[i0 + j].a;
+                    pb[j] = cand[i0 + j].b;
                 }
-                done++;
-                round_done++;
-                if (m->live_vertices <= g.vertices ||
-                    (g.triangles && m->live_triangles <= g.triangles)) {
-                    finished = true;
-                    break;
-                }
-                if (o->progress && done >= next_report) {
-                    o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
-                                o->progress_user);
-                    next_report += g.planned / 100 + 1;
+                mr_simplifier_plan_edges(s, nc, pa, pb, pc, pr, pk, pt);
+                for (size_t j = 0; j < nc; j++) {
+                    if (!try_collapse(s, pr[j], pk[j], pt + 3 * j, pc[j], g.limit, &worst)) {
+                        /* Out of the pass: mark nothing, so that the other
+                         * candidates at its ends can win the next round. */
+                        continue;
+                    }
+                    done++;
+                    round_done++;
+                    if (m->live_vertices <= g.vertices ||
+                        (g.triangles && m->live_triangles <= g.triangles)) {
+                        finished = true;
+                        break;
+                    }
+                    if (o->progress && done >= next_report) {
+                        o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
+                                    o->progress_user);
+                        next_report += g.planned / 100 + 1;
+                    }
                 }
             }
             pass_done += round_done;
             productive += round_done > wins - round_done;
-            /* Winners that failed validity leave the candidates. */
-            size_t keep = 0;
-            for (size_t i = wins; i < nsel; i++)
-                cand[keep++] = cand[i];
-            nsel = keep;
+            /* The winners leave the candidates (those that failed
+             * validity too): the rest follow them. */
+            cand += wins;
+            nsel -= wins;
         }
         if (pass_done == 0) {
             if (!partial)

@@ -492,49 +492,71 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
 
 /* The vector loop: costs of n <= COST_BATCH free edges whose inputs are in
  * in[k * COST_BATCH + i]. */
-MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost)
+MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost, double *x)
 {
-    double x[3 * COST_BATCH];
 #pragma omp simd
     for (size_t i = 0; i < n; i++)
         cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH);
 }
 
-void mr_simplifier_edge_costs(const mr_simplifier *s, size_t n, const uint32_t *a,
-                              const uint32_t *b, double *cost)
+void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *a,
+                              const uint32_t *b, double *cost, uint32_t *r, uint32_t *k,
+                              double *target)
 {
+    const mr_collapse_mesh *m = &s->m;
     if (s->half) {
         for (size_t i = 0; i < n; i++) {
-            uint32_t r, k;
-            double target[3];
-            cost[i] = mr_simplifier_plan_edge(s, a[i], b[i], &r, &k, target);
+            uint32_t rr, kk;
+            double t[3];
+            cost[i] = mr_simplifier_plan_edge(s, a[i], b[i], &rr, &kk, t);
+            if (r) {
+                r[i] = rr;
+                k[i] = kk;
+                memcpy(target + 3 * i, t, sizeof t);
+            }
         }
         return;
     }
-    const mr_collapse_mesh *m = &s->m;
     const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
     float in[FREE_INPUTS * COST_BATCH];
-    double out[COST_BATCH];
-    uint32_t lane[COST_BATCH];
+    double out[COST_BATCH], x[3 * COST_BATCH];
+    uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];
     for (size_t i0 = 0; i0 < n; i0 += COST_BATCH) {
         const size_t i1 = n - i0 < COST_BATCH ? n : i0 + COST_BATCH;
         size_t nl = 0;
         for (size_t i = i0; i < i1; i++) {
             const uint32_t ea = a[i], eb = b[i];
             if ((m->flags[ea] | m->flags[eb]) & pin) {
-                uint32_t r, k;
-                double target[3];
-                cost[i] = plan_edge(s, ea, eb, &r, &k, target);
+                uint32_t rr, kk;
+                double t[3];
+                cost[i] = plan_edge(s, ea, eb, &rr, &kk, t);
+                if (r) {
+                    r[i] = rr;
+                    k[i] = kk;
+                    memcpy(target + 3 * i, t, sizeof t);
+                }
                 continue;
             }
             /* plan_edge: the larger id goes */
-            const uint32_t r = ea < eb ? eb : ea, k = ea < eb ? ea : eb;
-            free_cost_inputs(s, r, k, in + nl, COST_BATCH);
+            lr[nl] = ea < eb ? eb : ea;
+            lk[nl] = ea < eb ? ea : eb;
+            free_cost_inputs(s, lr[nl], lk[nl], in + nl, COST_BATCH);
             lane[nl++] = (uint32_t)(i - i0);
         }
-        free_costs(in, nl, out);
-        for (size_t l = 0; l < nl; l++)
-            cost[i0 + lane[l]] = out[l];
+        free_costs(in, nl, out, x);
+        for (size_t l = 0; l < nl; l++) {
+            const size_t i = i0 + lane[l];
+            cost[i] = out[l];
+            if (r) {
+                /* as plan_edge: the kept end's position plus x */
+                const uint32_t kk = lk[l];
+                r[i] = lr[l];
+                k[i] = kk;
+                target[3 * i] = (double)m->pos[3 * (size_t)kk] + x[l];
+                target[3 * i + 1] = (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l];
+                target[3 * i + 2] = (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l];
+            }
+        }
     }
 }
 

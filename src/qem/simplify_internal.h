@@ -66,10 +66,12 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
  * when it may not happen). Symmetric in a and b. */
 double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
                                uint32_t *k, double target[3]);
-/* The costs mr_simplifier_plan_edge gives edges (a[i], b[i]), the same
- * bits, for n edges at once (free edges in a vector loop). */
-void mr_simplifier_edge_costs(const mr_simplifier *s, size_t n, const uint32_t *a,
-                              const uint32_t *b, double *cost);
+/* mr_simplifier_plan_edge for n edges (a[i], b[i]) at once, the same
+ * bits (free edges in a vector loop): cost[i], and when r is not NULL
+ * r[i], k[i] and target[3i..3i+2]. */
+void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *a,
+                              const uint32_t *b, double *cost, uint32_t *r, uint32_t *k,
+                              double *target);
 /* Apply a valid planned collapse: attribute hook, quadrics, mesh. */
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
 mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
