@@ -20,8 +20,9 @@
  *
  * Why it is faster: no heap with mutable keys (a sift per neighbour edge
  * after every collapse), no re-evaluation of a neighbourhood that collapses
- * again before its edges reach the top, and the gathering sweeps the mesh
- * in memory order.
+ * again before its edges reach the top, the gathering sweeps the mesh in
+ * memory order, and costs and plans are computed for batches of edges in
+ * one vectorised loop (mr_simplifier_plan_edges).
  */
 #include "simplify_internal.h"
 
