@@ -281,7 +281,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     /* Live lists never take more than `total` entries, so after a
      * compaction there is always room for the merged list of two vertices
      * of MR_COLLAPSE_MAX_DEGREE triangles each. */
-    const size_t capacity = total + total / 32 + 2 * MR_COLLAPSE_MAX_DEGREE + 64;
+    const size_t capacity = total + total / 4 + 2 * MR_COLLAPSE_MAX_DEGREE + 64;
     m->refs = mr_alloc_array(capacity, sizeof *m->refs);
     if (!m->refs) {
         mr_collapse_mesh_free(m);
