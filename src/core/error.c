@@ -1,10 +1,5 @@
 /* Error records and the library's small shared utilities. */
-#define _DEFAULT_SOURCE /* madvise's MADV_HUGEPAGE */
 #include "internal.h"
-
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 #include <stdio.h>
 #include <time.h>
@@ -80,29 +75,11 @@ mr_status mr_fail_nomem(mr_error *err, const char *name, size_t bytes)
                          bytes);
 }
 
-/* Arrays from this size up are placed on 2 MiB boundaries and offered to
- * the kernel for transparent huge pages: the big per-point and
- * per-triangle arrays are written once right after allocation, and
- * faulting them in 4 KiB pages costs more than filling them (a fifth of
- * the neighbour graph's time on a 5M-point cloud). Where huge pages are
- * off, this only aligns. Memory so allocated is released with free(). */
-#define HUGE_ARRAY_BYTES ((size_t)8 << 20)
-#define HUGE_PAGE ((size_t)2 << 20)
-
 void *mr_alloc_array(size_t count, size_t size)
 {
     if (size && count > SIZE_MAX / size)
         return NULL;
     size_t bytes = count * size;
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (bytes >= HUGE_ARRAY_BYTES) {
-        void *p = NULL;
-        if (posix_memalign(&p, HUGE_PAGE, bytes) != 0)
-            return NULL;
-        madvise(p, (bytes + HUGE_PAGE - 1) & ~(HUGE_PAGE - 1), MADV_HUGEPAGE);
-        return p;
-    }
-#endif
     return malloc(bytes ? bytes : 1);
 }
 

@@ -153,7 +153,7 @@ static size_t gather(mr_simplifier *s, double limit)
     do {                                                                              \
         if (nb == 0)                                                                  \
             break;                                                                    \
-        mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);                                \
+        mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
         for (size_t i = 0; i < nb; i++) {                                             \
             /* an infinite cost is a collapse that must not happen */                 \
             if (cost[i] <= limit && cost[i] < INFINITY && n < cap)                    \

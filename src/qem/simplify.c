@@ -61,10 +61,10 @@ static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *
  * to w's origin and added to w's, the target x (relative to w) at the
  * optimum of the sum or, where the system is ill-conditioned or its optimum
  * lies far from the edge, at the best point of the edge; returns the cost.
- * Input k of the edge is in[k * st] (FREE_*), x[k] is x[k * xst]. Written without branches (every quotient is
- * computed, then selected), so that a loop over edges vectorises
- * (mr_simplifier_edge_costs); the scalar path calls the same code, so both
- * give the same bits.
+ * Input k of the edge (FREE_*) is in[k * st], x[k] is x[k * xst]. Written
+ * without branches (every quotient is computed, then selected), so that a
+ * loop over edges vectorises (mr_simplifier_plan_edges); the scalar path
+ * calls the same code, so both give the same bits.
  */
 enum { FREE_QU = 0, FREE_QW = 11, FREE_PU = 22, FREE_PW = 25, FREE_INPUTS = 28 };
 
@@ -487,7 +487,7 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
     return a_goes ? ca : cb;
 }
 
-/* Edges per batch of mr_simplifier_edge_costs' vector loop. */
+/* Edges per batch of mr_simplifier_plan_edges' vector loop. */
 #define COST_BATCH 64
 
 /* The vector loop: costs of n <= COST_BATCH free edges whose inputs are in
