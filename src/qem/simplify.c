@@ -740,68 +740,45 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
 
 /* ---- setup ----------------------------------------------------------------- */
 
-/* Per triangle, for the initial quadrics: g = c / sqrt(2 |c|) for the
- * cross product c of its edges, so that g g^T = area * n n^T with the unit
- * normal n = c / |c| and the area |c| / 2; and the area. */
-typedef struct tri_plane {
-    float g[3], area;
-} tri_plane;
-
-static void triangle_plane(const mr_collapse_mesh *m, size_t t, tri_plane *out)
-{
-    const uint32_t *tri = m->tris + 3 * t;
-    out->g[0] = out->g[1] = out->g[2] = out->area = 0;
-    if (tri[0] == NONE)
-        return;
-    double p[3][3];
-    for (int k = 0; k < 3; k++)
-        mr_collapse_load(m, tri[k], p[k]);
-    const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                         u[0] * w[1] - u[1] * w[0]};
-    const double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    if (!(len > 0))
-        return; /* no area, no normal: nothing to add */
-    const double f = 1.0 / sqrt(2 * len);
-    out->g[0] = (float)(f * c[0]);
-    out->g[1] = (float)(f * c[1]);
-    out->g[2] = (float)(f * c[2]);
-    out->area = (float)(0.5 * len);
-}
-
 /* Initial quadric of v, relative to v's position: the planes of its
  * triangles (all through v) and the constraint planes of its boundary
  * edges. */
-static void initial_quadric(mr_simplifier *s, const tri_plane *planes, uint32_t v,
-                            double boundary_weight)
+static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight)
 {
     const mr_collapse_mesh *m = &s->m;
     mr_quadric q;
     mr_quadric_zero(&q);
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    double pv[3];
+    mr_collapse_load(m, v, pv);
     const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
     for (uint32_t i = 0; i < m->count[v]; i++) {
-        const tri_plane *tp = &planes[list[i] / 3];
-        if (!(tp->area > 0))
-            continue;
-        const double g[3] = {tp->g[0], tp->g[1], tp->g[2]};
-        q.a00 += g[0] * g[0];
-        q.a01 += g[0] * g[1];
-        q.a02 += g[0] * g[2];
-        q.a11 += g[1] * g[1];
-        q.a12 += g[1] * g[2];
-        q.a22 += g[2] * g[2];
-        q.w += tp->area;
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        double p[3][3];
+        for (int k = 0; k < 3; k++)
+            mr_collapse_load(m, tri[k], p[k]);
+        /* area * n n^T for the unit normal n = c / |c| and area |c| / 2 of
+         * the cross product c: c c^T / (2 |c|), one division */
+        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                             u[0] * w[1] - u[1] * w[0]};
+        const double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (!(len > 0))
+            continue; /* no area, no normal: nothing to add */
+        const double f = 0.5 / len;
+        q.a00 += f * c[0] * c[0];
+        q.a01 += f * c[0] * c[1];
+        q.a02 += f * c[0] * c[2];
+        q.a11 += f * c[1] * c[1];
+        q.a12 += f * c[1] * c[2];
+        q.a22 += f * c[2] * c[2];
+        q.w += 0.5 * len;
         if (!border)
             continue;
-        const double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-        const double n[3] = {g[0] / gl, g[1] / gl, g[2] / gl};
-        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        const double n[3] = {c[0] / len, c[1] / len, c[2] / len};
         const uint32_t k = list[i] % 3;
         const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
-        double pv[3];
-        mr_collapse_load(m, v, pv);
         for (int e = 0; e < 2; e++) {
             if (mr_collapse_edge_triangles(m, v, ends[e]) != 1)
                 continue;
@@ -976,27 +953,14 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
             return st;
         }
     }
-    /* Each triangle's plane once, then a gather over each vertex's own
-     * triangles, writing only its own quadric: the same result on any
-     * number of threads. */
-    tri_plane *planes = mr_alloc_array(triangle_count, sizeof *planes);
-    if (!planes) {
-        mr_simplifier_free(s);
-        return mr_fail_nomem(err, NULL, triangle_count * sizeof *planes);
-    }
+    /* A gather over each vertex's own triangles, writing only its own
+     * quadric: the same result on any number of threads. */
     const int nthreads = mr_thread_count(o->threads);
-    const ptrdiff_t nv = (ptrdiff_t)vertex_count, nt = (ptrdiff_t)triangle_count;
-#pragma omp parallel num_threads(nthreads) if (nthreads > 1 && nv > 65536)
-    {
-#pragma omp for schedule(static)
-        for (ptrdiff_t t = 0; t < nt; t++)
-            triangle_plane(m, (size_t)t, &planes[t]);
-#pragma omp for schedule(static)
-        for (ptrdiff_t v = 0; v < nv; v++)
-            if (!(m->flags[v] & MR_VF_REMOVED))
-                initial_quadric(s, planes, (uint32_t)v, o->boundary_weight);
-    }
-    free(planes);
+    const ptrdiff_t nv = (ptrdiff_t)vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED))
+            initial_quadric(s, (uint32_t)v, o->boundary_weight);
     return MR_OK;
 }
 
