@@ -270,7 +270,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
     uint64_t *best = s->best64;
 
     while (!finished) {
-        if (m->live_vertices <= g.vertices || (g.triangles && m->live_triangles <= g.triangles))
+        if (mr_simplifier_reached(s, &g))
             break;
         size_t n = gather(s, g.limit);
         if (n == 0)
@@ -361,8 +361,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                     }
                     done++;
                     round_done++;
-                    if (m->live_vertices <= g.vertices ||
-                        (g.triangles && m->live_triangles <= g.triangles)) {
+                    if (mr_simplifier_reached(s, &g)) {
                         finished = true;
                         break;
                     }

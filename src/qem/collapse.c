@@ -126,11 +126,6 @@ static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
             succ[i] = next ? __builtin_ctz(next) : -1;
         }
 #undef LANES_EQUAL
-        for (uint32_t i = 0; i < n; i++) {
-            if (succ[i] >= 0)
-                pred[succ[i]] = (int)i;
-            open += succ[i] < 0;
-        }
     } else
 #endif
     for (uint32_t i = 0; i < n; i++) {
@@ -143,9 +138,11 @@ static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
         for (uint32_t j = 0; j < n; j++)
             s = pv[j] == nx[i] ? (int)j : s;
         succ[i] = s;
-        if (s >= 0)
-            pred[s] = (int)i;
-        open += s < 0;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        if (succ[i] >= 0)
+            pred[succ[i]] = (int)i;
+        open += succ[i] < 0;
     }
     if (open > 1)
         return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* more than two boundary edges */

@@ -499,22 +499,28 @@ MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost,
         cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH);
 }
 
+/* Edge i of mr_simplifier_plan_edges through the one-edge path. */
+static void plan_one(const mr_simplifier *s, uint32_t a, uint32_t b, size_t i, double *cost,
+                     uint32_t *r, uint32_t *k, double *target)
+{
+    uint32_t rr, kk;
+    double t[3];
+    cost[i] = mr_simplifier_plan_edge(s, a, b, &rr, &kk, t);
+    if (r) {
+        r[i] = rr;
+        k[i] = kk;
+        memcpy(target + 3 * i, t, sizeof t);
+    }
+}
+
 void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *a,
                               const uint32_t *b, double *cost, uint32_t *r, uint32_t *k,
                               double *target)
 {
     const mr_collapse_mesh *m = &s->m;
     if (s->half) {
-        for (size_t i = 0; i < n; i++) {
-            uint32_t rr, kk;
-            double t[3];
-            cost[i] = mr_simplifier_plan_edge(s, a[i], b[i], &rr, &kk, t);
-            if (r) {
-                r[i] = rr;
-                k[i] = kk;
-                memcpy(target + 3 * i, t, sizeof t);
-            }
-        }
+        for (size_t i = 0; i < n; i++)
+            plan_one(s, a[i], b[i], i, cost, r, k, target);
         return;
     }
     const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
@@ -527,14 +533,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
         for (size_t i = i0; i < i1; i++) {
             const uint32_t ea = a[i], eb = b[i];
             if ((m->flags[ea] | m->flags[eb]) & pin) {
-                uint32_t rr, kk;
-                double t[3];
-                cost[i] = plan_edge(s, ea, eb, &rr, &kk, t);
-                if (r) {
-                    r[i] = rr;
-                    k[i] = kk;
-                    memcpy(target + 3 * i, t, sizeof t);
-                }
+                plan_one(s, ea, eb, i, cost, r, k, target);
                 continue;
             }
             /* plan_edge: the larger id goes */
@@ -1025,13 +1024,13 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
     mr_collapse_mesh *m = &s->m;
     mr_simplify_goal g;
     mr_simplifier_targets(s, o, &g);
-    const size_t target_v = g.vertices, target_t = g.triangles, planned = g.planned;
+    const size_t planned = g.planned;
     const double limit = g.limit;
     size_t next_report = planned / 100 + 1, done = 0;
     double worst = 0;
 
     while (!mr_heap_empty(&s->heap)) {
-        if (m->live_vertices <= target_v || (target_t && m->live_triangles <= target_t))
+        if (mr_simplifier_reached(s, &g))
             break;
         if (!s->half) {
             const uint32_t h = mr_heap_top(&s->heap);

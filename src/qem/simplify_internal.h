@@ -50,6 +50,13 @@ typedef struct mr_simplify_goal {
     size_t planned;             /* collapses the targets need, for progress */
 } mr_simplify_goal;
 
+/* Are the targets met? */
+static inline bool mr_simplifier_reached(const mr_simplifier *s, const mr_simplify_goal *g)
+{
+    return s->m.live_vertices <= g->vertices ||
+           (g->triangles && s->m.live_triangles <= g->triangles);
+}
+
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
                                     size_t input_triangles, mr_error *err);
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
