@@ -20,9 +20,11 @@
  * rows three radii wide hold a few dozen, and the one-sided search
  * halves both the windows and the tests.
  *
- * Each thread appends the pairs it finds to its own buffer; atomic
- * counters give every point its count of larger and of smaller
- * neighbours, a prefix sum places the lists, and each list is sorted.
+ * Each thread appends the pairs it finds to its own buffer. Then each
+ * thread owns a slice of the ids and walks all the buffers: it counts
+ * the larger and the smaller neighbours of its ids, a prefix sum places
+ * the lists, it fills its ids' lists and sorts them. No counter is
+ * shared, so there is no atomic read-modify-write.
  * The full symmetric graph is never stored.
  */
 #include "grid.h"
@@ -37,6 +39,12 @@ static inline int omp_get_num_threads(void) { return 1; }
 #endif
 
 #define PARALLEL_MIN 16384
+
+/* First id of the slice that thread `me` of `nt` owns. */
+static inline uint32_t own_lo(size_t n, uint32_t me, uint32_t nt)
+{
+    return (uint32_t)(n * me / nt);
+}
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -533,7 +541,8 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
     memset(&s, 0, sizeof s);
     edge_buf *bufs = NULL;
     size_t *blk_first = NULL;
-    _Atomic uint32_t *cnt = NULL;
+    uint32_t *cnt = NULL;
+    _Atomic int32_t *dep = NULL;
     size_t sort_bytes = 0, transient = 0;
     mr_status st = empty ? MR_OK
                          : sweep_build(&s, pos, n, eps, strict, box, threads, &sort_bytes, err);
@@ -568,6 +577,7 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
     blk_first = mr_alloc_array(n / BLOCK_POINTS + 2, sizeof *blk_first);
     bufs = mr_calloc_array((size_t)threads, sizeof *bufs);
     cnt = mr_alloc_array(n, sizeof *cnt);
+    dep = g->depend;
     if (!blk_first || !bufs || !cnt) {
         st = mr_fail_nomem(err, NULL, n * 4);
         goto done;
@@ -579,9 +589,8 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
     blk_first[blocks] = s.rows;
 
     /* One search: each thread appends the pairs of the blocks it takes to
-     * its own buffer; then every buffer's pairs are counted at both ends.
-     * (A buffer is walked by whichever thread gets it: the team may be
-     * smaller than asked.) */
+     * its own buffer; then every pair is counted at both ends. (The team
+     * may be smaller than asked: every thread walks all the buffers.) */
     _Atomic int failed;
     atomic_init(&failed, 0);
 #pragma omp parallel num_threads(threads) if (n > PARALLEL_MIN)
@@ -589,21 +598,33 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
         edge_buf *mine = &bufs[omp_get_thread_num()];
 #pragma omp for schedule(static)
         for (size_t i = 0; i < n; i++) {
-            atomic_init(&cnt[i], 0);
-            atomic_init(&g->depend[i], 0);
+            cnt[i] = 0;
+            atomic_init(&dep[i], 0);
         }
 #pragma omp for schedule(dynamic, 1)
         for (size_t blk = 0; blk < blocks; blk++)
             if (!atomic_load_explicit(&failed, memory_order_relaxed) &&
                 !search_rows(&s, blk_first[blk], blk_first[blk + 1], mine))
                 atomic_store_explicit(&failed, 1, memory_order_relaxed);
-#pragma omp for schedule(static, 1)
-        for (int t = 0; t < threads; t++)
+        /* Counting: each thread owns a slice of the ids and walks every
+         * buffer, counting the ends that fall in its slice: plain stores
+         * into entries no other thread touches. (A select into a sink
+         * entry instead of the branches was twice as slow: the sink's
+         * increments form one long dependency chain.) */
+        const uint32_t nt = (uint32_t)omp_get_num_threads(), me = (uint32_t)omp_get_thread_num();
+        const uint32_t lo = own_lo(n, me, nt), span = own_lo(n, me + 1, nt) - lo;
+        for (int t = 0; t < threads; t++) {
+            const uint32_t *d = bufs[t].data;
             for (size_t e = 0; e < bufs[t].len; e += 2) {
-                atomic_fetch_add_explicit(&cnt[bufs[t].data[e]], 1, memory_order_relaxed);
-                atomic_fetch_add_explicit(&g->depend[bufs[t].data[e + 1]], 1,
+                const uint32_t u = d[e], v = d[e + 1];
+                if (u - lo < span)
+                    cnt[u]++;
+                if (v - lo < span)
+                    atomic_store_explicit(&dep[v],
+                                          atomic_load_explicit(&dep[v], memory_order_relaxed) + 1,
                                           memory_order_relaxed);
             }
+        }
     }
     size_t buffered = 0;
     for (int t = 0; t < threads; t++)
@@ -630,7 +651,7 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
     for (size_t t = 0; t < slices; t++) {
         size_t sum = 0;
         for (size_t i = n * t / slices; i < n * (t + 1) / slices; i++)
-            sum += atomic_load_explicit(&cnt[i], memory_order_relaxed);
+            sum += cnt[i];
         slice_sum[t + 1] = sum;
     }
     for (size_t t = 0; t < slices; t++)
@@ -640,8 +661,8 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
         size_t at = slice_sum[t];
         for (size_t i = n * t / slices; i < n * (t + 1) / slices; i++) {
             off[i] = at;
-            at += atomic_load_explicit(&cnt[i], memory_order_relaxed);
-            atomic_init(&cnt[i], 0);
+            at += cnt[i];
+            cnt[i] = 0;
         }
     }
     off[n] = slice_sum[slices];
@@ -657,13 +678,18 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
      * every consumer walks the members of a cluster in index order. */
 #pragma omp parallel num_threads(threads) if (n > PARALLEL_MIN)
     {
-#pragma omp for schedule(static, 1)
-        for (int t = 0; t < threads; t++)
+        /* each thread places the pairs whose smaller end it owns */
+        const uint32_t nt = (uint32_t)omp_get_num_threads(), me = (uint32_t)omp_get_thread_num();
+        const uint32_t lo = own_lo(n, me, nt), span = own_lo(n, me + 1, nt) - lo;
+        for (int t = 0; t < threads; t++) {
+            const uint32_t *d = bufs[t].data;
             for (size_t e = 0; e < bufs[t].len; e += 2) {
-                const uint32_t u = bufs[t].data[e];
-                const uint32_t at = atomic_fetch_add_explicit(&cnt[u], 1, memory_order_relaxed);
-                g->adj[off[u] + at] = bufs[t].data[e + 1];
+                const uint32_t u = d[e];
+                if (u - lo < span)
+                    g->adj[off[u] + cnt[u]++] = d[e + 1];
             }
+        }
+#pragma omp barrier
 #pragma omp for schedule(dynamic, 16384)
         for (size_t i = 0; i < n; i++)
             if (off[i + 1] - off[i] > 1)
@@ -678,7 +704,7 @@ done:
             free(bufs[t].data);
     free(bufs);
     free(blk_first);
-    free((void *)cnt);
+    free(cnt);
     sweep_free(&s);
     if (st != MR_OK)
         mr_radius_graph_free(g);
