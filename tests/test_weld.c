@@ -3,6 +3,8 @@
  * finder, attributes, errors and the command line. */
 #include "testutil.h"
 
+#include "cluster/grid.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -443,6 +445,113 @@ static void test_sweep_grid_edges(void **state)
     free(q);
 }
 
+
+/* The neighbour graph itself, edge for edge, against a plain sweep over
+ * the points sorted by x: a jittered wavy sheet (every point has
+ * neighbours in the rows around its own) with duplicates, above the
+ * parallel threshold, at every thread count. */
+static int cmp_x(const void *a, const void *b, const float *p)
+{
+    const float xa = p[3 * *(const uint32_t *)a], xb = p[3 * *(const uint32_t *)b];
+    return xa < xb ? -1 : xa > xb;
+}
+
+static const float *sort_pts;
+static int cmp_sort(const void *a, const void *b) { return cmp_x(a, b, sort_pts); }
+
+static int cmp_u32(const void *a, const void *b)
+{
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void test_radius_graph_exact(void **state)
+{
+    (void)state;
+    const size_t side = 180, n = side * side;
+    float *p = malloc(n * 3 * sizeof *p);
+    uint64_t s = 11;
+    for (size_t i = 0; i < n; i++) {
+        s = s * 6364136223846793005ull + 1442695040888963407ull;
+        const uint32_t r = (uint32_t)(s >> 33);
+        const float u = (float)(i % side) + (float)(r % 1000) * 4e-4f,
+                    v = (float)(i / side) + (float)((r >> 10) % 1000) * 4e-4f;
+        p[3 * i] = 0.7f * u + 0.3f * v;
+        p[3 * i + 1] = 0.2f * u - 0.6f * v;
+        p[3 * i + 2] = 3.0f * sinf(0.05f * u) + 0.5f * v;
+        if (i % 11 == 5) /* a duplicate of an earlier point */
+            memcpy(p + 3 * i, p + 3 * (i / 3), 3 * sizeof *p);
+    }
+    uint32_t *order = malloc(n * sizeof *order);
+    for (size_t i = 0; i < n; i++)
+        order[i] = (uint32_t)i;
+    sort_pts = p;
+    qsort(order, n, sizeof *order, cmp_sort);
+    double lo[3], hi[3];
+    size_t bad;
+    assert_true(mr_points_bounds(p, n, 1, lo, hi, &bad));
+    const double box[6] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+    const double radii[] = {0.3, 0.75, 1.6};
+    for (size_t e = 0; e < sizeof radii / sizeof *radii; e++)
+        for (int strict = 0; strict <= 1; strict++) {
+            const double eps = radii[e];
+            /* the reference: larger neighbours of each point, and counts
+             * of smaller ones */
+            size_t cap = 1 << 16, len = 0;
+            uint32_t *pairs = malloc(cap * 2 * sizeof *pairs);
+            for (size_t a = 0; a < n; a++)
+                for (size_t b = a + 1; b < n; b++) {
+                    const float *x = p + 3 * order[a], *y = p + 3 * order[b];
+                    if ((double)y[0] - (double)x[0] > eps)
+                        break;
+                    const double dx = (double)x[0] - y[0], dy = (double)x[1] - y[1],
+                                 dz = (double)x[2] - y[2], d2 = dx * dx + dy * dy + dz * dz;
+                    if (strict ? d2 < eps * eps : d2 <= eps * eps) {
+                        if (len == cap)
+                            pairs = realloc(pairs, (cap *= 2) * 2 * sizeof *pairs);
+                        const uint32_t i = order[a], j = order[b];
+                        pairs[2 * len] = i < j ? i : j;
+                        pairs[2 * len + 1] = i < j ? j : i;
+                        len++;
+                    }
+                }
+            size_t *off = calloc(n + 1, sizeof *off);
+            int32_t *dep = calloc(n, sizeof *dep);
+            for (size_t k = 0; k < len; k++) {
+                off[pairs[2 * k] + 1]++;
+                dep[pairs[2 * k + 1]]++;
+            }
+            for (size_t i = 0; i < n; i++)
+                off[i + 1] += off[i];
+            uint32_t *adj = malloc((len + 1) * sizeof *adj), *fill = calloc(n, sizeof *fill);
+            for (size_t k = 0; k < len; k++)
+                adj[off[pairs[2 * k]] + fill[pairs[2 * k]]++] = pairs[2 * k + 1];
+            for (size_t i = 0; i < n; i++)
+                qsort(adj + off[i], off[i + 1] - off[i], sizeof *adj, cmp_u32);
+            assert_true(len >= n / 11); /* at least the duplicates */
+            for (size_t t = 0; t < 4; t++) {
+                mr_radius_graph g;
+                mr_error err;
+                assert_int_equal(
+                    mr_radius_graph_build(&g, p, n, eps, strict, box, thread_counts[t], &err),
+                    MR_OK);
+                assert_int_equal(g.edge_count, len);
+                assert_memory_equal(g.offsets, off, (n + 1) * sizeof *off);
+                assert_memory_equal(g.adj, adj, len * sizeof *adj);
+                for (size_t i = 0; i < n; i++)
+                    assert_int_equal(atomic_load(&g.depend[i]), dep[i]);
+                mr_radius_graph_free(&g);
+            }
+            free(pairs);
+            free(off);
+            free(dep);
+            free(adj);
+            free(fill);
+        }
+    free(order);
+    free(p);
+}
+
 /* The finder's filtered graph gives the radius a bisection over whole
  * welds gives: the same bracket and steps, each step a full mr_weld. */
 static void test_find_eps_reference(void **state)
@@ -707,6 +816,7 @@ int main(void)
         cmocka_unit_test(test_stride),
         cmocka_unit_test(test_find_eps),
         cmocka_unit_test(test_sweep_grid_edges),
+        cmocka_unit_test(test_radius_graph_exact),
         cmocka_unit_test(test_find_eps_reference),
         cmocka_unit_test(test_open3d_equivalence),
         cmocka_unit_test(test_cli),

@@ -114,6 +114,7 @@ typedef struct sweep {
     uint32_t *ids;       /* n: point of each sorted slot */
     float *px, *py, *pz; /* n + PAD each: coordinates in sorted order */
     float eps2f;         /* float bound above every squared distance <= eps^2 */
+    float eps2_in;       /* float bound below them (or -1: none is sure) */
     uint32_t *q;         /* n: quantised sweep coordinate (ascending per row) */
     uint64_t *keys;      /* rows: key of each occupied row, ascending */
     uint32_t *first;     /* rows + 1: first sorted slot of each row */
@@ -188,38 +189,59 @@ static bool buf_pair(edge_buf *b, uint32_t x, uint32_t y)
 #define PAD 4
 
 /*
- * Append (a, b) for every b in [b0, b1) within eps of a. A float filter,
- * four points at a time, passes every pair the exact test can accept
- * (eps2f sits above their float distances' rounding); the exact test
- * decides the few that pass.
+ * A group: up to four consecutive points of one row, tested together
+ * against one candidate at a time. A float filter passes every pair the
+ * exact test can accept (eps2f sits above their float distances'
+ * rounding) and marks the pairs that are surely within (below eps2_in);
+ * the exact test decides the few in between.
  */
-static bool test_range(const sweep *s, uint32_t a, uint32_t b0, uint32_t b1, edge_buf *buf)
-{
-    const uint32_t ia = s->ids[a];
+typedef struct group {
+    uint32_t first, count;
 #if defined(__SSE2__)
-    const __m128 ax = _mm_set1_ps(s->px[a]), ay = _mm_set1_ps(s->py[a]),
-                 az = _mm_set1_ps(s->pz[a]), e2 = _mm_set1_ps(s->eps2f);
-    for (uint32_t b = b0; b < b1; b += 4) {
-        const __m128 dx = _mm_sub_ps(_mm_loadu_ps(s->px + b), ax);
-        const __m128 dy = _mm_sub_ps(_mm_loadu_ps(s->py + b), ay);
-        const __m128 dz = _mm_sub_ps(_mm_loadu_ps(s->pz + b), az);
-        const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
-                                     _mm_mul_ps(dz, dz));
-        unsigned m = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, e2));
-        if (b1 - b < 4)
-            m &= (1u << (b1 - b)) - 1;
-        while (m) {
-            const uint32_t c = b + (uint32_t)__builtin_ctz(m);
-            m &= m - 1;
-            if (within(s, a, c) && !buf_pair(buf, ia, s->ids[c]))
-                return false;
-        }
-    }
-#else
-    for (uint32_t b = b0; b < b1; b++)
-        if (within(s, a, b) && !buf_pair(buf, ia, s->ids[b]))
-            return false;
+    __m128 x, y, z, e2, e2in;
 #endif
+} group;
+
+static inline void group_init(group *G, const sweep *s, uint32_t first, uint32_t count)
+{
+    G->first = first;
+    G->count = count;
+#if defined(__SSE2__)
+    G->x = _mm_loadu_ps(s->px + first);
+    G->y = _mm_loadu_ps(s->py + first);
+    G->z = _mm_loadu_ps(s->pz + first);
+    G->e2 = _mm_set1_ps(s->eps2f);
+    G->e2in = _mm_set1_ps(s->eps2_in);
+#else
+    (void)s;
+#endif
+}
+
+/* Append the pairs (first + k, b) within eps, for the lanes k in `lanes`. */
+static inline bool group_test(const sweep *s, const group *G, uint32_t b, unsigned lanes,
+                              edge_buf *buf)
+{
+#if defined(__SSE2__)
+    const __m128 dx = _mm_sub_ps(G->x, _mm_set1_ps(s->px[b]));
+    const __m128 dy = _mm_sub_ps(G->y, _mm_set1_ps(s->py[b]));
+    const __m128 dz = _mm_sub_ps(G->z, _mm_set1_ps(s->pz[b]));
+    const __m128 d2 =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    unsigned m = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, G->e2)) & lanes;
+    if (!m)
+        return true;
+    const unsigned sure = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, G->e2in));
+#else
+    unsigned m = lanes, sure = 0;
+#endif
+    const uint32_t ib = s->ids[b];
+    while (m) {
+        const unsigned k = (unsigned)__builtin_ctz(m);
+        m &= m - 1;
+        const uint32_t a = G->first + k;
+        if (((sure >> k) & 1 || within(s, a, b)) && !buf_pair(buf, s->ids[a], ib))
+            return false;
+    }
     return true;
 }
 
@@ -227,12 +249,15 @@ static bool test_range(const sweep *s, uint32_t a, uint32_t b0, uint32_t b1, edg
  * Search the rows r0 .. r1-1 and append every pair within the radius to
  * `buf` as (smaller id, larger id). A point's partners are the points
  * after it in its own row and the points of the rows after its row, among
- * (d1, d2) = (+1, 0), (-1, +1), (0, +1), (+1, +1), that it lies within eps
- * of; in each, those whose quantised sweep coordinate is within `reach`
- * of its own: one window per row whose ends only move forward as the
- * point moves along its row. The row look-ups use cursors that only move
- * forward too: the key of the row at offset (d1, d2) grows with the row's
- * own key.
+ * (d1, d2) = (+1, 0), (-1, +1), (0, +1), (+1, +1). The points of a row
+ * are taken four at a time: the group's candidates in a row are those
+ * whose quantised sweep coordinate lies within `reach` of the group's
+ * span, one window per row whose ends only move forward along the row,
+ * and a neighbouring row is searched only when some point of the group
+ * lies within eps of it. Every candidate is tested against the whole
+ * group at once; a pair is still tested once only, from its point that
+ * comes first. The row look-ups use cursors that only move forward: the
+ * key of the row at offset (d1, d2) grows with the row's own key.
  */
 static bool search_rows(const sweep *s, size_t r0, size_t r1, edge_buf *buf)
 {
@@ -272,20 +297,33 @@ static bool search_rows(const sweep *s, size_t r0, size_t r1, edge_buf *buf)
         }
         const uint32_t row_end = s->first[r + 1];
         uint32_t own_hi = s->first[r];
-        for (uint32_t a = s->first[r]; a < row_end; a++) {
-            const uint64_t qa = s->q[a];
-            /* the rest of its own row */
-            if (own_hi <= a)
-                own_hi = a + 1;
-            while (own_hi < row_end && (uint64_t)s->q[own_hi] <= qa + reach)
+        for (uint32_t g = s->first[r]; g < row_end; g += 4) {
+            const uint32_t count = row_end - g < 4 ? row_end - g : 4;
+            const unsigned valid = (1u << count) - 1;
+            const uint64_t qmin = s->q[g], qmax = s->q[g + count - 1];
+            group G;
+            group_init(&G, s, g, count);
+            /* the rest of its own row: candidate b pairs with the lanes
+             * before it */
+            if (own_hi <= g)
+                own_hi = g + 1;
+            while (own_hi < row_end && (uint64_t)s->q[own_hi] <= qmax + reach)
                 own_hi++;
-            if (!test_range(s, a, a + 1, own_hi, buf))
-                return false;
-            /* where the point sits across its row: the rows it is near */
-            const float pa[3] = {s->px[a], s->py[a], s->pz[a]};
-            const double f1 = ((double)pa[s->a1] - s->lo1) * s->inv_cell - (double)c1;
-            const double f2 = ((double)pa[s->a2] - s->lo2) * s->inv_cell - (double)c2;
-            const bool left = f1 < near, right = f1 > far, up = f2 > far;
+            for (uint32_t b = g + 1; b < own_hi; b++) {
+                const unsigned before = b - g < 4 ? (1u << (b - g)) - 1 : 15u;
+                if (!group_test(s, &G, b, valid & before, buf))
+                    return false;
+            }
+            /* the rows some point of the group is near */
+            bool left = false, right = false, up = false;
+            for (uint32_t a = g; a < g + count; a++) {
+                const float pa[3] = {s->px[a], s->py[a], s->pz[a]};
+                const double f1 = ((double)pa[s->a1] - s->lo1) * s->inv_cell - (double)c1;
+                const double f2 = ((double)pa[s->a2] - s->lo2) * s->inv_cell - (double)c2;
+                left |= f1 < near;
+                right |= f1 > far;
+                up |= f2 > far;
+            }
             if (!right && !up)
                 continue;
             for (int k = 0; k < 4; k++) {
@@ -293,16 +331,17 @@ static bool search_rows(const sweep *s, size_t r0, size_t r1, edge_buf *buf)
                     (fd1[k] < 0 && !left))
                     continue;
                 uint32_t l = lo[k], h = hi[k];
-                while (l < end[k] && (uint64_t)s->q[l] + reach < qa)
+                while (l < end[k] && (uint64_t)s->q[l] + reach < qmin)
                     l++;
                 if (h < l)
                     h = l;
-                while (h < end[k] && (uint64_t)s->q[h] <= qa + reach)
+                while (h < end[k] && (uint64_t)s->q[h] <= qmax + reach)
                     h++;
                 lo[k] = l;
                 hi[k] = h;
-                if (!test_range(s, a, l, h, buf))
-                    return false;
+                for (uint32_t b = l; b < h; b++)
+                    if (!group_test(s, &G, b, valid, buf))
+                        return false;
             }
         }
     }
@@ -444,6 +483,10 @@ static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, i
     s->eps2f = (float)(eps * eps * (1 + 1e-5));
     if (!(s->eps2f >= 4 * FLT_MIN))
         s->eps2f = 4 * FLT_MIN;
+    /* A float distance 10 ppm below eps^2 is within it however it rounded
+     * (a few ulps: under 1 ppm); tiny radii, where underflow could weigh
+     * more than that, leave every candidate to the exact test. */
+    s->eps2_in = eps * eps > 1e-30 ? (float)(eps * eps * (1 - 1e-5)) : -1.0f;
     /* ids, positions, sweep coordinates, keys and the radix scratch */
     *peak = n * (20 + (narrow ? 12 : 20));
     const double l0 = lo[ax], l1 = lo[a1], l2 = lo[a2];
