@@ -638,17 +638,21 @@ mr_status mr_radius_graph_build(mr_radius_graph *g, const float *pos, size_t n, 
     atomic_init(&failed, 0);
 #pragma omp parallel num_threads(threads) if (n > PARALLEL_MIN)
     {
-        edge_buf *mine = &bufs[omp_get_thread_num()];
 #pragma omp for schedule(static)
         for (size_t i = 0; i < n; i++) {
             cnt[i] = 0;
             atomic_init(&dep[i], 0);
         }
-#pragma omp for schedule(dynamic, 1)
+        /* the thread's buffer is filled through a copy of its own: the
+         * buffers' headers share cache lines */
+        edge_buf mine = {NULL, 0, 0};
+#pragma omp for schedule(dynamic, 1) nowait
         for (size_t blk = 0; blk < blocks; blk++)
             if (!atomic_load_explicit(&failed, memory_order_relaxed) &&
-                !search_rows(&s, blk_first[blk], blk_first[blk + 1], mine))
+                !search_rows(&s, blk_first[blk], blk_first[blk + 1], &mine))
                 atomic_store_explicit(&failed, 1, memory_order_relaxed);
+        bufs[omp_get_thread_num()] = mine;
+#pragma omp barrier
         /* Counting: each thread owns a slice of the ids and walks every
          * buffer, counting the ends that fall in its slice: plain stores
          * into entries no other thread touches. (A select into a sink
