@@ -54,20 +54,18 @@ static inline uint32_t own_lo(size_t n, uint32_t me, uint32_t nt)
 bool mr_points_bounds(const float *pos, size_t n, int threads, double lo[3], double hi[3],
                       size_t *bad)
 {
-    double l0 = INFINITY, l1 = INFINITY, l2 = INFINITY;
-    double h0 = -INFINITY, h1 = -INFINITY, h2 = -INFINITY;
-    size_t first_bad = SIZE_MAX;
-#pragma omp parallel for schedule(static) num_threads(threads) if (n > PARALLEL_MIN) \
-    reduction(min : l0, l1, l2, first_bad) reduction(max : h0, h1, h2)
+    /* Bounds in float (exact: they are input values) and a flag for any
+     * coordinate that is not finite, in a loop that vectorises; only a
+     * bad coordinate makes the search for the first offender. */
+    float l0 = INFINITY, l1 = INFINITY, l2 = INFINITY;
+    float h0 = -INFINITY, h1 = -INFINITY, h2 = -INFINITY;
+    int nonfinite = 0;
+#pragma omp parallel for simd schedule(static) num_threads(threads) if (n > PARALLEL_MIN) \
+    reduction(min : l0, l1, l2) reduction(max : h0, h1, h2) reduction(| : nonfinite)
     for (size_t i = 0; i < n; i++) {
-        const float *p = pos + 3 * i;
-        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
-            if (i < first_bad)
-                first_bad = i;
-            continue;
-        }
-        /* finite here: plain comparisons, not calls to fmin/fmax */
-        const double x = p[0], y = p[1], z = p[2];
+        const float x = pos[3 * i], y = pos[3 * i + 1], z = pos[3 * i + 2];
+        /* NaN fails every comparison, infinity the bound */
+        nonfinite |= !(fabsf(x) <= FLT_MAX) | !(fabsf(y) <= FLT_MAX) | !(fabsf(z) <= FLT_MAX);
         l0 = x < l0 ? x : l0, l1 = y < l1 ? y : l1, l2 = z < l2 ? z : l2;
         h0 = x > h0 ? x : h0, h1 = y > h1 ? y : h1, h2 = z > h2 ? z : h2;
     }
@@ -76,8 +74,15 @@ bool mr_points_bounds(const float *pos, size_t n, int threads, double lo[3], dou
     if (n == 0)
         for (int k = 0; k < 3; k++)
             lo[k] = hi[k] = 0;
-    *bad = first_bad;
-    return first_bad == SIZE_MAX;
+    *bad = SIZE_MAX;
+    if (!nonfinite)
+        return true;
+    for (size_t i = 0; i < 3 * n; i++)
+        if (!isfinite(pos[i])) {
+            *bad = i / 3;
+            break;
+        }
+    return false;
 }
 
 void mr_grid_init(mr_grid *grid, const double lo[3], const double hi[3], double cell)

@@ -31,10 +31,17 @@ mr_status mr_check_indices(const uint32_t *indices, size_t triangle_count,
     if (vertex_count > UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
                              "%zu vertices exceed the 32-bit index limit", vertex_count);
-    /* The smallest bad triangle, so the message is the same for every
-     * thread count. */
+    /* The largest index first, in a loop that vectorises; only a bad one
+     * makes the search for the smallest bad triangle (so the message is
+     * the same for every thread count). */
+    const size_t n = triangle_count, corners = 3 * n;
+    uint32_t top = 0;
+#pragma omp parallel for simd schedule(static) reduction(max : top) if (n > MR_PARALLEL_MIN)
+    for (size_t c = 0; c < corners; c++)
+        top = indices[c] > top ? indices[c] : top;
+    if (n == 0 || top < vertex_count)
+        return MR_OK;
     size_t first = SIZE_MAX;
-    const size_t n = triangle_count;
 #pragma omp parallel for schedule(static) reduction(min : first) if (n > MR_PARALLEL_MIN)
     for (size_t t = 0; t < n; t++) {
         const uint32_t *tri = indices + 3 * t;
