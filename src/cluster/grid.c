@@ -222,30 +222,53 @@ static inline void group_init(group *G, const sweep *s, uint32_t first, uint32_t
 #endif
 }
 
-/* Append the pairs (first + k, b) within eps, for the lanes k in `lanes`. */
-static inline bool group_test(const sweep *s, const group *G, uint32_t b, unsigned lanes,
-                              edge_buf *buf)
+/* Candidates tested before their hits are appended. */
+#define HIT_BATCH 64
+
+/*
+ * Append the pairs (first + k, b) within eps for the candidates b in
+ * [b0, b1) and the lanes k in `lanes`; in the group's own row (`own`) a
+ * candidate pairs only with the lanes before it. The tests record their
+ * hits without a branch (a hit is one candidate in five: a branch on it
+ * mispredicts often); the pairs are then appended from the records.
+ */
+static inline bool group_range(const sweep *s, const group *G, uint32_t b0, uint32_t b1,
+                               unsigned lanes, bool own, edge_buf *buf)
 {
+    uint64_t rec[HIT_BATCH];
+    while (b0 < b1) {
+        const uint32_t e = b1 - b0 > HIT_BATCH ? b0 + HIT_BATCH : b1;
+        unsigned nrec = 0;
+        for (uint32_t b = b0; b < e; b++) {
+            const uint32_t ahead = b - G->first;
+            const unsigned use = own && ahead < 4 ? lanes & ((1u << ahead) - 1) : lanes;
 #if defined(__SSE2__)
-    const __m128 dx = _mm_sub_ps(G->x, _mm_set1_ps(s->px[b]));
-    const __m128 dy = _mm_sub_ps(G->y, _mm_set1_ps(s->py[b]));
-    const __m128 dz = _mm_sub_ps(G->z, _mm_set1_ps(s->pz[b]));
-    const __m128 d2 =
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    unsigned m = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, G->e2)) & lanes;
-    if (!m)
-        return true;
-    const unsigned sure = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, G->e2in));
+            const __m128 dx = _mm_sub_ps(G->x, _mm_set1_ps(s->px[b]));
+            const __m128 dy = _mm_sub_ps(G->y, _mm_set1_ps(s->py[b]));
+            const __m128 dz = _mm_sub_ps(G->z, _mm_set1_ps(s->pz[b]));
+            const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
+                                         _mm_mul_ps(dz, dz));
+            const unsigned m = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, G->e2)) & use;
+            const unsigned sure = (unsigned)_mm_movemask_ps(_mm_cmple_ps(d2, G->e2in)) & m;
 #else
-    unsigned m = lanes, sure = 0;
+            const unsigned m = use, sure = 0;
 #endif
-    const uint32_t ib = s->ids[b];
-    while (m) {
-        const unsigned k = (unsigned)__builtin_ctz(m);
-        m &= m - 1;
-        const uint32_t a = G->first + k;
-        if (((sure >> k) & 1 || within(s, a, b)) && !buf_pair(buf, s->ids[a], ib))
-            return false;
+            rec[nrec] = (uint64_t)b << 8 | sure << 4 | m;
+            nrec += m != 0;
+        }
+        for (unsigned i = 0; i < nrec; i++) {
+            const uint32_t b = (uint32_t)(rec[i] >> 8), ib = s->ids[b];
+            const unsigned sure = (unsigned)(rec[i] >> 4) & 15;
+            unsigned m = (unsigned)rec[i] & 15;
+            while (m) {
+                const unsigned k = (unsigned)__builtin_ctz(m);
+                m &= m - 1;
+                const uint32_t a = G->first + k;
+                if (((sure >> k) & 1 || within(s, a, b)) && !buf_pair(buf, s->ids[a], ib))
+                    return false;
+            }
+        }
+        b0 = e;
     }
     return true;
 }
@@ -314,11 +337,8 @@ static bool search_rows(const sweep *s, size_t r0, size_t r1, edge_buf *buf)
                 own_hi = g + 1;
             while (own_hi < row_end && (uint64_t)s->q[own_hi] <= qmax + reach)
                 own_hi++;
-            for (uint32_t b = g + 1; b < own_hi; b++) {
-                const unsigned before = b - g < 4 ? (1u << (b - g)) - 1 : 15u;
-                if (!group_test(s, &G, b, valid & before, buf))
-                    return false;
-            }
+            if (!group_range(s, &G, g + 1, own_hi, valid, true, buf))
+                return false;
             /* the rows some point of the group is near */
             bool left = false, right = false, up = false;
             for (uint32_t a = g; a < g + count; a++) {
@@ -344,9 +364,8 @@ static bool search_rows(const sweep *s, size_t r0, size_t r1, edge_buf *buf)
                     h++;
                 lo[k] = l;
                 hi[k] = h;
-                for (uint32_t b = l; b < h; b++)
-                    if (!group_test(s, &G, b, valid, buf))
-                        return false;
+                if (!group_range(s, &G, l, h, valid, false, buf))
+                    return false;
             }
         }
     }
