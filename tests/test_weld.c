@@ -438,6 +438,20 @@ static void test_sweep_grid_edges(void **state)
                     check_cloud(p, n, radii[e], strict);
         }
     free(p);
+    /* coordinates and radii whose squares overflow a float: the float
+     * filter sees an infinite distance, the exact test decides */
+    {
+        const size_t m = 40;
+        float *h = malloc(m * 3 * sizeof *h);
+        for (size_t i = 0; i < m; i++) /* along the diagonal, 2e20 * sqrt(3) apart */
+            for (int c = 0; c < 3; c++)
+                h[3 * i + (size_t)c] = ((float)i - 20.0f) * 2e20f + (float)c * 1e17f;
+        const double big[] = {1e19, 3e20, 4e20, 7e20, 1e22};
+        for (size_t e = 0; e < sizeof big / sizeof *big; e++)
+            for (int strict = 0; strict <= 1; strict++)
+                check_cloud(h, m, big[e], strict);
+        free(h);
+    }
     /* above the parallel threshold: the threads share the rows */
     const size_t big = 17000;
     float *q = random_points(big, 3);

@@ -509,8 +509,10 @@ static mr_status sweep_build(sweep *s, const float *pos, size_t n, double eps, i
         s->eps2f = 4 * FLT_MIN;
     /* A float distance 10 ppm below eps^2 is within it however it rounded
      * (a few ulps: under 1 ppm); tiny radii, where underflow could weigh
-     * more than that, leave every candidate to the exact test. */
-    s->eps2_in = eps * eps > 1e-30 ? (float)(eps * eps * (1 - 1e-5)) : -1.0f;
+     * more than that, and radii whose square is near a float's range
+     * (an overflowed distance would pass) leave every candidate to the
+     * exact test. */
+    s->eps2_in = eps * eps > 1e-30 && eps * eps < 1e37 ? (float)(eps * eps * (1 - 1e-5)) : -1.0f;
     /* ids, positions, sweep coordinates, keys and the radix scratch */
     *peak = n * (20 + (narrow ? 12 : 20));
     const double l0 = lo[ax], l1 = lo[a1], l2 = lo[a2];
