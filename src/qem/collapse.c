@@ -243,7 +243,8 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     m->triangle_count = tc;
     m->start = mr_calloc_array(vc + 1, sizeof *m->start);
     m->count = mr_alloc_array(vc, sizeof *m->count);
-    m->pos = mr_alloc_array(3 * vc, sizeof *m->pos);
+    /* one float of padding: the batch planner reads positions as 4 */
+    m->pos = mr_alloc_array(3 * vc + 1, sizeof *m->pos);
     m->tris = mr_alloc_array(3 * tc, sizeof *m->tris);
     m->flags = mr_calloc_array(vc, sizeof *m->flags);
     if (!m->start || !m->count || !m->pos || !m->tris || !m->flags) {
