@@ -506,7 +506,7 @@ static void test_batched_close_to_greedy(void **state)
         assert_true(b.stats.max_error <= 1.25 * g.stats.max_error);
         mr_compare_options co;
         mr_compare_options_default(&co);
-        co.samples = 100000;
+        co.samples = 200000; /* as the benchmark: fewer leave the Hausdorff noisy */
         mr_compare_result cg, cb;
         assert_int_equal(mr_compare(m.positions, m.vertex_count, m.indices, m.triangle_count,
                                     g.positions, g.vertex_count, g.indices, g.triangle_count,

@@ -16,7 +16,7 @@
  * share of the collapses still needed) times a small factor -- edges
  * blocked by a neighbour's collapse would otherwise leave the pass short.
  * Costs and order are deterministic (ties keep gathering order, which is
- * by vertex id), so the result is too.
+ * by triangle), so the result is too.
  *
  * Why it is faster: no heap with mutable keys (a sift per neighbour edge
  * after every collapse), no re-evaluation of a neighbourhood that collapses
@@ -67,31 +67,22 @@ static inline float key_float(uint32_t u)
 }
 
 /*
- * Runs the block once for every live edge at v whose smaller end is v, with
- * (a, b) the edge along a half-edge of the mesh: v and the vertex after it
- * in one of its triangles (an inner edge's other half-edge runs from the
- * larger end), or, for a boundary edge whose only half-edge runs from the
- * larger end, that end and v.
+ * Runs the block once for every live edge of triangle t, as (a, b) along
+ * one of its half-edges: an inner edge from the half-edge that runs from
+ * its smaller end (its other half-edge runs from the larger one), a
+ * boundary edge from its only half-edge, whichever way it runs. The
+ * inner test is written without a branch (which end is the smaller is a
+ * coin toss); `take` is false for the half-edges the block must ignore.
  */
-#define FOR_EACH_EDGE(m, v, a, b, ...)                                                \
+#define FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, ...)                                   \
     do {                                                                               \
-        const uint32_t *list_ = mr_collapse_vertex_tris((m), (v));                     \
-        const bool vb_ = ((m)->flags[(v)] & MR_VF_BOUNDARY) != 0;                      \
-        for (uint32_t i_ = 0, n_ = (m)->count[(v)]; i_ < n_; i_++) {                   \
-            const uint32_t c_ = list_[i_], j_ = c_ % 3, base_ = c_ - j_;               \
-            const uint32_t nx_ = (m)->tris[base_ + (j_ == 2 ? 0 : j_ + 1)];            \
-            if ((v) < nx_) {                                                           \
-                const uint32_t a = (v), b = nx_;                                       \
-                __VA_ARGS__                                                            \
-            }                                                                          \
-            if (vb_) {                                                                 \
-                const uint32_t pv_ = (m)->tris[base_ + (j_ == 0 ? 2 : j_ - 1)];        \
-                if ((v) < pv_ && ((m)->flags[pv_] & MR_VF_BOUNDARY) &&                 \
-                    mr_collapse_edge_triangles((m), (v), pv_) == 1) {                  \
-                    const uint32_t a = pv_, b = (v);                                   \
-                    __VA_ARGS__                                                        \
-                }                                                                      \
-            }                                                                          \
+        const uint32_t *tri_ = (m)->tris + 3 * (size_t)(t);                            \
+        for (int j_ = 0; j_ < 3; j_++) {                                               \
+            const uint32_t a = tri_[j_], b = tri_[j_ == 2 ? 0 : j_ + 1];               \
+            bool take = a < b;                                                         \
+            if (!take && ((m)->flags[a] & (m)->flags[b] & MR_VF_BOUNDARY))             \
+                take = mr_collapse_edge_triangles((m), a, b) == 1;                     \
+            __VA_ARGS__                                                                \
         }                                                                              \
     } while (0)
 
@@ -99,10 +90,10 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
 {
     const mr_collapse_mesh *m = &s->m;
     size_t edges = 0;
-    for (uint32_t v = 0; v < m->vertex_count; v++) {
-        if (m->flags[v] & MR_VF_REMOVED)
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        if (m->tris[3 * t] == NONE)
             continue;
-        FOR_EACH_EDGE(m, v, a, b, { (void)a, (void)b, edges++; });
+        FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, { (void)a, (void)b, edges += take; });
     }
     s->cand_cap = edges + 1;
     s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
@@ -131,7 +122,7 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
 }
 
 /* Every live edge whose collapse may happen (cost finite and within the
- * limit), with its ends and cost, in vertex order. Returns how
+ * limit), with its ends and cost, in triangle order. Returns how
  * many were written (at most s->cand_cap). Edges at a vertex of more than
  * MR_COLLAPSE_MAX_DEGREE triangles are left out: they cannot collapse yet
  * (mr_collapse_valid), and as candidates the cheap ones would hold back
@@ -161,18 +152,18 @@ static size_t gather(mr_simplifier *s, double limit)
         }                                                                             \
         nb = 0;                                                                       \
     } while (0)
-    for (uint32_t v = 0; v < m->vertex_count; v++) {
-        if (m->flags[v] & MR_VF_REMOVED || m->count[v] > MR_COLLAPSE_MAX_DEGREE)
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        if (m->tris[3 * t] == NONE)
             continue;
-        FOR_EACH_EDGE(m, v, a, b, {
-            /* v's own count is checked above */
-            if (m->count[a == v ? b : a] <= MR_COLLAPSE_MAX_DEGREE) {
-                ea[nb] = a;
-                eb[nb] = b;
-                if (++nb == B)
-                    FLUSH();
-            }
+        FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
+            /* stored always, kept when taken */
+            ea[nb] = a;
+            eb[nb] = b;
+            nb += take & (m->count[a] <= MR_COLLAPSE_MAX_DEGREE) &
+                  (m->count[b] <= MR_COLLAPSE_MAX_DEGREE);
         });
+        if (nb > B - 3)
+            FLUSH();
     }
     FLUSH();
 #undef FLUSH
@@ -296,7 +287,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
          * which retires the candidates around them, and the next round
          * looks again among the rest. Iterated, this takes the same edges
          * as taking them in order of cost, skipping those at a marked end;
-         * but the collapses of a round run in gathering (vertex) order,
+         * but the collapses of a round run in gathering (triangle) order,
          * so they walk the mesh in memory order. A candidate whose ends
          * are both unmarked is still an edge of the mesh with its cost:
          * only the ends of a collapse move, and the triangles it deletes
