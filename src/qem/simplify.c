@@ -790,18 +790,86 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
 
 /* ---- setup ----------------------------------------------------------------- */
 
+/* Triangles of one vertex that inner_quadric takes at once. */
+#define INNER_FAN 32
+
+/* Each triangle's area-weighted plane term c c^T / (2 |c|) (6 entries)
+ * and area |c| / 2 for the cross products c of the edges (u, w) in
+ * in[k * INNER_FAN + i] (u: k = 0..2, w: 3..5); zero for a triangle
+ * without area. The same expressions as initial_quadric's scalar loop,
+ * so the same bits. */
+MR_VECTOR_CLONES static void plane_terms(double *in, size_t n, double *out)
+{
+#pragma omp simd
+    for (size_t i = 0; i < n; i++) {
+        const double u0 = in[i], u1 = in[INNER_FAN + i], u2 = in[2 * INNER_FAN + i];
+        const double w0 = in[3 * INNER_FAN + i], w1 = in[4 * INNER_FAN + i],
+                     w2 = in[5 * INNER_FAN + i];
+        const double c0 = u1 * w2 - u2 * w1, c1 = u2 * w0 - u0 * w2, c2 = u0 * w1 - u1 * w0;
+        const double len = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+        const bool area = len > 0;
+        const double f = 0.5 / (area ? len : 1.0);
+        out[i] = area ? f * c0 * c0 : 0;
+        out[INNER_FAN + i] = area ? f * c0 * c1 : 0;
+        out[2 * INNER_FAN + i] = area ? f * c0 * c2 : 0;
+        out[3 * INNER_FAN + i] = area ? f * c1 * c1 : 0;
+        out[4 * INNER_FAN + i] = area ? f * c1 * c2 : 0;
+        out[5 * INNER_FAN + i] = area ? f * c2 * c2 : 0;
+        out[6 * INNER_FAN + i] = area ? 0.5 * len : 0;
+    }
+}
+
+/* initial_quadric of a vertex with no constraint planes and at most
+ * INNER_FAN triangles: the plane terms computed in one vector loop, then
+ * summed in list order as the scalar loop does (adding a zero for a
+ * triangle without area changes no bit: the sums start at +0). */
+static void inner_quadric(mr_simplifier *s, uint32_t v)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    const uint32_t n = m->count[v];
+    double in[6 * INNER_FAN], t[7 * INNER_FAN];
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        const float *p0 = m->pos + 3 * (size_t)tri[0], *p1 = m->pos + 3 * (size_t)tri[1],
+                    *p2 = m->pos + 3 * (size_t)tri[2];
+        for (int k = 0; k < 3; k++) {
+            const double o = p0[k];
+            in[k * INNER_FAN + i] = (double)p1[k] - o;
+            in[(3 + k) * INNER_FAN + i] = (double)p2[k] - o;
+        }
+    }
+    plane_terms(in, n, t);
+    mr_quadric q;
+    mr_quadric_zero(&q);
+    for (uint32_t i = 0; i < n; i++) {
+        q.a00 += t[i];
+        q.a01 += t[INNER_FAN + i];
+        q.a02 += t[2 * INNER_FAN + i];
+        q.a11 += t[3 * INNER_FAN + i];
+        q.a12 += t[4 * INNER_FAN + i];
+        q.a22 += t[5 * INNER_FAN + i];
+        q.w += t[6 * INNER_FAN + i];
+    }
+    mr_quadric_store(&s->q[v], &q);
+}
+
 /* Initial quadric of v, relative to v's position: the planes of its
  * triangles (all through v) and the constraint planes of its boundary
  * edges. */
 static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight)
 {
     const mr_collapse_mesh *m = &s->m;
+    const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
+    if (!border && m->count[v] <= INNER_FAN) {
+        inner_quadric(s, v);
+        return;
+    }
     mr_quadric q;
     mr_quadric_zero(&q);
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     double pv[3];
     mr_collapse_load(m, v, pv);
-    const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
     for (uint32_t i = 0; i < m->count[v]; i++) {
         const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
         double p[3][3];
