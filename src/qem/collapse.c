@@ -83,10 +83,16 @@ static uint32_t walk_fan(const mr_collapse_mesh *m, uint32_t v, uint32_t t0, boo
  * v -> nx[i] and pv[i] -> v. An edge is non-manifold (or inconsistently
  * oriented) when two triangles run it the same way: when two nx, or two
  * pv, are equal. Otherwise (v, w) is manifold when w is some nx and some
- * pv, a boundary edge when only one of them; the unmatched nx and pv are
- * equally many, so the boundary edges are twice the triangles without a
- * successor. The fan is one when stepping from triangle i to its
- * successor, the one whose pv is nx[i] (or back), reaches all n.
+ * pv, a boundary edge when only one of them. The successor of triangle i
+ * is the one whose pv is nx[i]; the fan is one when stepping to
+ * successors (or back) from triangle 0 reaches all n.
+ *
+ * Only nx against pv is compared: two pv equal to an nx give it two
+ * successors, two nx with one successor give that one two predecessors,
+ * and once neither happens the triangles without a successor are as many
+ * as those without a predecessor -- so two equal nx, or two equal pv,
+ * that match nothing make two triangles without a successor, more than
+ * one fan can have.
  */
 static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
 {
@@ -99,50 +105,47 @@ static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
         pv[i] = tri[j == 0 ? 2 : j - 1];
         pred[i] = -1;
     }
-    uint32_t open = 0;
 #if defined(__SSE2__)
-    if (n <= 8 && m->vertex_count < UINT32_MAX - 16) {
-        /* The usual fan, eight lanes at a time: the free lanes hold ids no
-         * vertex has and that match nothing. Each nx and each pv must
-         * match itself only; the pv equal to nx[i], if any, is the
-         * successor of triangle i. */
-        for (uint32_t i = n; i < 8; i++) {
-            nx[i] = UINT32_MAX - 2 * i;
-            pv[i] = UINT32_MAX - 2 * i - 1;
-        }
-        const __m128i nx0 = _mm_loadu_si128((const __m128i *)nx),
-                      nx1 = _mm_loadu_si128((const __m128i *)(nx + 4)),
-                      pv0 = _mm_loadu_si128((const __m128i *)pv),
+    if (n <= 8) {
+        /* The usual fan, eight lanes at a time; the free lanes hold a
+         * copy of pv[0], which adds nothing new to match. */
+        for (uint32_t i = n; i < 8; i++)
+            pv[i] = pv[0];
+        const __m128i pv0 = _mm_loadu_si128((const __m128i *)pv),
                       pv1 = _mm_loadu_si128((const __m128i *)(pv + 4));
-#define LANES_EQUAL(v0, v1, x)                                                        \
-    ((unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v0), (x)))) |        \
-     (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v1), (x)))) << 4)
+        const unsigned lanes = (1u << n) - 1;
         for (uint32_t i = 0; i < n; i++) {
-            const __m128i x = _mm_set1_epi32((int)nx[i]), y = _mm_set1_epi32((int)pv[i]);
-            const unsigned same_nx = LANES_EQUAL(nx0, nx1, x), same_pv = LANES_EQUAL(pv0, pv1, y);
-            if ((same_nx & (same_nx - 1)) | (same_pv & (same_pv - 1)))
+            const __m128i x = _mm_set1_epi32((int)nx[i]);
+            const unsigned hit =
+                ((unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(pv0, x))) |
+                 (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(pv1, x))) << 4) &
+                lanes;
+            if (hit & (hit - 1))
                 return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
-            const unsigned next = LANES_EQUAL(pv0, pv1, x);
-            succ[i] = next ? __builtin_ctz(next) : -1;
+            succ[i] = hit ? __builtin_ctz(hit) : -1;
         }
-#undef LANES_EQUAL
     } else
 #endif
     for (uint32_t i = 0; i < n; i++) {
-        bool dup = false;
-        for (uint32_t j = i + 1; j < n; j++)
-            dup |= (nx[j] == nx[i]) | (pv[j] == pv[i]);
-        if (dup)
+        int s = -1, hits = 0;
+        for (uint32_t j = 0; j < n; j++) {
+            const bool hit = pv[j] == nx[i];
+            s = hit ? (int)j : s;
+            hits += hit;
+        }
+        if (hits > 1)
             return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
-        int s = -1;
-        for (uint32_t j = 0; j < n; j++)
-            s = pv[j] == nx[i] ? (int)j : s;
         succ[i] = s;
     }
+    uint32_t open = 0;
     for (uint32_t i = 0; i < n; i++) {
-        if (succ[i] >= 0)
-            pred[succ[i]] = (int)i;
-        open += succ[i] < 0;
+        if (succ[i] < 0) {
+            open++;
+            continue;
+        }
+        if (pred[succ[i]] >= 0)
+            return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
+        pred[succ[i]] = (int)i;
     }
     if (open > 1)
         return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* more than two boundary edges */
