@@ -424,27 +424,62 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
 
     /* (1) the link condition: a neighbour of u other than the opposite
      * vertices must not be a neighbour of v. */
-    uint32_t nbv[2 * MR_COLLAPSE_MAX_DEGREE];
-    uint32_t nn = 0;
+    uint32_t nbn[MR_COLLAPSE_MAX_DEGREE + 8], nbp[MR_COLLAPSE_MAX_DEGREE + 8];
     for (uint32_t i = 0; i < nv; i++) {
         const uint32_t e = lv[i], j = e % 3;
         const uint32_t *tri = CORNER_TRI(m, e);
-        nbv[nn++] = corner_next(tri, j);
-        nbv[nn++] = corner_prev(tri, j);
+        nbn[i] = corner_next(tri, j);
+        nbp[i] = corner_prev(tri, j);
     }
     /* Around an inner manifold vertex every neighbour is the vertex after
      * it in exactly one triangle: then the vertices after u (in its
      * triangles off the edge; the one after u in an edge triangle is v or
      * an opposite vertex) and after v are all the neighbours. */
     const bool inner = !((fu | fv) & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD));
-    const uint32_t step = inner ? 2 : 1;
+#if defined(__SSE2__)
+    if (nv <= 8) {
+        /* v's usual fan, eight lanes at a time; the free lanes hold an
+         * opposite vertex, which matches nothing that counts. */
+        for (uint32_t i = nv; i < 8; i++)
+            nbn[i] = nbp[i] = opp[0];
+#define LANES_EQUAL(v0, v1, x)                                                        \
+    ((unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v0), (x)))) |        \
+     (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v1), (x)))) << 4)
+        const __m128i n0 = _mm_loadu_si128((const __m128i *)nbn),
+                      n1 = _mm_loadu_si128((const __m128i *)(nbn + 4)),
+                      p0 = _mm_loadu_si128((const __m128i *)nbp),
+                      p1 = _mm_loadu_si128((const __m128i *)(nbp + 4));
+        const __m128i o0 = _mm_set1_epi32((int)opp[0]), o1 = _mm_set1_epi32((int)opp[1]);
+        const unsigned keep_n = ~(LANES_EQUAL(n0, n1, o0) | LANES_EQUAL(n0, n1, o1)),
+                       keep_p = ~(LANES_EQUAL(p0, p1, o0) | LANES_EQUAL(p0, p1, o1));
+        for (uint32_t i = 0; i < nu; i++) {
+            const uint32_t a = nua[i], b = nub[i];
+            if (a == v || b == v)
+                continue;
+            const __m128i xa = _mm_set1_epi32((int)a);
+            unsigned hit = LANES_EQUAL(n0, n1, xa) & keep_n;
+            if (!inner) {
+                const __m128i xb = _mm_set1_epi32((int)b);
+                hit |= (LANES_EQUAL(n0, n1, xb) & keep_n) |
+                       ((LANES_EQUAL(p0, p1, xa) | LANES_EQUAL(p0, p1, xb)) & keep_p);
+            }
+            if (hit)
+                return false;
+        }
+#undef LANES_EQUAL
+    } else
+#endif
     for (uint32_t i = 0; i < nu; i++) {
-        const uint32_t a = nua[i], b = inner ? a : nub[i];
-        if (a == v || nub[i] == v)
+        const uint32_t a = nua[i], b = nub[i];
+        if (a == v || b == v)
             continue;
-        for (uint32_t j = 0; j < nn; j += step) {
-            const uint32_t x = nbv[j];
-            if ((x == a || x == b) && x != opp[0] && x != opp[1])
+        for (uint32_t j = 0; j < nv; j++) {
+            const uint32_t x = nbn[j], y = nbp[j];
+            const bool x_counts = x != opp[0] && x != opp[1],
+                       y_counts = y != opp[0] && y != opp[1];
+            if (x_counts && (x == a || (!inner && x == b)))
+                return false;
+            if (!inner && y_counts && (y == a || y == b))
                 return false;
         }
     }
@@ -468,7 +503,7 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
     }
     if (!v_stays) {
         for (uint32_t i = 0; i < nv; i++) {
-            const uint32_t a = nbv[2 * i], b = nbv[2 * i + 1];
+            const uint32_t a = nbn[i], b = nbp[i];
             if (a != u && b != u)
                 fan_add(m, fan, nf++, v, a, b);
         }

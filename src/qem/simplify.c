@@ -839,7 +839,12 @@ static void inner_quadric(mr_simplifier *s, uint32_t v)
             in[(3 + k) * INNER_FAN + i] = (double)p2[k] - o;
         }
     }
-    plane_terms(in, n, t);
+    /* whole vectors only: padding lanes have no area */
+    const uint32_t n4 = (n + 3) & ~3u;
+    for (uint32_t i = n; i < n4; i++)
+        for (int k = 0; k < 6; k++)
+            in[k * INNER_FAN + i] = 0;
+    plane_terms(in, n4, t);
     mr_quadric q;
     mr_quadric_zero(&q);
     for (uint32_t i = 0; i < n; i++) {
