@@ -508,7 +508,12 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                 fan_add(m, fan, nf++, v, a, b);
         }
     }
-    return fan_ok(fan, nf, t, limits->min_cos_turn);
+    /* whole vectors only: the padding repeats the first triangle */
+    const size_t nf4 = (nf + 3) & ~(size_t)3;
+    for (size_t i = nf; i < nf4 && nf; i++)
+        for (int k = 0; k < 9; k++)
+            fan[k * RING + i] = fan[k * RING];
+    return fan_ok(fan, nf4, t, limits->min_cos_turn);
 }
 
 /* ---- apply ------------------------------------------------------------------ */
