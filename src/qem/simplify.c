@@ -580,6 +580,33 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
     uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];
     for (size_t i0 = 0; i0 < n; i0 += COST_BATCH) {
         const size_t i1 = n - i0 < COST_BATCH ? n : i0 + COST_BATCH;
+        uint8_t any = 0;
+        for (size_t i = i0; i < i1; i++)
+            any |= m->flags[a[i]] | m->flags[b[i]];
+        if (!(any & pin)) {
+            /* the usual batch: no pinned end, every edge in its own lane */
+            const size_t nl = i1 - i0;
+            for (size_t l = 0; l < nl; l++) {
+                const uint32_t ea = a[i0 + l], eb = b[i0 + l];
+                lr[l] = ea < eb ? eb : ea;
+                lk[l] = ea < eb ? ea : eb;
+            }
+            pack_inputs(s, lr, lk, nl, in);
+            free_costs(in, nl, cost + i0, x);
+            if (r) {
+                for (size_t l = 0; l < nl; l++) {
+                    const size_t i = i0 + l;
+                    const uint32_t kk = lk[l];
+                    r[i] = lr[l];
+                    k[i] = kk;
+                    target[3 * i] = (double)m->pos[3 * (size_t)kk] + x[l];
+                    target[3 * i + 1] = (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l];
+                    target[3 * i + 2] =
+                        (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l];
+                }
+            }
+            continue;
+        }
         size_t nl = 0;
         for (size_t i = i0; i < i1; i++) {
             const uint32_t ea = a[i], eb = b[i];
@@ -790,32 +817,34 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_error *err)
 
 /* ---- setup ----------------------------------------------------------------- */
 
-/* Triangles of one vertex that inner_quadric takes at once. */
+/* Triangles of one vertex that inner_quadric takes at once, and the
+ * length of its rows (room for three lanes of padding). */
 #define INNER_FAN 32
+#define INNER_ROW (INNER_FAN + 4)
 
 /* Each triangle's area-weighted plane term c c^T / (2 |c|) (6 entries)
  * and area |c| / 2 for the cross products c of the edges (u, w) in
- * in[k * INNER_FAN + i] (u: k = 0..2, w: 3..5); zero for a triangle
+ * in[k * INNER_ROW + i] (u: k = 0..2, w: 3..5); zero for a triangle
  * without area. The same expressions as initial_quadric's scalar loop,
  * so the same bits. */
 MR_VECTOR_CLONES static void plane_terms(double *in, size_t n, double *out)
 {
 #pragma omp simd
     for (size_t i = 0; i < n; i++) {
-        const double u0 = in[i], u1 = in[INNER_FAN + i], u2 = in[2 * INNER_FAN + i];
-        const double w0 = in[3 * INNER_FAN + i], w1 = in[4 * INNER_FAN + i],
-                     w2 = in[5 * INNER_FAN + i];
+        const double u0 = in[i], u1 = in[INNER_ROW + i], u2 = in[2 * INNER_ROW + i];
+        const double w0 = in[3 * INNER_ROW + i], w1 = in[4 * INNER_ROW + i],
+                     w2 = in[5 * INNER_ROW + i];
         const double c0 = u1 * w2 - u2 * w1, c1 = u2 * w0 - u0 * w2, c2 = u0 * w1 - u1 * w0;
         const double len = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
         const bool area = len > 0;
         const double f = 0.5 / (area ? len : 1.0);
         out[i] = area ? f * c0 * c0 : 0;
-        out[INNER_FAN + i] = area ? f * c0 * c1 : 0;
-        out[2 * INNER_FAN + i] = area ? f * c0 * c2 : 0;
-        out[3 * INNER_FAN + i] = area ? f * c1 * c1 : 0;
-        out[4 * INNER_FAN + i] = area ? f * c1 * c2 : 0;
-        out[5 * INNER_FAN + i] = area ? f * c2 * c2 : 0;
-        out[6 * INNER_FAN + i] = area ? 0.5 * len : 0;
+        out[INNER_ROW + i] = area ? f * c0 * c1 : 0;
+        out[2 * INNER_ROW + i] = area ? f * c0 * c2 : 0;
+        out[3 * INNER_ROW + i] = area ? f * c1 * c1 : 0;
+        out[4 * INNER_ROW + i] = area ? f * c1 * c2 : 0;
+        out[5 * INNER_ROW + i] = area ? f * c2 * c2 : 0;
+        out[6 * INNER_ROW + i] = area ? 0.5 * len : 0;
     }
 }
 
@@ -828,33 +857,33 @@ static void inner_quadric(mr_simplifier *s, uint32_t v)
     const mr_collapse_mesh *m = &s->m;
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     const uint32_t n = m->count[v];
-    double in[6 * INNER_FAN], t[7 * INNER_FAN];
+    double in[6 * INNER_ROW], t[7 * INNER_ROW];
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
         const float *p0 = m->pos + 3 * (size_t)tri[0], *p1 = m->pos + 3 * (size_t)tri[1],
                     *p2 = m->pos + 3 * (size_t)tri[2];
         for (int k = 0; k < 3; k++) {
             const double o = p0[k];
-            in[k * INNER_FAN + i] = (double)p1[k] - o;
-            in[(3 + k) * INNER_FAN + i] = (double)p2[k] - o;
+            in[k * INNER_ROW + i] = (double)p1[k] - o;
+            in[(3 + k) * INNER_ROW + i] = (double)p2[k] - o;
         }
     }
     /* whole vectors only: padding lanes have no area */
-    const uint32_t n4 = (n + 3) & ~3u;
-    for (uint32_t i = n; i < n4; i++)
-        for (int k = 0; k < 6; k++)
-            in[k * INNER_FAN + i] = 0;
-    plane_terms(in, n4, t);
+    for (int k = 0; k < 6; k++) {
+        double *row = in + k * INNER_ROW + n;
+        row[0] = row[1] = row[2] = 0;
+    }
+    plane_terms(in, (n + 3) & ~3u, t);
     mr_quadric q;
     mr_quadric_zero(&q);
     for (uint32_t i = 0; i < n; i++) {
         q.a00 += t[i];
-        q.a01 += t[INNER_FAN + i];
-        q.a02 += t[2 * INNER_FAN + i];
-        q.a11 += t[3 * INNER_FAN + i];
-        q.a12 += t[4 * INNER_FAN + i];
-        q.a22 += t[5 * INNER_FAN + i];
-        q.w += t[6 * INNER_FAN + i];
+        q.a01 += t[INNER_ROW + i];
+        q.a02 += t[2 * INNER_ROW + i];
+        q.a11 += t[3 * INNER_ROW + i];
+        q.a12 += t[4 * INNER_ROW + i];
+        q.a22 += t[5 * INNER_ROW + i];
+        q.w += t[6 * INNER_ROW + i];
     }
     mr_quadric_store(&s->q[v], &q);
 }
