@@ -145,10 +145,13 @@ static size_t gather(mr_simplifier *s, double limit)
         if (nb == 0)                                                                  \
             break;                                                                    \
         mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
-        for (size_t i = 0; i < nb; i++) {                                             \
-            /* an infinite cost is a collapse that must not happen */                 \
-            if (cost[i] <= limit && cost[i] < INFINITY && n < cap)                    \
-                out[n++] = (mr_candidate){float_key((float)cost[i]), ea[i], eb[i]};   \
+        /* an infinite cost is a collapse that must not happen; every    \
+         * candidate is stored, those allowed are kept (a mesh has no     \
+         * more edges than at the start: cap is never reached) */         \
+        const size_t room = cap - n < nb ? cap - n : nb;                              \
+        for (size_t i = 0; i < room; i++) {                                           \
+            out[n] = (mr_candidate){float_key((float)cost[i]), ea[i], eb[i]};         \
+            n += (cost[i] <= limit) & (cost[i] < INFINITY);                           \
         }                                                                             \
         nb = 0;                                                                       \
     } while (0)
