@@ -24,6 +24,12 @@
 static inline uint32_t mr_corner_next(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 static inline uint32_t mr_corner_prev(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 
+/* The same within a triangle: the corner after / before corner j (0..2),
+ * without a branch (which corner holds a vertex is a coin toss to a
+ * branch predictor). */
+static inline uint32_t mr_local_next(uint32_t j) { return (0x09u >> (2 * j)) & 3u; }
+static inline uint32_t mr_local_prev(uint32_t j) { return (0x12u >> (2 * j)) & 3u; }
+
 static inline bool mr_triangle_is_degenerate(const uint32_t *tri)
 {
     return tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];

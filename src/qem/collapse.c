@@ -101,8 +101,8 @@ static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t j = list[i] % 3, *tri = m->tris + (list[i] - j);
-        nx[i] = tri[j == 2 ? 0 : j + 1];
-        pv[i] = tri[j == 0 ? 2 : j - 1];
+        nx[i] = tri[mr_local_next(j)];
+        pv[i] = tri[mr_local_prev(j)];
         pred[i] = -1;
     }
 #if defined(__SSE2__)
@@ -366,11 +366,11 @@ static inline void fan_add(const mr_collapse_mesh *m, double *in, size_t i, uint
 #define CORNER_TRI(m, e) ((m)->tris + ((e) - (e) % 3))
 static inline uint32_t corner_next(const uint32_t *tri, uint32_t j)
 {
-    return tri[j == 2 ? 0 : j + 1];
+    return tri[mr_local_next(j)];
 }
 static inline uint32_t corner_prev(const uint32_t *tri, uint32_t j)
 {
-    return tri[j == 0 ? 2 : j - 1];
+    return tri[mr_local_prev(j)];
 }
 
 bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
@@ -397,24 +397,26 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         return false;
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
 
-    /* u's neighbours across each of its corners, once; the triangles on the
-     * edge and their opposite vertices. */
+    /* u's triangles off the edge, as the neighbours across u's corner
+     * (nua, nub: compacted, no branch on which ones they are); the
+     * triangles on the edge and their opposite vertices. */
     uint32_t nua[MR_COLLAPSE_MAX_DEGREE], nub[MR_COLLAPSE_MAX_DEGREE];
-    uint32_t opp[2] = {MR_COLLAPSE_NONE, MR_COLLAPSE_NONE}, ne = 0;
+    uint32_t opp[4], ne = 0, no = 0;
     for (uint32_t i = 0; i < nu; i++) {
         const uint32_t e = lu[i], j = e % 3;
         const uint32_t *tri = CORNER_TRI(m, e);
         const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
-        nua[i] = a;
-        nub[i] = b;
-        if (a != v && b != v)
-            continue;
-        if (ne == 2)
-            return false; /* non-manifold edge */
-        opp[ne++] = a == v ? b : a;
+        const bool on = (a == v) | (b == v);
+        nua[no] = a;
+        nub[no] = b;
+        no += !on;
+        opp[ne < 3 ? ne : 3] = a == v ? b : a;
+        ne += on;
     }
-    if (ne == 0 || (ne == 2 && opp[0] == opp[1]))
-        return false;
+    if (ne == 0 || ne > 2 || (ne == 2 && opp[0] == opp[1]))
+        return false; /* not an edge, or a non-manifold one */
+    if (ne == 1)
+        opp[1] = MR_COLLAPSE_NONE;
     /* (4) two boundary vertices joined through the inside would pinch the
      * surface; and the last triangles of a component must stay. */
     if (ne == 2 && (fu & MR_VF_BOUNDARY) && (fv & MR_VF_BOUNDARY))
@@ -423,13 +425,18 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         return false;
 
     /* (1) the link condition: a neighbour of u other than the opposite
-     * vertices must not be a neighbour of v. */
+     * vertices must not be a neighbour of v. v's triangles on the edge
+     * are left out: their vertices are u and the opposite ones, and
+     * neither can match. */
     uint32_t nbn[MR_COLLAPSE_MAX_DEGREE + 8], nbp[MR_COLLAPSE_MAX_DEGREE + 8];
+    uint32_t nw = 0;
     for (uint32_t i = 0; i < nv; i++) {
         const uint32_t e = lv[i], j = e % 3;
         const uint32_t *tri = CORNER_TRI(m, e);
-        nbn[i] = corner_next(tri, j);
-        nbp[i] = corner_prev(tri, j);
+        const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
+        nbn[nw] = a;
+        nbp[nw] = b;
+        nw += (a != u) & (b != u);
     }
     /* Around an inner manifold vertex every neighbour is the vertex after
      * it in exactly one triangle: then the vertices after u (in its
@@ -437,10 +444,10 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
      * an opposite vertex) and after v are all the neighbours. */
     const bool inner = !((fu | fv) & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD));
 #if defined(__SSE2__)
-    if (nv <= 8) {
+    if (nw <= 8) {
         /* v's usual fan, eight lanes at a time; the free lanes hold an
          * opposite vertex, which matches nothing that counts. */
-        for (uint32_t i = nv; i < 8; i++)
+        for (uint32_t i = nw; i < 8; i++)
             nbn[i] = nbp[i] = opp[0];
 #define LANES_EQUAL(v0, v1, x)                                                        \
     ((unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v0), (x)))) |        \
@@ -452,28 +459,24 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         const __m128i o0 = _mm_set1_epi32((int)opp[0]), o1 = _mm_set1_epi32((int)opp[1]);
         const unsigned keep_n = ~(LANES_EQUAL(n0, n1, o0) | LANES_EQUAL(n0, n1, o1)),
                        keep_p = ~(LANES_EQUAL(p0, p1, o0) | LANES_EQUAL(p0, p1, o1));
-        for (uint32_t i = 0; i < nu; i++) {
-            const uint32_t a = nua[i], b = nub[i];
-            if (a == v || b == v)
-                continue;
-            const __m128i xa = _mm_set1_epi32((int)a);
-            unsigned hit = LANES_EQUAL(n0, n1, xa) & keep_n;
+        unsigned hit = 0;
+        for (uint32_t i = 0; i < no; i++) {
+            const __m128i xa = _mm_set1_epi32((int)nua[i]);
+            hit |= LANES_EQUAL(n0, n1, xa) & keep_n;
             if (!inner) {
-                const __m128i xb = _mm_set1_epi32((int)b);
+                const __m128i xb = _mm_set1_epi32((int)nub[i]);
                 hit |= (LANES_EQUAL(n0, n1, xb) & keep_n) |
                        ((LANES_EQUAL(p0, p1, xa) | LANES_EQUAL(p0, p1, xb)) & keep_p);
             }
-            if (hit)
-                return false;
         }
+        if (hit)
+            return false;
 #undef LANES_EQUAL
     } else
 #endif
-    for (uint32_t i = 0; i < nu; i++) {
+    for (uint32_t i = 0; i < no; i++) {
         const uint32_t a = nua[i], b = nub[i];
-        if (a == v || b == v)
-            continue;
-        for (uint32_t j = 0; j < nv; j++) {
+        for (uint32_t j = 0; j < nw; j++) {
             const uint32_t x = nbn[j], y = nbp[j];
             const bool x_counts = x != opp[0] && x != opp[1],
                        y_counts = y != opp[0] && y != opp[1];
@@ -485,13 +488,13 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
     }
     double fan[9 * RING];
     size_t nf = 0;
-    for (uint32_t i = 0; i < nu; i++) {
+    for (uint32_t i = 0; i < no; i++) {
         const uint32_t a = nua[i], b = nub[i];
-        if (a == v || b == v)
-            continue;
         /* (3) u's triangle (u, c, d) over both opposite vertices would
          * duplicate a triangle (v, c, d) of v: a tetrahedron-like pocket. */
-        if (ne == 2 && ((a == opp[0] && b == opp[1]) || (a == opp[1] && b == opp[0]))) {
+        const bool pocket =
+            (ne == 2) & (((a == opp[0]) & (b == opp[1])) | ((a == opp[1]) & (b == opp[0])));
+        if (MR_UNLIKELY(pocket)) {
             for (uint32_t j = 0; j < nv; j++) {
                 const uint32_t *o = CORNER_TRI(m, lv[j]);
                 if (tri_has(o, a) && tri_has(o, b))
@@ -501,13 +504,9 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         /* (2) the triangle's normal under the move of u */
         fan_add(m, fan, nf++, u, a, b);
     }
-    if (!v_stays) {
-        for (uint32_t i = 0; i < nv; i++) {
-            const uint32_t a = nbn[i], b = nbp[i];
-            if (a != u && b != u)
-                fan_add(m, fan, nf++, v, a, b);
-        }
-    }
+    if (!v_stays)
+        for (uint32_t i = 0; i < nw; i++)
+            fan_add(m, fan, nf++, v, nbn[i], nbp[i]);
     /* whole vectors only: the padding repeats the first triangle */
     const size_t nf4 = (nf + 3) & ~(size_t)3;
     for (size_t i = nf; i < nf4 && nf; i++)
@@ -555,17 +554,18 @@ void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
         compact_refs(m);
 }
 
-/* Take corner id e out of its vertex c's list (order does not matter). */
+/* Take corner id e out of its vertex c's list (order does not matter):
+ * the whole list is looked at, without a branch on where e is. */
 static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
 {
     uint32_t *list = m->refs + m->start[c];
     const uint32_t n = m->count[c];
-    for (uint32_t i = 0; i < n; i++) {
-        if (list[i] == e) {
-            list[i] = list[n - 1];
-            m->count[c] = n - 1;
-            return;
-        }
+    uint32_t at = n;
+    for (uint32_t i = 0; i < n; i++)
+        at = list[i] == e ? i : at;
+    if (at < n) {
+        list[at] = list[n - 1];
+        m->count[c] = n - 1;
     }
 }
 
@@ -574,35 +574,42 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
 {
     const uint32_t nu = m->count[u], nv = m->count[v];
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
-    unsigned deleted = 0;
+    /* u's corners become v's; the triangles on the edge (one or two, as
+     * the collapse is valid) are noted by their third corner and deleted
+     * after the loop, which has no branch on which they are. */
+    uint32_t dead[3];
+    unsigned nd = 0;
     for (uint32_t i = 0; i < nu; i++) {
         const uint32_t e = lu[i], j = e % 3, base = e - j;
         uint32_t *tri = m->tris + base;
-        const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
-        if (tri[jn] == v || tri[jp] == v) {
-            const uint32_t jc = tri[jn] == v ? jp : jn;
-            const uint32_t c = tri[jc];
-            list_remove(m, c, base + jc);
-            if (m->count[c] == 0) { /* an ear's tip: now unreferenced */
-                m->flags[c] |= MR_VF_REMOVED;
-                m->live_vertices--;
-            }
-            tri[0] = tri[1] = tri[2] = MR_COLLAPSE_NONE;
-            deleted++;
-        } else {
-            tri[j] = v;
-        }
+        const uint32_t jn = mr_local_next(j), jp = mr_local_prev(j);
+        const bool on_n = tri[jn] == v, on = on_n | (tri[jp] == v);
+        dead[nd] = base + (on_n ? jp : jn);
+        nd += on & (nd < 2);
+        tri[j] = v;
     }
+    for (unsigned d = 0; d < nd; d++) {
+        const uint32_t ec = dead[d], base = ec - ec % 3, c = m->tris[ec];
+        list_remove(m, c, ec);
+        if (m->count[c] == 0) { /* an ear's tip: now unreferenced */
+            m->flags[c] |= MR_VF_REMOVED;
+            m->live_vertices--;
+        }
+        m->tris[base] = m->tris[base + 1] = m->tris[base + 2] = MR_COLLAPSE_NONE;
+    }
+    const unsigned deleted = nd;
     /* v's merged list, at the end of refs: v's surviving triangles, then
      * u's (their corners now hold v). */
     uint32_t *out = m->refs + m->refs_size;
     uint32_t n = 0;
-    for (uint32_t i = 0; i < nv; i++)
-        if (m->tris[lv[i] - lv[i] % 3] != MR_COLLAPSE_NONE)
-            out[n++] = lv[i];
-    for (uint32_t i = 0; i < nu; i++)
-        if (m->tris[lu[i] - lu[i] % 3] != MR_COLLAPSE_NONE)
-            out[n++] = lu[i];
+    for (uint32_t i = 0; i < nv; i++) {
+        out[n] = lv[i];
+        n += m->tris[lv[i] - lv[i] % 3] != MR_COLLAPSE_NONE;
+    }
+    for (uint32_t i = 0; i < nu; i++) {
+        out[n] = lu[i];
+        n += m->tris[lu[i] - lu[i] % 3] != MR_COLLAPSE_NONE;
+    }
     m->start[v] = (uint32_t)m->refs_size;
     m->count[v] = n;
     m->refs_size += n;

@@ -31,6 +31,7 @@
 #define MR_COLLAPSE_H
 
 #include "../core/internal.h"
+#include "../mesh/adjacency.h"
 
 #define MR_COLLAPSE_NONE UINT32_MAX
 
@@ -92,7 +93,7 @@ static inline const uint32_t *mr_collapse_vertex_tris(const mr_collapse_mesh *m,
 static inline uint32_t mr_collapse_he_dst(const mr_collapse_mesh *m, uint32_t h)
 {
     const uint32_t j = h % 3;
-    return m->tris[h - j + (j == 2 ? 0 : j + 1)];
+    return m->tris[h - j + mr_local_next(j)];
 }
 
 static inline void mr_collapse_load(const mr_collapse_mesh *m, uint32_t v, double p[3])

@@ -444,7 +444,7 @@ static uint32_t he_twin(const mr_collapse_mesh *m, uint32_t h)
     const uint32_t a = m->tris[h], b = he_dst(m, h), t = h / 3;
     const uint32_t *list = mr_collapse_vertex_tris(m, a);
     for (uint32_t i = 0, n = m->count[a]; i < n; i++) {
-        const uint32_t j = list[i] % 3, base = list[i] - j, p = j == 0 ? 2 : j - 1;
+        const uint32_t j = list[i] % 3, base = list[i] - j, p = mr_local_prev(j);
         if (m->tris[base + p] == b && base != 3 * t)
             return base + p;
     }
@@ -679,8 +679,8 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
             const uint32_t j = list[i] % 3;
             const uint32_t *tri = m->tris + (list[i] - j);
             cj[i] = j;
-            nx[i] = tri[j == 2 ? 0 : j + 1];
-            pv[i] = tri[j == 0 ? 2 : j - 1];
+            nx[i] = tri[mr_local_next(j)];
+            pv[i] = tri[mr_local_prev(j)];
         }
         for (uint32_t i = 0; i < n; i++) {
             const uint32_t x = nx[i], p = pv[i], j = cj[i];
@@ -697,14 +697,14 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
             const uint32_t base = list[i] - j;
             edge_enqueue(s, base + j, tw_out);
             if (!in_twinned)
-                edge_enqueue(s, base + (j == 0 ? 2 : j - 1), NONE);
+                edge_enqueue(s, base + mr_local_prev(j), NONE);
         }
         return;
     }
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t j = list[i] % 3, t = list[i] / 3;
         const uint32_t *tri = m->tris + 3 * (size_t)t;
-        const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
+        const uint32_t jn = mr_local_next(j), jp = mr_local_prev(j);
         const uint32_t x = tri[jn], p = tri[jp];
         uint32_t tw_out = NONE;
         bool in_twinned = false;
@@ -734,7 +734,7 @@ static void edge_requeue_vertex(mr_simplifier *s, uint32_t x, uint32_t k)
     for (uint32_t i = 0, n = m->count[x]; i < n; i++) {
         const uint32_t j = list[i] % 3, t = list[i] / 3;
         const uint32_t *tri = m->tris + 3 * (size_t)t;
-        const uint32_t jn = j == 2 ? 0 : j + 1, jp = j == 0 ? 2 : j - 1;
+        const uint32_t jn = mr_local_next(j), jp = mr_local_prev(j);
         if (tri[jn] != k) {
             const uint32_t h = 3 * t + j, tw = he_twin(m, h);
             const uint32_t rep = tw != NONE && tw < h ? tw : h;
