@@ -155,18 +155,26 @@ static size_t gather(mr_simplifier *s, double limit)
         }                                                                             \
         nb = 0;                                                                       \
     } while (0)
-    for (size_t t = 0; t < m->triangle_count; t++) {
-        if (m->tris[3 * t] == NONE)
-            continue;
-        FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
-            /* stored always, kept when taken */
-            ea[nb] = a;
-            eb[nb] = b;
-            nb += take & (m->count[a] <= MR_COLLAPSE_MAX_DEGREE) &
-                  (m->count[b] <= MR_COLLAPSE_MAX_DEGREE);
-        });
-        if (nb > B - 3)
-            FLUSH();
+    /* Triangles 64 at a time: which are live is read without a branch
+     * (collapses leave live and deleted ones interleaved), the live ones
+     * are visited from the mask. */
+    for (size_t t0 = 0; t0 < m->triangle_count; t0 += 64) {
+        const size_t nt = m->triangle_count - t0 < 64 ? m->triangle_count - t0 : 64;
+        uint64_t live = 0;
+        for (size_t i = 0; i < nt; i++)
+            live |= (uint64_t)(m->tris[3 * (t0 + i)] != NONE) << i;
+        for (; live; live &= live - 1) {
+            const size_t t = t0 + (size_t)__builtin_ctzll(live);
+            FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
+                /* stored always, kept when taken */
+                ea[nb] = a;
+                eb[nb] = b;
+                nb += take & (m->count[a] <= MR_COLLAPSE_MAX_DEGREE) &
+                      (m->count[b] <= MR_COLLAPSE_MAX_DEGREE);
+            });
+            if (nb > B - 3)
+                FLUSH();
+        }
     }
     FLUSH();
 #undef FLUSH
@@ -279,9 +287,10 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             const uint32_t kth = rank_key(s, n, (size_t)goal);
             const uint32_t lim = float_key(key_float(kth) * PASS_SLACK);
             nsel = 0;
-            for (size_t i = 0; i < n; i++)
-                if (cand[i].key <= lim)
-                    cand[nsel++] = cand[i];
+            for (size_t i = 0; i < n; i++) {
+                cand[nsel] = cand[i];
+                nsel += cand[i].key <= lim;
+            }
         }
         const bool partial = nsel < n;
 
@@ -305,12 +314,12 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             size_t live = 0;
             for (size_t i = 0; i < nsel; i++) {
                 const mr_candidate c = cand[i];
-                if (s->mark[c.a] | s->mark[c.b])
-                    continue;
-                const uint64_t id = (uint64_t)c.key << 32 | live;
+                const bool retired = s->mark[c.a] | s->mark[c.b];
+                const uint64_t id = retired ? UINT64_MAX : (uint64_t)c.key << 32 | live;
                 best[c.a] = id < best[c.a] ? id : best[c.a];
                 best[c.b] = id < best[c.b] ? id : best[c.b];
-                cand[live++] = c;
+                cand[live] = c;
+                live += !retired;
             }
             nsel = live;
             /* The winners, moved to the front (the rest keep their order
@@ -319,12 +328,12 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
              * winner's cost is still exact when it is applied. */
             size_t wins = 0;
             for (size_t i = 0; i < nsel; i++) {
-                const mr_candidate c = cand[i];
+                const mr_candidate c = cand[i], w = cand[wins];
                 const uint64_t id = (uint64_t)c.key << 32 | i;
-                if (best[c.a] == id && best[c.b] == id) {
-                    cand[i] = cand[wins];
-                    cand[wins++] = c;
-                }
+                const bool win = (best[c.a] == id) & (best[c.b] == id);
+                cand[i] = win ? w : c;
+                cand[wins] = win ? c : w;
+                wins += win;
             }
             for (size_t i = 0; i < nsel; i++)
                 best[cand[i].a] = best[cand[i].b] = UINT64_MAX;
