@@ -315,7 +315,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             for (size_t i = 0; i < nsel; i++) {
                 const mr_candidate c = cand[i];
                 const bool retired = s->mark[c.a] | s->mark[c.b];
-                const uint64_t id = retired ? UINT64_MAX : (uint64_t)c.key << 32 | live;
+                const uint64_t id = ((uint64_t)c.key << 32 | live) | -(uint64_t)retired;
                 best[c.a] = id < best[c.a] ? id : best[c.a];
                 best[c.b] = id < best[c.b] ? id : best[c.b];
                 cand[live] = c;
@@ -331,8 +331,12 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                 const mr_candidate c = cand[i], w = cand[wins];
                 const uint64_t id = (uint64_t)c.key << 32 | i;
                 const bool win = (best[c.a] == id) & (best[c.b] == id);
-                cand[i] = win ? w : c;
-                cand[wins] = win ? c : w;
+                /* select by mask: a conditional move of the records */
+                const uint32_t mk = -(uint32_t)win;
+                cand[i] = (mr_candidate){(w.key & mk) | (c.key & ~mk), (w.a & mk) | (c.a & ~mk),
+                                         (w.b & mk) | (c.b & ~mk)};
+                cand[wins] = (mr_candidate){(c.key & mk) | (w.key & ~mk),
+                                            (c.a & mk) | (w.a & ~mk), (c.b & mk) | (w.b & ~mk)};
                 wins += win;
             }
             for (size_t i = 0; i < nsel; i++)

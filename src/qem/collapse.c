@@ -410,7 +410,7 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         nua[no] = a;
         nub[no] = b;
         no += !on;
-        opp[ne < 3 ? ne : 3] = a == v ? b : a;
+        opp[ne < 3 ? ne : 3] = a ^ ((a ^ b) & -(uint32_t)(a == v)); /* a == v ? b : a */
         ne += on;
     }
     if (ne == 0 || ne > 2 || (ne == 2 && opp[0] == opp[1]))
@@ -584,7 +584,7 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
         uint32_t *tri = m->tris + base;
         const uint32_t jn = mr_local_next(j), jp = mr_local_prev(j);
         const bool on_n = tri[jn] == v, on = on_n | (tri[jp] == v);
-        dead[nd] = base + (on_n ? jp : jn);
+        dead[nd] = base + (jn ^ ((jn ^ jp) & -(uint32_t)on_n)); /* on_n ? jp : jn */
         nd += on & (nd < 2);
         tri[j] = v;
     }
