@@ -256,6 +256,12 @@ static bool try_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double 
     return true;
 }
 
+/* How many turns ahead of a winner's validity test the three prefetch
+ * stages of mr_collapse_prefetch run (~2 % on a 1M-triangle scan). */
+#define PF0 6
+#define PF1 4
+#define PF2 2
+
 /* Winners planned at once (one batch of the vector cost loop). */
 #define PLAN_BATCH 64
 
@@ -361,6 +367,13 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                 }
                 mr_simplifier_plan_edges(s, nc, pa, pb, pc, pr, pk, pt);
                 for (size_t j = 0; j < nc; j++) {
+                    static const int ahead[3] = {PF0, PF1, PF2};
+                    for (int st = 0; st < 3; st++) {
+                        if (j + ahead[st] < nc) {
+                            mr_collapse_prefetch(m, pr[j + ahead[st]], st);
+                            mr_collapse_prefetch(m, pk[j + ahead[st]], st);
+                        }
+                    }
                     if (!try_collapse(s, pr[j], pk[j], pt + 3 * j, pc[j], g.limit, &worst)) {
                         /* Out of the pass: mark nothing, so that the other
                          * candidates at its ends can win the next round. */

@@ -103,6 +103,31 @@ static inline void mr_collapse_load(const mr_collapse_mesh *m, uint32_t v, doubl
     p[2] = m->pos[3 * v + 2];
 }
 
+/*
+ * Prefetch hints for a collapse at vertex v that comes soon, in stages
+ * (each reads only what the one before brought in): 0, v's list head; 1,
+ * the list; 2, its triangles. A caller with a batch of collapses runs
+ * stage s for the collapse a few turns ahead, later stages nearer, so
+ * that a validity test does not wait for memory one load at a time.
+ */
+static inline void mr_collapse_prefetch(const mr_collapse_mesh *m, uint32_t v, int stage)
+{
+    if (stage == 0) {
+        __builtin_prefetch(m->start + v);
+        __builtin_prefetch(m->count + v);
+        return;
+    }
+    const uint32_t *list = m->refs + m->start[v];
+    const uint32_t n = m->count[v] < 16 ? m->count[v] : 16;
+    if (stage == 1) {
+        __builtin_prefetch(list);
+        __builtin_prefetch(list + n);
+        return;
+    }
+    for (uint32_t i = 0; i < n; i++)
+        __builtin_prefetch(m->tris + list[i]);
+}
+
 /* Number of live triangles with both vertices v and w (from v's list). */
 uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint32_t w);
 
