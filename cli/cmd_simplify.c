@@ -28,7 +28,7 @@ static const char usage[] =
     "                        batched: passes over all edges, cheapest first, at\n"
     "                        most one collapse per vertex a pass (default);\n"
     "                        greedy: always the single cheapest collapse, from a\n"
-    "                        heap (the reference; about 2.5x slower)\n"
+    "                        heap (the reference; about 5x slower)\n"
     "  --lock-border         never move boundary vertices\n"
     "  --boundary-weight W   weight of the quadrics that hold boundaries and seams\n"
     "                        (default 1, 0 = none)\n"
