@@ -417,6 +417,12 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         return false; /* not an edge, or a non-manifold one */
     if (ne == 1)
         opp[1] = MR_COLLAPSE_NONE;
+    /* A valid collapse takes the edge's triangles out of the opposite
+     * vertices' lists (mr_collapse_apply): fetch their heads now. */
+    for (uint32_t i = 0; i < ne; i++) {
+        __builtin_prefetch(m->start + opp[i]);
+        __builtin_prefetch(m->count + opp[i]);
+    }
     /* (4) two boundary vertices joined through the inside would pinch the
      * surface; and the last triangles of a component must stay. */
     if (ne == 2 && (fu & MR_VF_BOUNDARY) && (fv & MR_VF_BOUNDARY))
@@ -507,6 +513,8 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
     if (!v_stays)
         for (uint32_t i = 0; i < nw; i++)
             fan_add(m, fan, nf++, v, nbn[i], nbp[i]);
+    for (uint32_t i = 0; i < ne; i++) /* and the lists */
+        __builtin_prefetch(m->refs + m->start[opp[i]]);
     /* whole vectors only: the padding repeats the first triangle */
     const size_t nf4 = (nf + 3) & ~(size_t)3;
     for (size_t i = nf; i < nf4 && nf; i++)
