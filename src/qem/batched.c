@@ -89,13 +89,15 @@ static inline float key_float(uint32_t u)
 mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
 {
     const mr_collapse_mesh *m = &s->m;
-    size_t edges = 0;
-    for (size_t t = 0; t < m->triangle_count; t++) {
-        if (m->tris[3 * t] == NONE)
-            continue;
-        FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, { (void)a, (void)b, edges += take; });
-    }
-    s->cand_cap = edges + 1;
+    /* Room for every edge, bounded without visiting them: with B edges
+     * of one triangle, 3T >= B + 2 (E - B), so E <= (3T + B) / 2; and a
+     * one-triangle edge has both ends flagged BOUNDARY or NONMANIFOLD,
+     * each with at most two such edges per triangle. */
+    size_t open = 0;
+    for (size_t v = 0; v < m->vertex_count; v++)
+        open += (m->flags[v] & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD)) ? 2 * (size_t)m->count[v] : 0;
+    const size_t t3 = 3 * m->live_triangles;
+    s->cand_cap = (t3 + (open < t3 ? open : t3)) / 2 + 1;
     s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
     s->mark = mr_calloc_array(m->vertex_count, 1);
     s->hist = mr_alloc_array(HIST_BUCKETS, sizeof *s->hist);
