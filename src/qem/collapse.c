@@ -7,6 +7,13 @@
 #include <math.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
+
+/* Bit i set where lane i of the eight ids (v0, v1) equals x. */
+static inline unsigned lanes_equal(__m128i v0, __m128i v1, __m128i x)
+{
+    return (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v0, x))) |
+           (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v1, x))) << 4;
+}
 #endif
 
 /* Marks a list's first entry during compaction; corner ids stay below it
@@ -116,10 +123,7 @@ static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
         const unsigned lanes = (1u << n) - 1;
         for (uint32_t i = 0; i < n; i++) {
             const __m128i x = _mm_set1_epi32((int)nx[i]);
-            const unsigned hit =
-                ((unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(pv0, x))) |
-                 (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(pv1, x))) << 4) &
-                lanes;
+            const unsigned hit = lanes_equal(pv0, pv1, x) & lanes;
             if (hit & (hit - 1))
                 return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
             succ[i] = hit ? __builtin_ctz(hit) : -1;
@@ -455,29 +459,25 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
          * opposite vertex, which matches nothing that counts. */
         for (uint32_t i = nw; i < 8; i++)
             nbn[i] = nbp[i] = opp[0];
-#define LANES_EQUAL(v0, v1, x)                                                        \
-    ((unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v0), (x)))) |        \
-     (unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32((v1), (x)))) << 4)
         const __m128i n0 = _mm_loadu_si128((const __m128i *)nbn),
                       n1 = _mm_loadu_si128((const __m128i *)(nbn + 4)),
                       p0 = _mm_loadu_si128((const __m128i *)nbp),
                       p1 = _mm_loadu_si128((const __m128i *)(nbp + 4));
         const __m128i o0 = _mm_set1_epi32((int)opp[0]), o1 = _mm_set1_epi32((int)opp[1]);
-        const unsigned keep_n = ~(LANES_EQUAL(n0, n1, o0) | LANES_EQUAL(n0, n1, o1)),
-                       keep_p = ~(LANES_EQUAL(p0, p1, o0) | LANES_EQUAL(p0, p1, o1));
+        const unsigned keep_n = ~(lanes_equal(n0, n1, o0) | lanes_equal(n0, n1, o1)),
+                       keep_p = ~(lanes_equal(p0, p1, o0) | lanes_equal(p0, p1, o1));
         unsigned hit = 0;
         for (uint32_t i = 0; i < no; i++) {
             const __m128i xa = _mm_set1_epi32((int)nua[i]);
-            hit |= LANES_EQUAL(n0, n1, xa) & keep_n;
+            hit |= lanes_equal(n0, n1, xa) & keep_n;
             if (!inner) {
                 const __m128i xb = _mm_set1_epi32((int)nub[i]);
-                hit |= (LANES_EQUAL(n0, n1, xb) & keep_n) |
-                       ((LANES_EQUAL(p0, p1, xa) | LANES_EQUAL(p0, p1, xb)) & keep_p);
+                hit |= (lanes_equal(n0, n1, xb) & keep_n) |
+                       ((lanes_equal(p0, p1, xa) | lanes_equal(p0, p1, xb)) & keep_p);
             }
         }
         if (hit)
             return false;
-#undef LANES_EQUAL
     } else
 #endif
     for (uint32_t i = 0; i < no; i++) {
