@@ -166,6 +166,16 @@ mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
 mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
                         const mr_write_options *options, mr_error *err);
 
+/* Remove the temporary files of the writes in progress, in every thread
+ * (those of mr_mesh_write and mr_png_write), which a process killed in the
+ * middle of a write would leave beside their destinations as hidden
+ * ".meshreduce-XXXXXX" files. Async-signal-safe: it calls only unlink(),
+ * with no lock and no allocation. Meant for the handler of a signal that
+ * ends the process (SIGINT, SIGTERM, SIGHUP), which the host program
+ * installs: the library installs no signal handler. Writes still in progress
+ * then fail (their rename finds no file); a destination is never touched. */
+void mr_remove_pending_files(void);
+
 /* ------------------------------------------------------------------------ */
 /* Cleanup                                                                  */
 /* ------------------------------------------------------------------------ */
@@ -203,6 +213,35 @@ mr_status mr_mesh_remove_degenerate(mr_mesh *mesh, int remove_duplicates,
 mr_status mr_mesh_orient(mr_mesh *mesh, size_t *flipped, size_t *nonorientable,
                          mr_error *err);
 
+/*
+ * Which vertices are one point of the surface. Files split a vertex where
+ * its attributes differ across the surface (a UV seam, a hard edge: several
+ * vertices at one position), and they keep apart parts that only touch
+ * (two shells sharing a point, a double-sided sheet). Vertices at
+ * bitwise-equal positions (-0 equals +0) are one surface point where
+ * triangles join them across the split -- a geometric edge (its ends taken
+ * by position) of exactly two triangles, wound against each other, that
+ * use different vertices for it, and do not lie folded onto each other
+ * (normals opposite within a degree: two coincident sheets, as a
+ * double-sided one glued at its border) -- and the vertices so joined form one
+ * manifold fan (a disk, or a half-disk on an open boundary); otherwise
+ * they stay apart. point[v] (vertex_count entries) receives the lowest
+ * index of the vertices of v's surface point (v itself for most);
+ * *split_vertices (may be NULL) the number of vertices with point[v] != v.
+ * Positions are packed floats. Deterministic. The simplifier, the
+ * statistics and mr_mesh_weld_seams all use this one rule.
+ */
+mr_status mr_surface_points(const float *positions, size_t vertex_count,
+                            const uint32_t *indices, size_t triangle_count, uint32_t *point,
+                            size_t *split_vertices, mr_error *err);
+
+/* Merge the vertices of each surface point (mr_surface_points) whose
+ * attributes (the arrays the mesh has) are bitwise equal into the first
+ * of them, as mr_mesh_weld_exact does: after an attribute array is
+ * dropped, the splits that only it caused go. Parts that only touch stay
+ * apart. *removed (may be NULL) gets the number of vertices merged. */
+mr_status mr_mesh_weld_seams(mr_mesh *mesh, size_t *removed, mr_error *err);
+
 /* ------------------------------------------------------------------------ */
 /* Statistics                                                               */
 /* ------------------------------------------------------------------------ */
@@ -211,6 +250,13 @@ typedef struct mr_stats {
     size_t vertex_count;            /* all vertices */
     size_t referenced_vertices;     /* vertices used by a triangle */
     size_t unreferenced_vertices;
+    size_t surface_vertices;        /* points of the surface among them
+                                       (mr_surface_points): the vertices of
+                                       every topology figure below */
+    size_t split_vertices;          /* referenced vertices that repeat a
+                                       surface point for other attributes
+                                       (UV seams, hard edges):
+                                       referenced - surface_vertices */
     size_t triangle_count;
     size_t degenerate_triangles;    /* a vertex repeated */
     size_t duplicate_triangles;     /* same vertex set as an earlier triangle */
@@ -228,7 +274,7 @@ typedef struct mr_stats {
     size_t components;              /* triangle components connected through
                                        shared vertices (isolated vertices
                                        not counted) */
-    long long euler_characteristic; /* V - E + F over referenced vertices */
+    long long euler_characteristic; /* V - E + F, V = surface_vertices */
     int closed;                     /* no boundary edge, no non-manifold edge
                                        (and at least one edge) */
     int manifold;                   /* no non-manifold edge or vertex (and at
@@ -240,7 +286,10 @@ typedef struct mr_stats {
 } mr_stats;
 
 /* Statistics of a mesh given as flat arrays. stride is the byte distance
- * between consecutive positions (0 = 3 * sizeof(float)). */
+ * between consecutive positions (0 = 3 * sizeof(float)). The topology
+ * (edges, boundaries, manifoldness, components, Euler characteristic) is
+ * that of the surface: vertices split only by their attributes count as
+ * one point (mr_surface_points). */
 mr_status mr_stats_compute(const float *positions, size_t stride, size_t vertex_count,
                            const uint32_t *indices, size_t triangle_count,
                            mr_stats *stats, mr_error *err);

@@ -228,7 +228,14 @@ static void test_weld_split_cube(void **state)
     (void)state;
     mr_mesh m, ref;
     make_split_cube(&m);
-    assert_false(mesh_stats(&m).closed);
+    /* The split is in the attributes only: the surface is closed. */
+    mr_stats split = mesh_stats(&m);
+    assert_true(split.closed);
+    assert_true(split.manifold);
+    assert_int_equal(split.surface_vertices, 8);
+    assert_int_equal(split.split_vertices, 16);
+    assert_int_equal(split.referenced_vertices, 24);
+    assert_int_equal(split.euler_characteristic, 2);
     reference_weld(&m, 0, &ref);
     size_t removed = 0;
     assert_int_equal(mr_mesh_weld_exact(&m, 0, &removed, NULL), MR_OK);
@@ -302,7 +309,11 @@ static void test_weld_seam(void **state)
         for (int attrs = 0; attrs < 2; attrs++) {
             mr_mesh m, ref;
             make_split_strip(&m, uv_seam);
-            assert_int_equal(mesh_stats(&m).components, 2);
+            /* two halves by index, one surface split down a seam */
+            mr_stats before = mesh_stats(&m);
+            assert_int_equal(before.components, 1);
+            assert_int_equal(before.split_vertices, 5);
+            assert_int_equal(before.boundary_loops, 1);
             reference_weld(&m, attrs, &ref);
             size_t removed = 99;
             assert_int_equal(mr_mesh_weld_exact(&m, attrs, &removed, NULL), MR_OK);
@@ -310,7 +321,8 @@ static void test_weld_seam(void **state)
             mr_stats s = mesh_stats(&m);
             if (uv_seam && attrs) {
                 assert_int_equal(removed, 0);
-                assert_int_equal(s.components, 2);
+                assert_int_equal(s.components, 1);
+                assert_int_equal(s.split_vertices, 5);
             } else {
                 assert_int_equal(removed, 5); /* the seam column */
                 assert_int_equal(s.components, 1);
@@ -321,6 +333,49 @@ static void test_weld_seam(void **state)
             mr_mesh_free(&m);
         }
     }
+}
+
+/* mr_mesh_weld_seams merges one surface point's vertices whose remaining
+ * attributes agree: a UV seam goes once the texture coordinates do. */
+static void test_weld_seams(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    make_split_strip(&m, 1);
+    size_t removed = 99;
+    assert_int_equal(mr_mesh_weld_seams(&m, &removed, NULL), MR_OK);
+    assert_int_equal(removed, 0);
+    assert_int_equal(m.vertex_count, 40);
+    free(m.texcoords);
+    m.texcoords = NULL;
+    assert_int_equal(mr_mesh_weld_seams(&m, &removed, NULL), MR_OK);
+    assert_int_equal(removed, 5);
+    assert_int_equal(m.vertex_count, 35);
+    mr_stats s = mesh_stats(&m);
+    assert_int_equal(s.split_vertices, 0);
+    assert_int_equal(s.components, 1);
+    assert_int_equal(s.euler_characteristic, 1);
+    mr_mesh_free(&m);
+
+    /* Two tetrahedra that share one corner position (separately indexed):
+     * the weld by position joins them, the seam weld does not. */
+    const float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1,
+                         0, 0, 0, -1, 0, 0, 0, -1, 0, 0, 0, -1};
+    const uint32_t idx[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,
+                            4, 5, 6, 4, 7, 5, 4, 6, 7, 5, 7, 6};
+    make_mesh(&m, pos, 8, idx, 8, 0);
+    s = mesh_stats(&m);
+    assert_int_equal(s.components, 2);
+    assert_int_equal(s.nonmanifold_vertices, 0);
+    assert_int_equal(s.split_vertices, 0);
+    assert_int_equal(mr_mesh_weld_seams(&m, &removed, NULL), MR_OK);
+    assert_int_equal(removed, 0);
+    assert_int_equal(mr_mesh_weld_exact(&m, 0, &removed, NULL), MR_OK);
+    assert_int_equal(removed, 1);
+    s = mesh_stats(&m);
+    assert_int_equal(s.components, 1);
+    assert_int_equal(s.nonmanifold_vertices, 1);
+    mr_mesh_free(&m);
 }
 
 static void test_weld_zero_sign_and_unreferenced(void **state)
@@ -680,6 +735,7 @@ int main(void)
         cmocka_unit_test(test_remove_unreferenced_point_cloud_and_empty),
         cmocka_unit_test(test_weld_split_cube),
         cmocka_unit_test(test_weld_seam),
+        cmocka_unit_test(test_weld_seams),
         cmocka_unit_test(test_weld_zero_sign_and_unreferenced),
         cmocka_unit_test(test_weld_large_and_deterministic),
         cmocka_unit_test(test_remove_degenerate),

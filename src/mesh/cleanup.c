@@ -264,6 +264,73 @@ mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t 
     return st;
 }
 
+mr_status mr_mesh_weld_seams(mr_mesh *mesh, size_t *removed, mr_error *err)
+{
+    if (removed)
+        *removed = 0;
+    mr_status st = check_mesh(mesh, err);
+    if (st != MR_OK)
+        return st;
+    const size_t vc = mesh->vertex_count;
+    if (vc < 2 || mesh->triangle_count == 0)
+        return MR_OK;
+    weld_layout l = {{mesh->positions}, {3}, 1};
+    const float *arrays[3] = {mesh->normals, mesh->texcoords, mesh->colors};
+    const unsigned widths[3] = {3, 2, 4};
+    for (unsigned k = 0; k < 3; k++)
+        if (arrays[k]) {
+            l.arrays[l.count] = arrays[k];
+            l.widths[l.count++] = widths[k];
+        }
+    uint32_t *point = mr_alloc_array(vc, sizeof *point);
+    uint32_t *ids = mr_alloc_array(vc, sizeof *ids);
+    uint32_t *reps = mr_alloc_array(vc, sizeof *reps);
+    uint8_t *keep = mr_calloc_array(vc, 1);
+    size_t split = 0, merged = 0;
+    if (!point || !ids || !reps || !keep) {
+        st = mr_fail_nomem(err, NULL, vc * 13);
+        goto done;
+    }
+    st = mr_surface_points(mesh->positions, vc, mesh->indices, mesh->triangle_count, point,
+                           &split, err);
+    if (st != MR_OK || split == 0)
+        goto done;
+    /* The vertices of each surface point, in index order (a counting sort
+     * by point: the point is the smallest index of its vertices). */
+    uint32_t *start = reps; /* reused below as weld_run's scratch */
+    for (size_t v = 0; v < vc; v++)
+        start[v] = 0;
+    for (size_t v = 0; v < vc; v++)
+        start[point[v]]++;
+    uint32_t sum = 0;
+    for (size_t v = 0; v < vc; v++) {
+        const uint32_t n = start[v];
+        start[v] = sum;
+        sum += n;
+    }
+    for (size_t v = 0; v < vc; v++)
+        ids[start[point[v]]++] = (uint32_t)v;
+    /* ids now holds each point's vertices from its (old) start on; the
+     * runs are where consecutive entries share a point. */
+    for (size_t i = 0; i < vc;) {
+        size_t j = i + 1;
+        while (j < vc && point[ids[j]] == point[ids[i]])
+            j++;
+        weld_run(&l, ids + i, j - i, point, keep, reps, &merged);
+        i = j;
+    }
+    if (merged)
+        compact_vertices(mesh, point, keep);
+    if (removed)
+        *removed = merged;
+done:
+    free(point);
+    free(ids);
+    free(reps);
+    free(keep);
+    return st;
+}
+
 /* ---- degenerate and duplicate triangles ------------------------------------ */
 
 static inline void sort3(const uint32_t *tri, uint32_t s[3])

@@ -443,6 +443,62 @@ done:
     return st;
 }
 
+/* The topology of the surface: vertices that are one surface point
+ * (mr_surface_points) count once. The vertex counts stay those of the
+ * vertex arrays; surface_vertices and split_vertices tell the difference. */
+static mr_status surface_topology(const float *positions, size_t stride,
+                                  const uint32_t *indices, size_t tc, size_t vc, mr_stats *s,
+                                  mr_error *err)
+{
+    float *packed = NULL;
+    uint32_t *point = mr_alloc_array(vc, sizeof *point);
+    if (!point)
+        return mr_fail_nomem(err, NULL, vc * sizeof *point);
+    if (stride != 3 * sizeof(float)) {
+        packed = mr_alloc_array(vc, 3 * sizeof *packed);
+        if (!packed) {
+            free(point);
+            return mr_fail_nomem(err, NULL, vc * 12);
+        }
+        for (size_t v = 0; v < vc; v++)
+            memcpy(packed + 3 * v, (const char *)positions + v * stride, 12);
+    }
+    size_t split = 0;
+    mr_status st = mr_surface_points(packed ? packed : positions, vc, indices, tc, point,
+                                     &split, err);
+    free(packed);
+    uint32_t *welded = NULL;
+    if (st == MR_OK && split) {
+        welded = mr_alloc_array(3 * tc, sizeof *welded);
+        if (!welded)
+            st = mr_fail_nomem(err, NULL, 3 * tc * sizeof *welded);
+        else
+            for (size_t c = 0; c < 3 * tc; c++)
+                welded[c] = point[indices[c]];
+    }
+    if (st == MR_OK)
+        st = compute_topology(welded ? welded : indices, tc, vc, s, err);
+    free(welded);
+    if (st == MR_OK) {
+        s->surface_vertices = s->referenced_vertices;
+        if (split) {
+            /* the vertex arrays' own count of referenced vertices */
+            uint8_t *used = (uint8_t *)point; /* reused: vc bytes */
+            memset(used, 0, vc);
+            for (size_t c = 0; c < 3 * tc; c++)
+                used[indices[c]] = 1;
+            size_t referenced = 0;
+            for (size_t v = 0; v < vc; v++)
+                referenced += used[v];
+            s->split_vertices = referenced - s->surface_vertices;
+            s->referenced_vertices = referenced;
+            s->unreferenced_vertices = vc - referenced;
+        }
+    }
+    free(point);
+    return st;
+}
+
 mr_status mr_stats_compute(const float *positions, size_t stride, size_t vertex_count,
                            const uint32_t *indices, size_t triangle_count, mr_stats *stats,
                            mr_error *err)
@@ -475,10 +531,13 @@ mr_status mr_stats_compute(const float *positions, size_t stride, size_t vertex_
         if ((st = compute_area(positions, stride, indices, triangle_count, &s.surface_area,
                                err)) != MR_OK)
             return st;
-        if ((st = compute_topology(indices, triangle_count, vertex_count, &s, err)) != MR_OK)
+        if ((st = surface_topology(positions, stride, indices, triangle_count, vertex_count,
+                                   &s, err)) != MR_OK)
             return st;
+    } else {
+        s.surface_vertices = 0;
     }
-    s.euler_characteristic = (long long)s.referenced_vertices - (long long)s.edge_count +
+    s.euler_characteristic = (long long)s.surface_vertices - (long long)s.edge_count +
                              (long long)s.triangle_count;
     s.closed = s.edge_count > 0 && s.boundary_edges == 0 && s.nonmanifold_edges == 0;
     s.manifold = s.edge_count > 0 && s.nonmanifold_edges == 0 && s.nonmanifold_vertices == 0;

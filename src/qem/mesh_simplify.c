@@ -2,9 +2,11 @@
  * mr_mesh_simplify: simplification that carries normals, texture
  * coordinates and colors.
  *
- * The geometry is simplified on the position-welded topology: attribute
- * vertices at bitwise-equal positions are one geometric vertex, so a UV
- * seam or a hard edge is no boundary to the simplifier. Each triangle
+ * The geometry is simplified on the topology of the surface: attribute
+ * vertices that are one surface point (mr_surface_points: at one position,
+ * joined across the split by their triangles) are one geometric vertex,
+ * so a UV seam or a hard edge is no boundary to the simplifier, while
+ * parts that only touch stay apart. Each triangle
  * corner remembers its attribute vertex (its "wedge"). A geometric vertex
  * with two wedges is a seam vertex:
  *   - seam edges (whose two triangles use different wedges at both ends)
@@ -253,7 +255,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         free_ctx(&a);
         return mr_fail_nomem(err, NULL, vc * 40 + tc * 24);
     }
-    st = mr_weld_positions(in->positions, vc, geo, err);
+    st = mr_surface_points(in->positions, vc, in->indices, tc, geo, NULL, err);
     if (st != MR_OK) {
         free(geo);
         free(gidx);

@@ -1,0 +1,256 @@
+/* Manifold in, manifold out: mr_mesh_simplify keeps the surface topology
+ * of its input -- it never joins what the input keeps apart, and never
+ * adds a non-manifold element -- and mr_surface_points, the one rule that
+ * decides which vertices are one surface point. */
+#include "testutil.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static mr_stats stats_of(const mr_mesh *m)
+{
+    mr_stats s;
+    assert_int_equal(mr_stats_compute(m->positions, 0, m->vertex_count, m->indices,
+                                      m->triangle_count, &s, NULL),
+                     MR_OK);
+    return s;
+}
+
+static void simplify(const mr_mesh *in, double ratio, mr_collapse_kind kind,
+                     mr_strategy strategy, mr_mesh *out)
+{
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = ratio;
+    o.collapse = kind;
+    o.strategy = strategy;
+    mr_error err;
+    mr_status st = mr_mesh_simplify(in, &o, out, NULL, NULL, &err);
+    if (st != MR_OK)
+        fail_msg("simplify: %s", err.message);
+}
+
+/* The output keeps the input's surface: no more non-manifold edges or
+ * vertices, no fewer components (the validity test keeps the last
+ * triangles of every component), as many boundary loops; at ratio 1 the
+ * same topology figure for figure. */
+static void check_kept(const mr_stats *in, const mr_stats *out, double ratio, const char *what)
+{
+    if (out->nonmanifold_edges > in->nonmanifold_edges ||
+        out->nonmanifold_vertices > in->nonmanifold_vertices ||
+        out->components < in->components)
+        fail_msg("%s at %g: non-manifold edges %zu -> %zu, vertices %zu -> %zu, components "
+                 "%zu -> %zu",
+                 what, ratio, in->nonmanifold_edges, out->nonmanifold_edges,
+                 in->nonmanifold_vertices, out->nonmanifold_vertices, in->components,
+                 out->components);
+    if (ratio == 1) {
+        assert_int_equal(out->surface_vertices, in->surface_vertices);
+        assert_int_equal(out->edge_count, in->edge_count);
+        assert_int_equal(out->boundary_edges, in->boundary_edges);
+        assert_int_equal(out->boundary_loops, in->boundary_loops);
+        assert_int_equal(out->components, in->components);
+        assert_int_equal(out->nonmanifold_vertices, in->nonmanifold_vertices);
+        assert_int_equal(out->nonmanifold_edges, in->nonmanifold_edges);
+        assert_int_equal(out->euler_characteristic, in->euler_characteristic);
+    }
+}
+
+/* A copy of m mirrored through its vertex p (x -> 2p - x, exact in float
+ * for p itself), windings reversed: a second shell that touches the first
+ * at p alone, separately indexed. */
+static void touching_pair(const mr_mesh *m, uint32_t p, mr_mesh *out)
+{
+    mr_mesh_init(out);
+    const size_t vc = m->vertex_count, tc = m->triangle_count;
+    assert_int_equal(mr_mesh_alloc(out, 2 * vc, 2 * tc, 0, NULL), MR_OK);
+    memcpy(out->positions, m->positions, vc * 12);
+    for (size_t v = 0; v < vc; v++)
+        for (int k = 0; k < 3; k++)
+            out->positions[3 * (vc + v) + k] =
+                2 * m->positions[3 * p + k] - m->positions[3 * v + k];
+    memcpy(out->indices, m->indices, tc * 12);
+    for (size_t t = 0; t < tc; t++) {
+        const uint32_t *tri = m->indices + 3 * t;
+        uint32_t *o = out->indices + 3 * (tc + t);
+        o[0] = tri[0] + (uint32_t)vc;
+        o[1] = tri[2] + (uint32_t)vc;
+        o[2] = tri[1] + (uint32_t)vc;
+    }
+}
+
+static void test_touching_shells_stay_apart(void **state)
+{
+    (void)state;
+    mr_mesh sphere, pair;
+    mr_mesh_init(&sphere);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 2000, 1, &sphere, NULL), MR_OK);
+    touching_pair(&sphere, 0, &pair);
+    mr_stats in = stats_of(&pair);
+    assert_int_equal(in.components, 2);
+    assert_int_equal(in.nonmanifold_vertices, 0);
+    assert_int_equal(in.split_vertices, 0);
+    assert_true(in.closed);
+    const double ratios[] = {1, 0.5, 0.1, 0.02};
+    for (int kind = 0; kind < 2; kind++)
+        for (int strategy = 0; strategy < 2; strategy++)
+            for (size_t i = 0; i < sizeof ratios / sizeof *ratios; i++) {
+                mr_mesh out;
+                simplify(&pair, ratios[i], (mr_collapse_kind)kind, (mr_strategy)strategy,
+                         &out);
+                mr_stats s = stats_of(&out);
+                check_kept(&in, &s, ratios[i], "touching spheres");
+                assert_int_equal(s.components, 2);
+                assert_true(s.closed);
+                assert_true(s.manifold);
+                mr_mesh_free(&out);
+            }
+    mr_mesh_free(&pair);
+    mr_mesh_free(&sphere);
+}
+
+/* A double-sided sheet (the same grid twice, wound both ways, separately
+ * indexed) is two surfaces on top of each other: joining them would give
+ * edges of four triangles. */
+static void test_double_sided_sheet(void **state)
+{
+    (void)state;
+    enum { N = 12 };
+    mr_mesh m;
+    mr_mesh_init(&m);
+    const size_t vc = 2 * (N + 1) * (N + 1), tc = 4 * N * N;
+    assert_int_equal(mr_mesh_alloc(&m, vc, tc, 0, NULL), MR_OK);
+    for (int side = 0; side < 2; side++)
+        for (int y = 0; y <= N; y++)
+            for (int x = 0; x <= N; x++) {
+                float *p = m.positions + 3 * ((size_t)side * (N + 1) * (N + 1) +
+                                              (size_t)y * (N + 1) + (size_t)x);
+                p[0] = (float)x;
+                p[1] = (float)y;
+                p[2] = (float)((x * 7 + y * 3) % 5) * 0.01f;
+            }
+    size_t t = 0;
+    for (int side = 0; side < 2; side++)
+        for (int y = 0; y < N; y++)
+            for (int x = 0; x < N; x++) {
+                uint32_t a = (uint32_t)(side * (N + 1) * (N + 1) + y * (N + 1) + x), b = a + 1,
+                         c = a + N + 1, d = c + 1;
+                uint32_t q[6] = {a, b, d, a, d, c};
+                if (side)
+                    q[1] = d, q[2] = b, q[4] = c, q[5] = d;
+                memcpy(m.indices + 6 * t, q, sizeof q);
+                t++;
+            }
+    uint32_t *point = malloc(vc * sizeof *point);
+    size_t split = 99;
+    assert_int_equal(mr_surface_points(m.positions, vc, m.indices, tc, point, &split, NULL),
+                     MR_OK);
+    assert_int_equal(split, 0);
+    for (size_t v = 0; v < vc; v++)
+        assert_int_equal(point[v], v);
+    free(point);
+    mr_stats in = stats_of(&m);
+    assert_int_equal(in.components, 2);
+    assert_int_equal(in.nonmanifold_edges, 0);
+    mr_mesh out;
+    simplify(&m, 0.2, MR_COLLAPSE_FULL, MR_STRATEGY_BATCHED, &out);
+    mr_stats s = stats_of(&out);
+    check_kept(&in, &s, 0.2, "double-sided sheet");
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+}
+
+/* A UV seam is one surface: the split copies are one point, so the
+ * simplifier may move and collapse them together, and the output stays
+ * one closed component. */
+static void test_seam_is_one_surface(void **state)
+{
+    (void)state;
+    mr_mesh sphere;
+    mr_mesh_init(&sphere);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 2000, 1, &sphere, NULL), MR_OK);
+    /* A seam round the equator: the triangles below z = 0 (by centroid)
+     * use copies of their vertices, with other texture coordinates. */
+    const size_t vc = sphere.vertex_count, tc = sphere.triangle_count;
+    mr_mesh m;
+    mr_mesh_init(&m);
+    assert_int_equal(mr_mesh_alloc(&m, 2 * vc, tc, MR_ATTR_TEXCOORDS, NULL), MR_OK);
+    memcpy(m.positions, sphere.positions, vc * 12);
+    memcpy(m.positions + 3 * vc, sphere.positions, vc * 12);
+    for (size_t v = 0; v < 2 * vc; v++) {
+        m.texcoords[2 * v] = m.positions[3 * v] + (v >= vc ? 3.0f : 0.0f);
+        m.texcoords[2 * v + 1] = m.positions[3 * v + 1];
+    }
+    for (size_t t = 0; t < tc; t++) {
+        const uint32_t *tri = sphere.indices + 3 * t;
+        double cz = 0;
+        for (int k = 0; k < 3; k++)
+            cz += sphere.positions[3 * tri[k] + 2];
+        for (int k = 0; k < 3; k++)
+            m.indices[3 * t + k] = tri[k] + (cz < 0 ? (uint32_t)vc : 0);
+    }
+    /* drop the copies no triangle uses */
+    assert_int_equal(mr_mesh_remove_unreferenced(&m, NULL, NULL), MR_OK);
+    mr_stats in = stats_of(&m);
+    assert_true(in.split_vertices > 0);
+    assert_int_equal(in.components, 1);
+    assert_true(in.closed);
+    assert_true(in.manifold);
+    assert_int_equal(in.euler_characteristic, 2);
+    for (int kind = 0; kind < 2; kind++) {
+        mr_mesh out;
+        simplify(&m, 0.1, (mr_collapse_kind)kind, MR_STRATEGY_BATCHED, &out);
+        mr_stats s = stats_of(&out);
+        check_kept(&in, &s, 0.1, "seamed sphere");
+        assert_int_equal(s.components, 1);
+        assert_true(s.closed);
+        assert_int_equal(s.euler_characteristic, 2);
+        assert_true(s.split_vertices > 0); /* the seam stays split */
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&m);
+    mr_mesh_free(&sphere);
+}
+
+/* The data meshes: beast (polygons, UVs, normals) and ogre (cuts) used to
+ * gain non-manifold vertices when every equal position was welded. */
+static void test_data_meshes_keep_topology(void **state)
+{
+    (void)state;
+    const char *names[] = {"beast.obj", "ogre.obj", "spot.obj", "stanford-bunny.obj",
+                           "fandisk.obj"};
+    const double ratios[] = {1, 0.1, 0.01, 0.001};
+    int found = 0;
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
+        const char *path = tu_shared_data(names[i]);
+        if (!path)
+            continue;
+        found++;
+        mr_mesh m;
+        mr_error err;
+        assert_int_equal(mr_mesh_read(path, NULL, &m, &err), MR_OK);
+        mr_stats in = stats_of(&m);
+        for (size_t r = 0; r < sizeof ratios / sizeof *ratios; r++) {
+            mr_mesh out;
+            simplify(&m, ratios[r], MR_COLLAPSE_FULL, MR_STRATEGY_BATCHED, &out);
+            mr_stats s = stats_of(&out);
+            check_kept(&in, &s, ratios[r], names[i]);
+            assert_int_equal(s.boundary_loops, in.boundary_loops);
+            mr_mesh_free(&out);
+        }
+        mr_mesh_free(&m);
+    }
+    if (!found)
+        skip();
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_touching_shells_stay_apart),
+        cmocka_unit_test(test_double_sided_sheet),
+        cmocka_unit_test(test_seam_is_one_surface),
+        cmocka_unit_test(test_data_meshes_keep_topology),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
