@@ -1,6 +1,7 @@
 /* meshreduce: command dispatch. Each subcommand lives in its own file. */
 #include "cli.h"
 
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -35,6 +36,38 @@ static void print_help(FILE *f)
                "or XYZ point lists, by extension; PLY and STL are also recognised by content.\n");
 }
 
+/* SIGINT, SIGTERM or SIGHUP in the middle of a write would leave the
+ * output's hidden temporary file behind: remove it, then die of the same
+ * signal, so that the parent (a shell, make) sees why the tool stopped.
+ * SA_RESETHAND has restored the default action, and the signal, blocked in
+ * its handler, is delivered as the handler returns. */
+static void on_terminating_signal(int sig)
+{
+    mr_remove_pending_files();
+    raise(sig);
+}
+
+static void install_signal_handlers(void)
+{
+    static const int signals[] = {SIGINT, SIGTERM, SIGHUP};
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_terminating_signal;
+    sa.sa_flags = SA_RESETHAND;
+    /* the others wait, so that the tool dies of the first */
+    sigemptyset(&sa.sa_mask);
+    for (size_t i = 0; i < sizeof signals / sizeof *signals; i++)
+        sigaddset(&sa.sa_mask, signals[i]);
+    for (size_t i = 0; i < sizeof signals / sizeof *signals; i++) {
+        struct sigaction old;
+        /* A signal ignored at start stays ignored: nohup, and the SIGINT of
+         * a background job, mean the tool should run on. */
+        if (sigaction(signals[i], NULL, &old) == 0 && old.sa_handler == SIG_IGN)
+            continue;
+        sigaction(signals[i], &sa, NULL);
+    }
+}
+
 /* Take "--threads N" / "--threads=N" out of argv wherever it stands, so
  * every subcommand honours it. Returns -1 on a bad value. */
 static int take_threads(int *argc, char **argv)
@@ -66,6 +99,7 @@ static int take_threads(int *argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    install_signal_handlers();
     if (take_threads(&argc, argv) != 0)
         return CLI_USAGE;
     if (argc < 2) {

@@ -1,5 +1,5 @@
 /* Format dispatch, file mapping and all-or-nothing writes. */
-#define _GNU_SOURCE /* mkstemp, fileno under strict C11 */
+#define _GNU_SOURCE /* realpath, lstat, readlink, fchown under strict C11 */
 #include "io_internal.h"
 #include "text.h"
 
@@ -7,8 +7,10 @@
 #include <strings.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <stdatomic.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 void mr_read_options_default(mr_read_options *options)
@@ -187,6 +189,91 @@ mr_status mr_mesh_read(const char *path, const mr_read_options *options, mr_mesh
     return st;
 }
 
+/* ------------------------------------------------------------------------ */
+/* Pending temporary files                                                  */
+/* ------------------------------------------------------------------------ */
+
+/* The temporary files of the writes in progress, for mr_remove_pending_files,
+ * which a signal handler may call at any moment on any thread. So: fixed
+ * slots (no allocation, no lock), each claimed by an atomic compare-and-swap;
+ * the path is written completely before the slot is published, and a
+ * published slot's path is never changed while a handler may be reading it.
+ * When every slot is taken a write goes unregistered: it still works, only a
+ * signal would leave its temporary file behind; so does a signal in the few
+ * instructions between creating the file and publishing its slot. */
+enum { PENDING_SLOTS = 64 };
+enum {
+    SLOT_FREE,      /* unused */
+    SLOT_FILLING,   /* claimed by a writer that is copying its path in */
+    SLOT_PUBLISHED, /* a temporary file exists at path */
+    SLOT_TAKEN,     /* a handler is removing it (it reads path) */
+    SLOT_REMOVED    /* a handler has removed it; the writer frees the slot */
+};
+typedef struct pending_slot {
+    atomic_int state;
+    char path[MR_OUTPUT_PATH_CAP];
+} pending_slot;
+static pending_slot pending[PENDING_SLOTS];
+
+/* Async-signal-safe only when the atomics need no lock. */
+_Static_assert(ATOMIC_INT_LOCK_FREE == 2, "pending-file slots need lock-free atomic int");
+
+/* Register an existing temporary file; returns its slot or -1. */
+static int pending_add(const char *path)
+{
+    for (int i = 0; i < PENDING_SLOTS; i++) {
+        int expected = SLOT_FREE;
+        if (atomic_compare_exchange_strong(&pending[i].state, &expected, SLOT_FILLING)) {
+            memcpy(pending[i].path, path, strlen(path) + 1);
+            atomic_store(&pending[i].state, SLOT_PUBLISHED);
+            return i;
+        }
+    }
+    return -1;
+}
+
+/* Forget a temporary file that has been renamed or removed. */
+static void pending_drop(int slot)
+{
+    if (slot < 0)
+        return;
+    int expected = SLOT_PUBLISHED;
+    if (atomic_compare_exchange_strong(&pending[slot].state, &expected, SLOT_FREE))
+        return;
+    /* A handler took it. Once it is done the slot can be reused; while it
+     * is still at work (on another thread: the process is ending) leave it. */
+    expected = SLOT_REMOVED;
+    atomic_compare_exchange_strong(&pending[slot].state, &expected, SLOT_FREE);
+}
+
+void mr_remove_pending_files(void)
+{
+    int saved = errno; /* a handler must not change errno under the code it interrupted */
+    for (int i = 0; i < PENDING_SLOTS; i++) {
+        int expected = SLOT_PUBLISHED;
+        if (atomic_compare_exchange_strong(&pending[i].state, &expected, SLOT_TAKEN)) {
+            unlink(pending[i].path);
+            atomic_store(&pending[i].state, SLOT_REMOVED);
+        }
+    }
+    errno = saved;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Output files                                                             */
+/* ------------------------------------------------------------------------ */
+
+/* Copy a path into a buffer of MR_OUTPUT_PATH_CAP; false when it does not
+ * fit with room for the temporary file's name. */
+static bool copy_path(char *dst, const char *src)
+{
+    size_t n = strlen(src);
+    if (n + sizeof "/.meshreduce-XXXXXX" > MR_OUTPUT_PATH_CAP)
+        return false;
+    memcpy(dst, src, n + 1);
+    return true;
+}
+
 /* Directory part of a path ("." when it has none), into buf. */
 static void dir_of(const char *path, char *buf, size_t cap)
 {
@@ -204,47 +291,280 @@ static void dir_of(const char *path, char *buf, size_t cap)
     buf[n] = '\0';
 }
 
-mr_status mr_output_open(mr_output_file *out, const char *path, mr_error *err)
+/* True when following `path` leads through a link that lives in /proc
+ * (/dev/stdout -> /proc/self/fd/1, /dev/fd/3, /proc/self/fd/3). Such a name
+ * stands for an open descriptor, whatever that refers to (a pipe, a
+ * terminal, a file the shell opened), so it is written in place as a shell
+ * redirection would, never renamed onto. */
+static bool names_descriptor(const char *path)
 {
-    /* Write next to the destination, then rename: the destination either
-     * keeps its old content or gets the complete new file. */
-    char dir[4096];
-    dir_of(path, dir, sizeof dir);
-    snprintf(out->tmp, sizeof out->tmp, "%s/.meshreduce-XXXXXX", dir);
-    out->f = NULL;
-    int fd = mkstemp(out->tmp);
-    if (fd < 0)
+    char cur[MR_OUTPUT_PATH_CAP], dir[MR_OUTPUT_PATH_CAP], link[MR_OUTPUT_PATH_CAP];
+    if (!copy_path(cur, path))
+        return false;
+    for (int hop = 0; hop < 16; hop++) {
+        dir_of(cur, dir, sizeof dir);
+        char *real = realpath(dir, NULL);
+        bool in_proc = real && strncmp(real, "/proc/", 6) == 0;
+        free(real);
+        if (in_proc)
+            return true;
+        ssize_t n = readlink(cur, link, sizeof link - 1);
+        if (n < 0)
+            return false; /* not a link: the end of the chain */
+        link[n] = '\0';
+        int len = link[0] == '/' ? snprintf(cur, sizeof cur, "%s", link)
+                                 : snprintf(cur, sizeof cur, "%s/%s", dir, link);
+        if (len < 0 || (size_t)len >= sizeof cur)
+            return false;
+    }
+    return false;
+}
+
+/* Where and how an output is written: out->dest and out->direct, and in
+ * *old the status of the regular file it replaces (*exists). */
+static mr_status plan_output(mr_output_file *out, const char *path, struct stat *old,
+                             bool *exists, mr_error *err)
+{
+    *exists = false;
+    if (!copy_path(out->dest, path))
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(ENAMETOOLONG));
+    if (names_descriptor(path)) {
+        out->direct = true;
+        return MR_OK;
+    }
+    struct stat sb;
+    if (lstat(path, &sb) != 0)
+        /* Nothing there, or a directory on the way is missing or closed:
+         * a new file, and creating the temporary file says what is wrong. */
+        return MR_OK;
+    if (S_ISLNK(sb.st_mode)) {
+        if (stat(path, &sb) != 0) {
+            int e = errno;
+            char to[MR_OUTPUT_PATH_CAP];
+            ssize_t n = readlink(path, to, sizeof to - 1);
+            to[n < 0 ? 0 : n] = '\0';
+            if (e == ENOENT)
+                return mr_fail_plain(err, MR_ERR_IO, path,
+                                     "is a dangling symbolic link (to %s)", to);
+            return mr_fail_plain(err, MR_ERR_IO, path, "cannot follow the symbolic link "
+                                 "(to %s): %s", to, strerror(e));
+        }
+        if (S_ISREG(sb.st_mode)) {
+            /* Write the link's target, as cp does: the temporary file goes
+             * beside the target and is renamed onto it; the link stays. */
+            char *real = realpath(path, NULL);
+            if (!real)
+                return mr_fail_plain(err, MR_ERR_IO, path,
+                                     "cannot resolve the symbolic link: %s", strerror(errno));
+            bool fits = copy_path(out->dest, real);
+            free(real);
+            if (!fits)
+                return mr_fail_plain(err, MR_ERR_IO, path, "cannot write its target: %s",
+                                     strerror(ENAMETOOLONG));
+        }
+    }
+    if (S_ISDIR(sb.st_mode))
+        return mr_fail_plain(err, MR_ERR_IO, path, "is a directory");
+    if (!S_ISREG(sb.st_mode)) {
+        /* A device (/dev/null), a FIFO or a socket: a rename would replace
+         * the node itself (as root even a device), so it is written in
+         * place, with no all-or-nothing guarantee. */
+        out->direct = true;
+        return MR_OK;
+    }
+    *exists = true;
+    *old = sb;
+    return MR_OK;
+}
+
+/* Create a new temporary file in `dir` (its path into out->tmp) with the
+ * given mode, which the kernel reduces by the umask. Not mkstemp: its 0600
+ * would have to be widened by reading the umask, and umask() can only be
+ * read by setting it, which races with files other threads create. */
+static int create_temp(mr_output_file *out, const char *dir, mode_t mode)
+{
+    static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz"
+                                 "ABCDEFGHIJKLMNOPQRSTUVWXYZ";
+    static atomic_uint_fast64_t counter;
+    for (int attempt = 0; attempt < 100; attempt++) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        uint64_t r = mr_mix64(atomic_fetch_add(&counter, 1) ^ (uint64_t)getpid() << 40 ^
+                              (uint64_t)ts.tv_sec << 30 ^ (uint64_t)ts.tv_nsec);
+        char name[7];
+        for (int i = 0; i < 6; i++, r /= 62)
+            name[i] = digits[r % 62];
+        name[6] = '\0';
+        int len = snprintf(out->tmp, sizeof out->tmp, "%s/.meshreduce-%s", dir, name);
+        if (len < 0 || (size_t)len >= sizeof out->tmp) {
+            errno = ENAMETOOLONG; /* not reached: plan_output checked the length */
+            return -1;
+        }
+        int fd = open(out->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
+        if (fd >= 0 || errno != EEXIST)
+            return fd;
+    }
+    errno = EEXIST;
+    return -1;
+}
+
+/* Open a temporary file beside out->dest into *fd; an existing
+ * destination's permission bits (and, where allowed, owner and group) carry
+ * over. */
+static mr_status open_temp(mr_output_file *out, const char *path, const struct stat *old,
+                           bool exists, int *fd, mr_error *err)
+{
+    char dir[MR_OUTPUT_PATH_CAP];
+    dir_of(out->dest, dir, sizeof dir);
+    /* a new file gets 0666 less the umask, like any created file; a
+     * replacement starts private and then gets the old file's bits */
+    *fd = create_temp(out, dir, exists ? 0600 : 0666);
+    if (*fd < 0)
         return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
                              strerror(errno));
+    out->slot = pending_add(out->tmp);
+    if (!exists)
+        return MR_OK;
+    /* Best effort, as an editor saving a file does: only root may give a
+     * file away, and a group only to one of one's own. Before the chmod,
+     * since a chown clears set-id bits. */
+    if (old->st_uid != geteuid() || old->st_gid != getegid())
+        (void)!fchown(*fd, old->st_uid, old->st_gid);
+    if (fchmod(*fd, old->st_mode & 07777) != 0) {
+        int e = errno;
+        close(*fd);
+        unlink(out->tmp);
+        pending_drop(out->slot);
+        return mr_fail_plain(err, MR_ERR_IO, path, "cannot keep its permissions: %s",
+                             strerror(e));
+    }
+    return MR_OK;
+}
+
+mr_status mr_output_open(mr_output_file *out, const char *path, mr_error *err)
+{
+    out->f = NULL;
+    out->direct = false;
+    out->slot = -1;
+    out->tmp[0] = '\0';
+    struct stat old;
+    bool exists;
+    mr_status st = plan_output(out, path, &old, &exists, err);
+    if (st != MR_OK)
+        return st;
+    int fd;
+    if (out->direct) {
+        /* Opening a FIFO waits for its reader, as a shell redirection does. */
+        fd = open(out->dest, O_WRONLY | O_TRUNC | O_CLOEXEC | O_NOCTTY);
+        if (fd < 0)
+            return mr_fail_plain(err, MR_ERR_IO, path, "cannot open for writing: %s",
+                                 strerror(errno));
+    } else {
+        /* Write next to the destination, then rename: the destination either
+         * keeps its old content or gets the complete new file. */
+        st = open_temp(out, path, &old, exists, &fd, err);
+        if (st != MR_OK)
+            return st;
+    }
     out->f = fdopen(fd, "wb");
     if (!out->f) {
         int e = errno;
         close(fd);
-        unlink(out->tmp);
+        if (!out->direct) {
+            unlink(out->tmp);
+            pending_drop(out->slot);
+        }
         return mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(e));
     }
     return MR_OK;
 }
 
+/* Flush and close the stream; the errno of the first failure, or 0. */
+static int close_stream(FILE *f)
+{
+    int e = 0;
+    errno = 0;
+    if (fflush(f) != 0)
+        e = errno ? errno : EIO;
+    else if (ferror(f))
+        e = EIO; /* an earlier failed write whose errno is gone */
+    errno = 0;
+    if (fclose(f) != 0 && e == 0)
+        e = errno ? errno : EIO;
+    return e;
+}
+
 mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, mr_error *err)
 {
-    FILE *f = out->f;
-    if (st == MR_OK && (fflush(f) != 0 || ferror(f)))
-        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
-    if (fclose(f) != 0 && st == MR_OK)
-        st = mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", strerror(errno));
+    int e = close_stream(out->f);
     out->f = NULL;
-    if (st == MR_OK) {
-        /* mkstemp creates 0600; give the file the usual permissions. */
-        mode_t mask = umask(0);
-        umask(mask);
-        chmod(out->tmp, 0666 & ~mask);
-        if (rename(out->tmp, path) != 0)
-            st = mr_fail_plain(err, MR_ERR_IO, path, "cannot write: %s", strerror(errno));
-    }
+    if (e != 0 && st == MR_OK)
+        st = mr_fail_write(err, path, e);
+    if (out->direct)
+        return st;
+    if (st == MR_OK && rename(out->tmp, out->dest) != 0)
+        st = mr_fail_plain(err, MR_ERR_IO, path, "cannot move the written file into place: %s",
+                           strerror(errno));
     if (st != MR_OK)
         unlink(out->tmp);
+    pending_drop(out->slot);
     return st;
+}
+
+mr_status mr_fail_write(mr_error *err, const char *name, int errnum)
+{
+    return mr_fail_plain(err, MR_ERR_IO, name, "write failed: %s",
+                         strerror(errnum ? errnum : EIO));
+}
+
+/* ------------------------------------------------------------------------ */
+/* Writing a mesh                                                           */
+/* ------------------------------------------------------------------------ */
+
+/* One per-vertex array a writer will write: `used` of every `stride` floats. */
+typedef struct written_array {
+    const float *data;
+    int stride, used;
+    const char *what;
+} written_array;
+
+/* The arrays the writer of `fmt` writes, into a[]; returns their count.
+ * Keep in step with the writers: OBJ writes rgb of the colors, PLY rgba
+ * (as bytes), STL positions only (its facet normals are computed), XYZ
+ * positions and normals. */
+static int written_arrays(mr_format fmt, const mr_mesh *m, const mr_write_options *o,
+                          written_array a[4])
+{
+    bool attributes = fmt == MR_FORMAT_OBJ || fmt == MR_FORMAT_PLY;
+    int n = 0;
+    a[n++] = (written_array){m->positions, 3, 3, "position"};
+    if (m->normals && o->write_normals && (attributes || fmt == MR_FORMAT_XYZ))
+        a[n++] = (written_array){m->normals, 3, 3, "normal"};
+    if (m->texcoords && o->write_texcoords && attributes)
+        a[n++] = (written_array){m->texcoords, 2, 2, "texture coordinate"};
+    if (m->colors && o->write_colors && attributes)
+        a[n++] = (written_array){m->colors, 4, fmt == MR_FORMAT_OBJ ? 3 : 4, "color"};
+    return n;
+}
+
+/* No format can hold NaN or infinity (or not portably), and a reader of
+ * ours would refuse the file: refuse the mesh before a file is created. */
+static mr_status check_finite(mr_format fmt, const mr_mesh *m, const mr_write_options *o,
+                              const char *path, mr_error *err)
+{
+    written_array a[4];
+    int n = written_arrays(fmt, m, o, a);
+    for (size_t v = 0; v < m->vertex_count; v++)
+        for (int k = 0; k < n; k++)
+            for (int c = 0; c < a[k].used; c++) {
+                float x = a[k].data[(size_t)a[k].stride * v + (size_t)c];
+                if (!isfinite(x))
+                    return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path,
+                                         "vertex %zu has a non-finite %s (%g); "
+                                         "nothing was written",
+                                         v, a[k].what, (double)x);
+            }
+    return MR_OK;
 }
 
 mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
@@ -275,9 +595,12 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
             return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path,
                                  "triangle %zu uses vertex %u, but there are %zu vertices",
                                  i / 3, mesh->indices[i], mesh->vertex_count);
+    mr_status st = check_finite(fmt, mesh, options, path, err);
+    if (st != MR_OK)
+        return st;
 
     mr_output_file out;
-    mr_status st = mr_output_open(&out, path, err);
+    st = mr_output_open(&out, path, err);
     if (st != MR_OK)
         return st;
     FILE *f = out.f;

@@ -19,13 +19,20 @@
  * Writers write to an open stdio stream; the dispatcher owns the temporary
  * file, checks ferror() and fclose(), and renames it into place, so that a
  * failed write leaves no partial file. `name` is the destination path for
- * messages.
+ * messages. Writers:
+ *   - report a failed fwrite/fputs with mr_fail_write(err, name, errno),
+ *     straight after the call, so that the message says why (disk full);
+ *   - are given only finite values: before creating any file the dispatcher
+ *     refuses a mesh with NaN or infinity in what the format writes
+ *     (written_arrays in io.c lists that per format: keep it in step when a
+ *     writer writes a new attribute).
  */
 #ifndef MR_IO_INTERNAL_H
 #define MR_IO_INTERNAL_H
 
 #include "../core/internal.h"
 
+#include <errno.h>
 #include <stdio.h>
 
 mr_status mr_read_obj(const char *data, size_t size, const char *name, int threads,
@@ -45,6 +52,10 @@ mr_status mr_write_stl(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
                        const char *name, mr_error *err);
 mr_status mr_write_xyz(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
                        const char *name, mr_error *err);
+
+/* Report a failed write as "<name>: write failed: <strerror(errnum)>"
+ * (MR_ERR_IO); errnum 0 (no errno) reads as an I/O error. */
+mr_status mr_fail_write(mr_error *err, const char *name, int errnum);
 
 /* Check that every coordinate of the mesh's positions is finite and every
  * index is below vertex_count; on failure report the first bad element.

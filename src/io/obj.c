@@ -977,8 +977,7 @@ static mr_status write_section(FILE *f, const obj_writer *w, size_t total, forma
         }
         for (size_t b = 0; b < blocks; b++)
             if (fwrite(bufs[b], 1, len[b], f) != len[b])
-                return mr_fail_plain(err, MR_ERR_IO, name, "write failed: %s",
-                                     strerror(errno));
+                return mr_fail_write(err, name, errno);
     }
     return MR_OK;
 }
@@ -991,7 +990,7 @@ static mr_status write_all(FILE *f, const obj_writer *w, char **bufs, int nbuf,
     int n = snprintf(head, sizeof head, "# meshreduce %s: %zu vertices, %zu triangles\n",
                      mr_version(), m->vertex_count, m->triangle_count);
     if (fwrite(head, 1, (size_t)n, f) != (size_t)n)
-        return mr_fail_plain(err, MR_ERR_IO, name, "write failed: %s", strerror(errno));
+        return mr_fail_write(err, name, errno);
     mr_status st = write_section(f, w, m->vertex_count, format_v, bufs, nbuf, name, err);
     if (st == MR_OK && w->texcoords)
         st = write_section(f, w, m->vertex_count, format_vt, bufs, nbuf, name, err);

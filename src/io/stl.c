@@ -673,9 +673,10 @@ static void store_le_floats(unsigned char *p, const float *v, int n)
     }
 }
 
+/* Called straight after the failing call, while errno says why. */
 static mr_status write_failed(const char *name, mr_error *err)
 {
-    return mr_fail_plain(err, MR_ERR_IO, name, "write failed");
+    return mr_fail_write(err, name, errno);
 }
 
 static mr_status write_binary(FILE *f, const mr_mesh *mesh, const char *name, mr_error *err)

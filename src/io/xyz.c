@@ -300,7 +300,7 @@ mr_status mr_write_xyz(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
         *o++ = '\n';
         size_t len = (size_t)(o - buf);
         if (fwrite(buf, 1, len, f) != len)
-            return mr_fail_plain(err, MR_ERR_IO, name, "write failed");
+            return mr_fail_write(err, name, errno);
     }
     return MR_OK;
 }
