@@ -160,9 +160,13 @@ mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
                               const mr_read_options *options, mr_mesh *mesh,
                               mr_error *err);
 
-/* Write a mesh. The file appears complete or not at all: it is written to a
- * temporary file beside the destination and renamed into place.
- * `options` may be NULL for the defaults. */
+/* Write a mesh. A regular file appears complete or not at all: it is
+ * written to a temporary file beside it and renamed into place, keeping an
+ * existing file's permission bits. A symbolic link is followed (its target
+ * is replaced); a dangling link is an error. Devices, FIFOs and /dev/stdout
+ * are written in place. NaN or infinite values in what the format stores
+ * are refused before any file is created. `options` may be NULL for the
+ * defaults. */
 mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
                         const mr_write_options *options, mr_error *err);
 
@@ -349,7 +353,8 @@ typedef void (*mr_progress_fn)(double fraction_done, void *user);
 typedef struct mr_simplify_options {
     /* Targets: simplification stops at the first one reached. 0 = unused.
      * At least one target (or max_error) must be set. Vertex counts and
-     * ratios count referenced vertices only. */
+     * ratios count referenced vertices only, as surface points (copies of
+     * a vertex split by attributes at one position count once). */
     double target_ratio;        /* fraction of vertices to keep, (0, 1] */
     size_t target_vertices;
     size_t target_triangles;
@@ -377,17 +382,42 @@ typedef struct mr_simplify_options {
 
 void mr_simplify_options_default(mr_simplify_options *options);
 
+/* Why a simplification stopped. A missed target is a result, not an
+ * error: the output is as far as the rules allow. */
+typedef enum mr_simplify_stop {
+    MR_STOP_TARGET = 0, /* a vertex, ratio or triangle target was reached */
+    MR_STOP_MAX_ERROR,  /* every further collapse would exceed max_error */
+    MR_STOP_LOCKED,     /* missed: no remaining edge may move (locked ends:
+                           non-manifold or misoriented fans, lock_border,
+                           vertex_lock; or two pinned seam ends) */
+    MR_STOP_REFUSED     /* missed: every remaining collapse is refused by
+                           the validity tests (link condition, a part's last
+                           triangles, flips, max_normal_turn, seams) */
+} mr_simplify_stop;
+
+/* A sentence saying why (for messages). */
+const char *mr_simplify_stop_string(mr_simplify_stop stop);
+
 /* What a simplification produced and how long each phase took. */
 typedef struct mr_simplify_stats {
-    size_t input_vertices;      /* referenced input vertices */
+    size_t input_vertices;      /* referenced input vertices, counted as
+                                   surface points (mr_surface_points: the
+                                   copies of a vertex split by attributes
+                                   count once), as the targets count them */
     size_t locked_vertices;     /* input vertices that could not move: their
                                    triangles are not one consistently wound
                                    fan (non-manifold, or misoriented edges:
                                    mr_mesh_orient fixes the latter) */
     size_t input_triangles;
-    size_t output_vertices;
+    size_t output_vertices;     /* vertices of the output arrays */
+    size_t output_points;       /* surface points of the output, counted as
+                                   input_vertices (mr_mesh_simplify keeps
+                                   attribute splits: output_vertices may be
+                                   more) */
     size_t output_triangles;
     size_t collapses;
+    int target_reached;         /* stop is MR_STOP_TARGET or _MAX_ERROR */
+    mr_simplify_stop stop;
     double max_error;           /* largest collapse error, as a distance */
     double seconds_setup;       /* adjacency, quadrics, queue */
     double seconds_collapse;

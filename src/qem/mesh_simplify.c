@@ -368,8 +368,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
                 const uint32_t g = tri[k];
                 float *p = out->positions + 3 * (size_t)o_;
                 if (m->flags[g] & MR_VF_MOVED)
-                    for (int j = 0; j < 3; j++)
-                        p[j] = (float)((double)m->pos[3 * g + j] * s.diagonal + s.centre[j]);
+                    mr_simplifier_position(&s, g, p);
                 else
                     memcpy(p, in->positions + 3 * (size_t)w, 3 * sizeof(float));
                 if (a.normals)
@@ -385,6 +384,8 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         }
     }
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
+    const size_t output_points = s.m.live_vertices;
+    const mr_simplify_stop stop = s.stop;
     mr_simplifier_free(&s);
     free(geo);
     free_ctx(&a);
@@ -397,7 +398,10 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         stats->locked_vertices = blocked;
         stats->input_triangles = tc;
         stats->output_vertices = nv;
+        stats->output_points = output_points;
         stats->output_triangles = nt;
+        stats->stop = stop;
+        stats->target_reached = stop <= MR_STOP_MAX_ERROR;
         stats->collapses = collapses;
         stats->max_error = max_error;
         stats->seconds_setup = t1 - t0;

@@ -72,7 +72,8 @@ static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *
 enum { FREE_QU = 0, FREE_QW = 11, FREE_PU = 22, FREE_PW = 25, FREE_INPUTS = 28 };
 
 static inline __attribute__((always_inline)) double free_cost(const float *in, size_t st,
-                                                              double *x, size_t xst)
+                                                              double *x, size_t xst,
+                                                              const double box[3])
 {
 #define IN(k) ((double)in[(size_t)(k) * st])
     const double d0 = IN(FREE_PU) - IN(FREE_PW);
@@ -109,11 +110,17 @@ static inline __attribute__((always_inline)) double free_cost(const float *in, s
     const double o0 = inv * (c00 * b0 + c01 * b1 + c02 * b2);
     const double o1 = inv * (c01 * b0 + c11 * b1 + c12 * b2);
     const double o2 = inv * (c02 * b0 + c12 * b1 + c22 * b2);
-    /* an optimum far from the edge comes from a barely conditioned system */
+    /* an optimum far from the edge comes from a barely conditioned system;
+     * one outside the mesh's bounding box (box: its half extents, w at
+     * IN(FREE_PW)) is no place for a vertex, and might leave the float
+     * range of the input */
     const double len2 = d0 * d0 + d1 * d1 + d2 * d2;
     const double e0 = o0 - 0.5 * d0, e1 = o1 - 0.5 * d1, e2 = o2 - 0.5 * d2;
+    const bool inside = (fabs(o0 + (double)in[(size_t)FREE_PW * st]) <= box[0]) &
+                        (fabs(o1 + (double)in[(size_t)(FREE_PW + 1) * st]) <= box[1]) &
+                        (fabs(o2 + (double)in[(size_t)(FREE_PW + 2) * st]) <= box[2]);
     const bool ok = (fabs(det) > MR_QUADRIC_DET_EPS * diag) & (diag > 0) &
-                    (e0 * e0 + e1 * e1 + e2 * e2 <= 4 * len2);
+                    (e0 * e0 + e1 * e1 + e2 * e2 <= 4 * len2) & inside;
     /* the best point of the edge from w (0) to u (d):
      * mr_quadric_segment_optimum */
     const double z = 0;
@@ -173,7 +180,7 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
     if (!((fu | fw) & pin)) {
         float in[FREE_INPUTS];
         free_cost_inputs(s, u, w, in, 1);
-        return free_cost(in, 1, x, 1);
+        return free_cost(in, 1, x, 1, s->box);
     }
     if ((fu & pin) && (fw & pin) && (fu & MR_VF_LOCKED || fw & MR_VF_LOCKED)) {
         x[0] = x[1] = x[2] = 0; /* no collapse: w stays where it is */
@@ -495,11 +502,13 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
 
 /* The vector loop: costs of n <= COST_BATCH free edges whose inputs are in
  * in[k * COST_BATCH + i]. */
-MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost, double *x)
+MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost, double *x,
+                                        const double box[3])
 {
+    const double bx[3] = {box[0], box[1], box[2]};
 #pragma omp simd
     for (size_t i = 0; i < n; i++)
-        cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH);
+        cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH, bx);
 }
 
 /*
@@ -592,7 +601,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
                 lk[l] = ea < eb ? ea : eb;
             }
             pack_inputs(s, lr, lk, nl, in);
-            free_costs(in, nl, cost + i0, x);
+            free_costs(in, nl, cost + i0, x, s->box);
             if (r) {
                 for (size_t l = 0; l < nl; l++) {
                     const size_t i = i0 + l;
@@ -620,7 +629,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
             lane[nl++] = (uint32_t)(i - i0);
         }
         pack_inputs(s, lr, lk, nl, in);
-        free_costs(in, nl, out, x);
+        free_costs(in, nl, out, x, s->box);
         for (size_t l = 0; l < nl; l++) {
             const size_t i = i0 + lane[l];
             cost[i] = out[l];
@@ -1058,6 +1067,13 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         s->centre[k] = 0.5 * (lo[k] + hi[k]);
     s->diagonal = diag;
     s->scale = 1.0 / diag;
+    for (int k = 0; k < 3; k++) {
+        s->lo[k] = (float)lo[k];
+        s->hi[k] = (float)hi[k];
+        /* a millionth of the diagonal of slack: a flat mesh's optimum
+         * may round off its plane */
+        s->box[k] = 0.5 * (hi[k] - lo[k]) * s->scale + 1e-6;
+    }
 
     st = mr_collapse_mesh_init(&s->m, positions, stride, vertex_count, indices, triangle_count,
                                s->centre, s->scale, err);
@@ -1065,6 +1081,13 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         return st;
     mr_collapse_mesh *m = &s->m;
     s->input_vertices = m->live_vertices;
+    if (m->live_triangles == 0) {
+        mr_simplifier_free(s);
+        return mr_fail_plain(err, MR_ERR_EMPTY, NULL,
+                             "every one of its %zu triangles uses a vertex twice: no surface "
+                             "to simplify",
+                             triangle_count);
+    }
     st = mr_simplify_check_options(o, m->live_vertices, triangle_count, err);
     if (st != MR_OK) {
         mr_simplifier_free(s);
@@ -1171,10 +1194,65 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
     g->planned = planned;
 }
 
+/*
+ * Why the run stopped, when no count target was met: a look at every edge
+ * left. A valid collapse that was not taken must cost more than the error
+ * bound; an edge that may not move at all has locked (or two pinned) ends;
+ * the rest are refused by the validity tests. Costs a pass over the
+ * triangles with a validity test per edge, only when a target is missed.
+ */
+static mr_simplify_stop stop_reason(mr_simplifier *s, const mr_simplify_goal *g)
+{
+    if (mr_simplifier_reached(s, g))
+        return MR_STOP_TARGET;
+    const mr_collapse_mesh *m = &s->m;
+    bool movable = false;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] == NONE)
+            continue;
+        for (int j = 0; j < 3; j++) {
+            const uint32_t a = tri[j], b = tri[(j + 1) % 3];
+            double cost;
+            if (mr_simplifier_valid(s, a, b, &cost) ||
+                (s->half && mr_simplifier_valid(s, b, a, &cost)))
+                return MR_STOP_MAX_ERROR;
+            movable |= cost < INFINITY;
+        }
+    }
+    return movable ? MR_STOP_REFUSED : MR_STOP_LOCKED;
+}
+
+const char *mr_simplify_stop_string(mr_simplify_stop stop)
+{
+    switch (stop) {
+    case MR_STOP_TARGET: return "the target was reached";
+    case MR_STOP_MAX_ERROR: return "every further collapse would exceed the error bound";
+    case MR_STOP_LOCKED:
+        return "every remaining vertex is locked (non-manifold or misoriented fans, "
+               "locked borders or vertices, seam ends)";
+    case MR_STOP_REFUSED:
+        return "every remaining collapse is refused by the topology or normal tests (it "
+               "would join two sides of the surface, remove a part's last triangles, or "
+               "flip or turn a triangle past the normal limit)";
+    }
+    return "unknown";
+}
+
+static size_t run_greedy(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
+
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
 {
-    if (s->batched)
-        return mr_simplifier_run_batched(s, o, max_error);
+    size_t done = s->batched ? mr_simplifier_run_batched(s, o, max_error)
+                             : run_greedy(s, o, max_error);
+    mr_simplify_goal g;
+    mr_simplifier_targets(s, o, &g);
+    s->stop = stop_reason(s, &g);
+    return done;
+}
+
+static size_t run_greedy(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+{
     mr_collapse_mesh *m = &s->m;
     mr_simplify_goal g;
     mr_simplifier_targets(s, o, &g);
@@ -1281,12 +1359,10 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
         remap[v] = (uint32_t)n;
         out->origin[n] = (uint32_t)v;
         float *p = out->positions + 3 * n;
-        if (m->flags[v] & MR_VF_MOVED) {
-            for (int k = 0; k < 3; k++)
-                p[k] = (float)((double)m->pos[3 * v + k] * s->diagonal + s->centre[k]);
-        } else {
+        if (m->flags[v] & MR_VF_MOVED)
+            mr_simplifier_position(s, (uint32_t)v, p);
+        else
             memcpy(p, (const char *)positions + v * stride, 3 * sizeof(float));
-        }
         n++;
     }
     size_t t = 0;
@@ -1333,6 +1409,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     s.q = NULL;
     st = mr_simplifier_output(&s, positions, stride, out, err);
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
+    const mr_simplify_stop stop = s.stop;
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;
@@ -1342,7 +1419,10 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     stats->locked_vertices = blocked;
     stats->input_triangles = triangle_count;
     stats->output_vertices = out->vertex_count;
+    stats->output_points = out->vertex_count;
     stats->output_triangles = out->triangle_count;
+    stats->stop = stop;
+    stats->target_reached = stop <= MR_STOP_MAX_ERROR;
     stats->collapses = collapses;
     stats->max_error = max_error;
     stats->seconds_setup = t1 - t0;

@@ -34,8 +34,12 @@ struct mr_simplifier {
     uint8_t pin_flags;       /* flags that pin a full collapse's target to
                                 that end (MR_VF_SEAM with attributes) */
     double centre[3], scale, diagonal;
+    float lo[3], hi[3];      /* bounding box of the referenced input vertices */
+    double box[3];           /* its half extents, normalised: targets stay
+                                inside (|target[k]| <= box[k]) */
     size_t input_vertices;
     size_t blocked_vertices; /* non-manifold or inconsistently wound: locked */
+    mr_simplify_stop stop;   /* why mr_simplifier_run stopped */
     /* Attribute hooks (mr_mesh_simplify): extra validity, and an action
      * before a collapse r -> k to target is applied. */
     bool (*attr_valid)(mr_simplifier *s, uint32_t r, uint32_t k);
@@ -55,6 +59,17 @@ static inline bool mr_simplifier_reached(const mr_simplifier *s, const mr_simpli
 {
     return s->m.live_vertices <= g->vertices ||
            (g->triangles && s->m.live_triangles <= g->triangles);
+}
+
+/* Output position of vertex v: its normalised position scaled back, kept
+ * inside the input's bounding box (the rounding of a target at its face
+ * must not leave it, nor the float range). */
+static inline void mr_simplifier_position(const mr_simplifier *s, uint32_t v, float p[3])
+{
+    for (int k = 0; k < 3; k++) {
+        const float f = (float)((double)s->m.pos[3 * (size_t)v + k] * s->diagonal + s->centre[k]);
+        p[k] = f < s->lo[k] ? s->lo[k] : f > s->hi[k] ? s->hi[k] : f;
+    }
 }
 
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
