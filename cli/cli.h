@@ -27,8 +27,27 @@ extern const cli_command cli_cmd_weld, cli_cmd_cluster, cli_cmd_render;
 int cli_fail(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Print the library error and return CLI_FAIL. */
 int cli_fail_err(const mr_error *err);
+/* Print the library error of work on the file `path` and return CLI_FAIL:
+ * "meshreduce: PATH: message" (the message as is when it already names
+ * PATH, as the readers' do), a leading "TAG: " of the message dropped (the
+ * library's name for the step, e.g. "simplify"; tag may be NULL). */
+int cli_fail_in(const char *path, const char *tag, const mr_error *err);
 /* Print "meshreduce <cmd>: <message>" and a hint to --help; return CLI_USAGE. */
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/*
+ * Options of which at most one may be given (weld's --eps, --eps-rel and
+ * --reduce, say): a second one, or the same value option twice, is a usage
+ * error naming both, not a silent override. `group` says what they choose,
+ * for the message ("one radius: --eps, --eps-rel or --reduce"). Returns
+ * CLI_OK for the first one given, else the usage status (message printed).
+ */
+typedef struct cli_choice {
+    const char *given; /* the option given first, or NULL */
+} cli_choice;
+int cli_choose(cli_choice *c, const char *cmd, const char *option, const char *group);
+/* The same for flags, of which a repeat changes nothing and is allowed. */
+int cli_choose_flag(cli_choice *c, const char *cmd, const char *option, const char *group);
 
 /*
  * Option matching. At argv[*i], accept "--name VALUE" or "--name=VALUE"
@@ -99,13 +118,15 @@ typedef struct cli_io {
     const char *in, *out;   /* in NULL: nothing is read */
     bool stats, json, quiet;
     mr_write_options write;
+    cli_choice encoding;    /* --ascii, --binary or --big-endian */
 } cli_io;
 
 /* Empty arguments with the default output options. */
 void cli_io_init(cli_io *io, const char *cmd, unsigned accepts);
 
 /* Match one shared option at argv[*i]: CLI_OK when it was one (*i advanced),
- * CLI_USAGE when it lacks its value (message printed), else CLI_NO_MATCH. */
+ * CLI_USAGE when it lacks its value or conflicts with one given before
+ * (-o twice, two encodings; message printed), else CLI_NO_MATCH. */
 int cli_io_option(cli_io *io, int argc, char **argv, int *i);
 
 /* A command's own options, with the contract of cli_io_option. */
@@ -124,7 +145,8 @@ typedef struct cli_times {
     double read, work, write;
 } cli_times;
 
-/* How a command prints what a successful run did. */
+/* How a command prints what a successful run did (only once the output
+ * is written). */
 typedef void (*cli_report_fn)(const cli_io *io, const mr_mesh *result, const cli_times *t,
                               void *user);
 
@@ -136,7 +158,7 @@ typedef struct cli_job {
     int (*work)(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user);
     cli_report_fn json;    /* on stdout with --json */
     cli_report_fn stats;   /* on stderr with --stats */
-    cli_report_fn summary; /* on stderr otherwise, unless --quiet or --json */
+    cli_report_fn summary; /* on stderr otherwise, unless -q/--quiet or --json */
 } cli_job;
 
 /*
@@ -155,8 +177,8 @@ void cli_summary(const char *out, size_t vertices, size_t triangles, const char 
  * {"input": IN, "output": OUT (the caller goes on and closes it). */
 void cli_json_io(const cli_io *io);
 
-/* The bounding-box diagonal of a mesh's positions; CLI_OK, else CLI_FAIL
- * with the message printed. */
-int cli_bbox_diagonal(const mr_mesh *m, double *diagonal);
+/* The bounding-box diagonal of the positions of the mesh read from
+ * `path`; CLI_OK, else CLI_FAIL with the message (naming path) printed. */
+int cli_bbox_diagonal(const char *path, const mr_mesh *m, double *diagonal);
 
 #endif

@@ -25,6 +25,36 @@ int cli_fail_err(const mr_error *err)
     return cli_fail("%s", err->message[0] ? err->message : mr_status_string(err->status));
 }
 
+int cli_fail_in(const char *path, const char *tag, const mr_error *err)
+{
+    const char *msg = err->message[0] ? err->message : mr_status_string(err->status);
+    size_t n = tag ? strlen(tag) : 0;
+    if (n && strncmp(msg, tag, n) == 0 && msg[n] == ':' && msg[n + 1] == ' ')
+        msg += n + 2;
+    n = path ? strlen(path) : 0;
+    if (!path || (strncmp(msg, path, n) == 0 && msg[n] == ':'))
+        return cli_fail("%s", msg);
+    return cli_fail("%s: %s", path, msg);
+}
+
+int cli_choose(cli_choice *c, const char *cmd, const char *option, const char *group)
+{
+    if (!c->given) {
+        c->given = option;
+        return CLI_OK;
+    }
+    if (!strcmp(c->given, option))
+        return cli_usage_error(cmd, "%s is given twice (%s)", option, group);
+    return cli_usage_error(cmd, "%s conflicts with %s (%s)", option, c->given, group);
+}
+
+int cli_choose_flag(cli_choice *c, const char *cmd, const char *option, const char *group)
+{
+    if (c->given && !strcmp(c->given, option))
+        return CLI_OK;
+    return cli_choose(c, cmd, option, group);
+}
+
 int cli_usage_error(const char *cmd, const char *fmt, ...)
 {
     va_list ap;
@@ -227,12 +257,24 @@ int cli_io_option(cli_io *io, int argc, char **argv, int *i)
 {
     const char *v;
     const bool report = (io->accepts & CLI_ACCEPT_REPORT) != 0;
-    if ((io->accepts & CLI_ACCEPT_WRITE) && cli_output_option(argc, argv, i, &io->write))
-        return CLI_OK;
+    if (io->accepts & CLI_ACCEPT_WRITE) {
+        const char *a = argv[*i];
+        if (!strcmp(a, "--ascii") || !strcmp(a, "--binary") || !strcmp(a, "--big-endian")) {
+            int rc = cli_choose_flag(&io->encoding, io->cmd, a,
+                                     "one encoding: --ascii, --binary or --big-endian");
+            if (rc != CLI_OK)
+                return rc;
+        }
+        if (cli_output_option(argc, argv, i, &io->write))
+            return CLI_OK;
+    }
     if ((io->accepts & CLI_ACCEPT_OUTPUT) &&
         (cli_value(argc, argv, i, "-o", &v) || cli_value(argc, argv, i, "--output", &v))) {
         if (!v)
             return cli_usage_error(io->cmd, "-o needs a file name");
+        if (io->out)
+            return cli_usage_error(io->cmd, "-o is given twice ('%s' and '%s'): one output "
+                                            "file at a time", io->out, v);
         io->out = v;
     } else if (report && cli_flag(argc, argv, i, "--stats")) {
         io->stats = true;
@@ -326,12 +368,12 @@ void cli_json_io(const cli_io *io)
     cli_json_string(stdout, io->out);
 }
 
-int cli_bbox_diagonal(const mr_mesh *m, double *diagonal)
+int cli_bbox_diagonal(const char *path, const mr_mesh *m, double *diagonal)
 {
     mr_stats s;
     mr_error err;
     if (mr_stats_compute(m->positions, 0, m->vertex_count, NULL, 0, &s, &err) != MR_OK)
-        return cli_fail_err(&err);
+        return cli_fail_in(path, NULL, &err);
     *diagonal = s.bbox_diagonal;
     return CLI_OK;
 }

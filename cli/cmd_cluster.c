@@ -5,7 +5,8 @@
 #include <string.h>
 
 static const char usage[] =
-    "usage: meshreduce cluster IN -o OUT (--cell C | --target-vertices N) [options]\n"
+    "usage: meshreduce cluster IN -o OUT (--cell C | --cell-rel F | --target-vertices N)\n"
+    "                          [options]\n"
     "\n"
     "Reduce a mesh or point cloud by grid clustering (Rossignac-Borrel): all\n"
     "vertices in one cubic cell become one vertex, placed by the cell's summed\n"
@@ -14,15 +15,18 @@ static const char usage[] =
     "the same at any thread count. Normals, texture coordinates and colors are\n"
     "averaged per cell.\n"
     "\n"
-    "options:\n"
-    "  -o, --output FILE       output file (required)\n"
+    "cell size (exactly one):\n"
     "  --cell C                cell edge length (absolute, > 0)\n"
     "  --cell-rel F            cell edge as a fraction of the bounding-box diagonal\n"
+    "                          (the input must not be a single point)\n"
     "  --target-vertices N     the cell size whose grid has about N occupied cells\n"
+    "\n"
+    "options:\n"
+    "  -o, --output FILE       output file (required)\n"
     "  --threads N             worker threads (default: all cores)\n"
     "  --stats                 print counts, the cell size and the time per phase\n"
     "  --json                  print them as one JSON object on stdout\n"
-    "  -q, --quiet             print nothing on success\n"
+    "  -q, --quiet             no summary on success (--stats and --json still print)\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
 /* The options, the relative cell size asked for and the statistics of one
@@ -30,8 +34,11 @@ static const char usage[] =
 typedef struct cluster_job {
     mr_cluster_options o;
     double cell_rel;
+    cli_choice size_option; /* --cell, --cell-rel or --target-vertices */
     mr_cluster_stats s;
 } cluster_job;
+
+static const char size_group[] = "one cell size: --cell, --cell-rel or --target-vertices";
 
 static int option(int argc, char **argv, int *i, void *user)
 {
@@ -39,17 +46,25 @@ static int option(int argc, char **argv, int *i, void *user)
     const char *v;
     double x;
     uint64_t n;
+    int rc;
     if (cli_value(argc, argv, i, "--cell", &v)) {
         if (!cli_parse_double(v, &x) || !(x > 0) || isinf(x))
             return cli_usage_error("cluster", "--cell needs a finite number > 0");
+        if ((rc = cli_choose(&job->size_option, "cluster", "--cell", size_group)) != CLI_OK)
+            return rc;
         job->o.cell = x;
     } else if (cli_value(argc, argv, i, "--cell-rel", &v)) {
         if (!cli_parse_double(v, &x) || !(x > 0) || isinf(x))
             return cli_usage_error("cluster", "--cell-rel needs a finite number > 0");
+        if ((rc = cli_choose(&job->size_option, "cluster", "--cell-rel", size_group)) != CLI_OK)
+            return rc;
         job->cell_rel = x;
     } else if (cli_value(argc, argv, i, "--target-vertices", &v)) {
         if (!cli_parse_count(v, &n) || n == 0)
             return cli_usage_error("cluster", "--target-vertices needs a positive count");
+        if ((rc = cli_choose(&job->size_option, "cluster", "--target-vertices", size_group)) !=
+            CLI_OK)
+            return rc;
         job->o.target_vertices = (size_t)n;
     } else {
         return CLI_NO_MATCH;
@@ -63,13 +78,25 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     mr_error err;
     if (job->cell_rel > 0 && mesh->vertex_count > 0) {
         double diagonal;
-        int rc = cli_bbox_diagonal(mesh, &diagonal);
+        int rc = cli_bbox_diagonal(io->in, mesh, &diagonal);
         if (rc != CLI_OK)
             return rc;
         job->o.cell = job->cell_rel * diagonal;
+        /* A fraction of nothing is no size: say so about the file, rather
+         * than let the library refuse a cell size the user never gave. */
+        char a[32];
+        if (diagonal == 0)
+            return cli_fail("%s: all %s vertices are at one point, so --cell-rel %g of its "
+                            "bounding-box diagonal (0) is no cell size; give --cell or "
+                            "--target-vertices",
+                            io->in, cli_count(a, sizeof a, mesh->vertex_count), job->cell_rel);
+        if (!(job->o.cell > 0) || isinf(job->o.cell))
+            return cli_fail("%s: --cell-rel %g of its bounding-box diagonal %g is no usable "
+                            "cell size; give --cell",
+                            io->in, job->cell_rel, diagonal);
     }
     if (mr_mesh_cluster(mesh, &job->o, result, &job->s, &err) != MR_OK)
-        return cli_fail_err(&err);
+        return cli_fail_in(io->in, NULL, &err);
     return CLI_OK;
 }
 

@@ -8,7 +8,7 @@
 #endif
 
 static const char usage[] =
-    "usage: meshreduce compare REF TEST [--samples N] [--seed S] [--json]\n"
+    "usage: meshreduce compare REF TEST [--samples N] [--seed S] [--json] [-q]\n"
     "\n"
     "Measure how far the surface of TEST is from that of REF (e.g. a mesh and its\n"
     "reduction), Metro-style: the points of each surface (its vertices and N\n"
@@ -23,7 +23,9 @@ static const char usage[] =
     "  --samples N   surface samples per mesh besides its vertices (default 1M;\n"
     "                0 = vertices only)\n"
     "  --seed S      sampling seed (default 1)\n"
-    "  --json        one JSON object instead of the table\n";
+    "  --json        one JSON object instead of the table\n"
+    "  -q, --quiet   accepted, as by every command; compare prints no progress or\n"
+    "                summary to silence (the table or JSON is its output)\n";
 
 typedef struct compare_args {
     const char *ref, *test;
@@ -38,6 +40,8 @@ static int parse(int argc, char **argv, compare_args *a)
         const char *v = NULL;
         if (cli_flag(argc, argv, &i, "--json")) {
             a->json = true;
+        } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
+            /* nothing to silence */
         } else if (cli_value(argc, argv, &i, "--samples", &v)) {
             if (!v || !cli_parse_count(v, &a->samples) || a->samples > ((uint64_t)1 << 40))
                 return cli_usage_error("compare", "--samples needs a count up to 1T, "
@@ -71,6 +75,20 @@ static int read_mesh(const char *path, mr_mesh *m)
         return cli_fail("%s: has no triangles (a point cloud): nothing to compare", path);
     }
     return CLI_OK;
+}
+
+/* A failed comparison: the library calls the meshes "reference mesh" and
+ * "test mesh"; the user knows them by their files. */
+static int compare_failed(const compare_args *a, const mr_error *err)
+{
+    static const char *const names[2] = {"reference mesh", "test mesh"};
+    const char *msg = err->message[0] ? err->message : mr_status_string(err->status);
+    for (int k = 0; k < 2; k++) {
+        size_t n = strlen(names[k]);
+        if (!strncmp(msg, names[k], n) && (msg[n] == ':' || msg[n] == ' '))
+            return cli_fail("%s%s", k ? a->test : a->ref, msg + n);
+    }
+    return cli_fail("%s, %s: %s", a->ref, a->test, msg);
 }
 
 static int threads_used(void)
@@ -182,7 +200,7 @@ static int run(int argc, char **argv)
     }
     mr_mesh_free(&ref);
     mr_mesh_free(&test);
-    return st == MR_OK ? CLI_OK : cli_fail_err(&err);
+    return st == MR_OK ? CLI_OK : compare_failed(&a, &err);
 }
 
 const cli_command cli_cmd_compare = {"compare", "surface distances between two meshes", run,

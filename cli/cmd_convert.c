@@ -9,48 +9,55 @@ typedef struct clean_steps {
         keep_winding;
 } clean_steps;
 
-static int clean_mesh(mr_mesh *m, const clean_steps *c, bool quiet)
+/* What the steps did, for the report. */
+typedef struct clean_counts {
+    size_t welded, degenerate, unreferenced, flipped, nonorientable;
+} clean_counts;
+
+static int clean_mesh(const char *path, mr_mesh *m, const clean_steps *c, clean_counts *n)
 {
     mr_error err;
-    size_t welded = 0, degenerate = 0, unreferenced = 0;
-    if (c->weld && mr_mesh_weld_exact(m, c->weld_attributes, &welded, &err) != MR_OK)
-        return cli_fail_err(&err);
+    if (c->weld && mr_mesh_weld_exact(m, c->weld_attributes, &n->welded, &err) != MR_OK)
+        return cli_fail_in(path, NULL, &err);
     if (!c->keep_degenerate &&
-        mr_mesh_remove_degenerate(m, !c->keep_duplicates, &degenerate, &err) != MR_OK)
-        return cli_fail_err(&err);
-    if (!c->keep_unreferenced && mr_mesh_remove_unreferenced(m, &unreferenced, &err) != MR_OK)
-        return cli_fail_err(&err);
-    size_t flipped = 0, nonorientable = 0;
-    if (!c->keep_winding && mr_mesh_orient(m, &flipped, &nonorientable, &err) != MR_OK)
-        return cli_fail_err(&err);
-    if (!quiet) {
-        char a[32], b[32], d[32];
-        fprintf(stderr,
-                "cleaned: %s vertices welded, %s degenerate or duplicate triangles and %s "
-                "unreferenced vertices removed\n",
-                cli_count(a, sizeof a, welded), cli_count(b, sizeof b, degenerate),
-                cli_count(d, sizeof d, unreferenced));
-        if (flipped)
-            fprintf(stderr, "cleaned: %s triangles flipped to their neighbours' winding\n",
-                    cli_count(a, sizeof a, flipped));
-        if (nonorientable)
-            fprintf(stderr, "cleaned: %s part%s cannot be oriented (left as %s)\n",
-                    cli_count(a, sizeof a, nonorientable), nonorientable == 1 ? "" : "s",
-                    nonorientable == 1 ? "it is" : "they are");
-    }
+        mr_mesh_remove_degenerate(m, !c->keep_duplicates, &n->degenerate, &err) != MR_OK)
+        return cli_fail_in(path, NULL, &err);
+    if (!c->keep_unreferenced && mr_mesh_remove_unreferenced(m, &n->unreferenced, &err) != MR_OK)
+        return cli_fail_in(path, NULL, &err);
+    if (!c->keep_winding && mr_mesh_orient(m, &n->flipped, &n->nonorientable, &err) != MR_OK)
+        return cli_fail_in(path, NULL, &err);
     return CLI_OK;
+}
+
+static void print_counts(const clean_counts *n)
+{
+    char a[32], b[32], d[32];
+    fprintf(stderr,
+            "cleaned: %s vertices welded, %s degenerate or duplicate triangles and %s "
+            "unreferenced vertices removed\n",
+            cli_count(a, sizeof a, n->welded), cli_count(b, sizeof b, n->degenerate),
+            cli_count(d, sizeof d, n->unreferenced));
+    if (n->flipped)
+        fprintf(stderr, "cleaned: %s triangles flipped to their neighbours' winding\n",
+                cli_count(a, sizeof a, n->flipped));
+    if (n->nonorientable)
+        fprintf(stderr, "cleaned: %s part%s cannot be oriented (left as %s)\n",
+                cli_count(a, sizeof a, n->nonorientable), n->nonorientable == 1 ? "" : "s",
+                n->nonorientable == 1 ? "it is" : "they are");
 }
 
 /* What convert and clean do between reading and writing. */
 typedef struct clean_job {
     clean_steps steps;
     bool clean; /* run the steps; else the mesh is written as read */
+    cli_choice weld_option; /* --no-weld and --weld-attributes exclude each other */
+    clean_counts counts;
 } clean_job;
 
 static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
 {
-    const clean_job *job = user;
-    int rc = job->clean ? clean_mesh(mesh, &job->steps, io->quiet) : CLI_OK;
+    clean_job *job = user;
+    int rc = job->clean ? clean_mesh(io->in, mesh, &job->steps, &job->counts) : CLI_OK;
     if (rc == CLI_OK) {
         *result = *mesh;
         mr_mesh_init(mesh);
@@ -58,10 +65,14 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     return rc;
 }
 
+/* Printed only once the output is written: what was cleaned, then what
+ * was written. */
 static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,
                           void *user)
 {
     const clean_job *job = user;
+    if (job->clean)
+        print_counts(&job->counts);
     cli_summary(io->out, result->vertex_count, result->triangle_count,
                 "read %.3f s, %s%.3f s, write %.3f s", t->read, job->clean ? "clean " : "",
                 job->clean ? t->work : 0.0, t->write);
@@ -78,7 +89,7 @@ static const char convert_usage[] =
     "  --clean          also clean the mesh as `meshreduce clean` does (weld exact\n"
     "                   duplicates; remove degenerate, duplicate triangles and\n"
     "                   unreferenced vertices; make the winding consistent)\n"
-    "  -q, --quiet      print nothing on success\n";
+    "  -q, --quiet      no summary on success (errors still print)\n";
 
 static int convert_option(int argc, char **argv, int *i, void *user)
 {
@@ -112,17 +123,28 @@ static const char clean_usage[] =
     "  -o, --output FILE       output file (required)\n"
     "  --no-weld               do not weld duplicate positions\n"
     "  --weld-attributes       weld only vertices whose normals, texture\n"
-    "                          coordinates and colors are equal too (keeps seams)\n"
+    "                          coordinates and colors are equal too (keeps seams;\n"
+    "                          not with --no-weld)\n"
     "  --keep-duplicates       keep duplicate triangles\n"
-    "  --keep-degenerate       keep triangles that repeat a vertex\n"
+    "  --keep-degenerate       keep triangles that repeat a vertex (duplicate\n"
+    "                          triangles too: both go in one step)\n"
     "  --keep-unreferenced     keep unreferenced vertices\n"
     "  --keep-winding          leave every triangle's winding as it is\n"
-    "  -q, --quiet             print nothing on success\n"
+    "  -q, --quiet             no report on success (errors still print); the\n"
+    "                          report comes only once OUT is written\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
 static int clean_option(int argc, char **argv, int *i, void *user)
 {
-    clean_steps *c = &((clean_job *)user)->steps;
+    clean_job *job = user;
+    clean_steps *c = &job->steps;
+    static const char group[] = "--weld-attributes sets how to weld, --no-weld not to weld";
+    const char *a = argv[*i];
+    if (!strcmp(a, "--no-weld") || !strcmp(a, "--weld-attributes")) {
+        int rc = cli_choose_flag(&job->weld_option, "clean", a, group);
+        if (rc != CLI_OK)
+            return rc;
+    }
     if (cli_flag(argc, argv, i, "--no-weld"))
         c->weld = false;
     else if (cli_flag(argc, argv, i, "--weld-attributes"))

@@ -7,7 +7,7 @@
 #include <sys/stat.h>
 
 static const char usage[] =
-    "usage: meshreduce demo [--triangles N] [--dir DIR]\n"
+    "usage: meshreduce demo [--triangles N] [--dir DIR] [-q]\n"
     "\n"
     "Generate the default scan-like mesh (about 1M triangles), write it as\n"
     "binary PLY and OBJ, read both back, check them, clean the mesh, print its\n"
@@ -17,7 +17,12 @@ static const char usage[] =
     "the original).\n"
     "\n"
     "  --triangles N   size of the generated mesh (default 1M)\n"
-    "  --dir DIR       where the files go (default out/demo)\n";
+    "  --dir DIR       where the files go (default out/demo)\n"
+    "  -q, --quiet     no report of the steps (the files are still written;\n"
+    "                  errors still print)\n";
+
+/* -q: the steps are done but not reported. */
+static bool quiet;
 
 /* mkdir -p */
 static int make_dirs(const char *path)
@@ -41,7 +46,8 @@ static int make_dirs(const char *path)
 
 static void step(const char *what, double seconds, const char *detail)
 {
-    printf("  %-28s %8.3f s   %s\n", what, seconds, detail);
+    if (!quiet)
+        printf("  %-28s %8.3f s   %s\n", what, seconds, detail);
 }
 
 /* Write `m` to path and read it back, timing both; the copy must match. */
@@ -73,12 +79,13 @@ static int round_trip(const mr_mesh *m, const char *path, const char *label)
              same ? "identical to what was written" : "DIFFERS from what was written");
     snprintf(what, sizeof what, "read %s", label);
     step(what, t1 - t0, detail);
-    return same ? CLI_OK : cli_fail("%s did not read back as written", path);
+    return same ? CLI_OK : cli_fail("%s: did not read back as written", path);
 }
 
 /* The main job: simplify to 10 % of the vertices, then measure how far the
- * result lies from the original surface. */
-static int simplify_and_compare(const mr_mesh *mesh, const char *dir)
+ * result lies from the original surface. Errors name `src`, the file the
+ * mesh was written to, or the reduction's own. */
+static int simplify_and_compare(const mr_mesh *mesh, const char *src, const char *dir)
 {
     mr_error err;
     char detail[160], a[32], b[32];
@@ -89,7 +96,7 @@ static int simplify_and_compare(const mr_mesh *mesh, const char *dir)
     mr_simplify_stats s;
     double t0 = cli_now();
     if (mr_mesh_simplify(mesh, &o, &low, NULL, &s, &err) != MR_OK)
-        return cli_fail_err(&err);
+        return cli_fail_in(src, "simplify", &err);
     double t1 = cli_now();
     snprintf(detail, sizeof detail, "%s vertices, %s triangles, %.2f M input triangles/s",
              cli_count(a, sizeof a, low.vertex_count), cli_count(b, sizeof b, low.triangle_count),
@@ -99,25 +106,26 @@ static int simplify_and_compare(const mr_mesh *mesh, const char *dir)
     char path[4096];
     snprintf(path, sizeof path, "%s/scan-10pct.ply", dir);
     mr_status st = mr_mesh_write(path, &low, NULL, &err);
-    if (st == MR_OK) {
-        mr_compare_options co;
-        mr_compare_options_default(&co);
-        co.samples = 200000;
-        mr_compare_result r;
-        t0 = cli_now();
-        st = mr_compare(mesh->positions, mesh->vertex_count, mesh->indices,
-                        mesh->triangle_count, low.positions, low.vertex_count, low.indices,
-                        low.triangle_count, &co, &r, &err);
-        t1 = cli_now();
-        if (st == MR_OK) {
-            snprintf(detail, sizeof detail,
-                     "hausdorff %.4f %%, rms %.4f %% of the bbox diagonal",
-                     100.0 * r.hausdorff_rel, 100.0 * r.rms_rel);
-            step("surface distance", t1 - t0, detail);
-        }
+    if (st != MR_OK) {
+        mr_mesh_free(&low);
+        return cli_fail_err(&err);
     }
+    mr_compare_options co;
+    mr_compare_options_default(&co);
+    co.samples = 200000;
+    mr_compare_result r;
+    t0 = cli_now();
+    st = mr_compare(mesh->positions, mesh->vertex_count, mesh->indices, mesh->triangle_count,
+                    low.positions, low.vertex_count, low.indices, low.triangle_count, &co, &r,
+                    &err);
+    t1 = cli_now();
     mr_mesh_free(&low);
-    return st == MR_OK ? CLI_OK : cli_fail_err(&err);
+    if (st != MR_OK)
+        return cli_fail("%s, %s: %s", src, path, err.message);
+    snprintf(detail, sizeof detail, "hausdorff %.4f %%, rms %.4f %% of the bbox diagonal",
+             100.0 * r.hausdorff_rel, 100.0 * r.rms_rel);
+    step("surface distance", t1 - t0, detail);
+    return CLI_OK;
 }
 
 /* Before/after: the mesh and its reduction side by side from one camera,
@@ -168,13 +176,14 @@ static int write_sheet(const mr_mesh *mesh, const char *dir, char *out, size_t o
         so.colorbar_max_label = hi;
         st = mr_render_sheet(panels, 2, &so, &img, &w, &h, &err);
     }
-    if (st == MR_OK)
-        st = mr_png_write(out, img, w, h, &err);
+    int rc = st == MR_OK ? CLI_OK : cli_fail_in(out, NULL, &err);
+    if (st == MR_OK && mr_png_write(out, img, w, h, &err) != MR_OK)
+        rc = cli_fail_err(&err);
     free(img);
     free(heat);
     mr_mesh_free(&low);
-    if (st != MR_OK)
-        return cli_fail_err(&err);
+    if (rc != CLI_OK)
+        return rc;
     snprintf(detail, sizeof detail, "%dx%d, heat map of the distance to the original", w, h);
     step("comparison sheet", cli_now() - t0, detail);
     return CLI_OK;
@@ -193,6 +202,8 @@ static int run(int argc, char **argv)
             if (!v)
                 return cli_usage_error("demo", "--dir needs a directory");
             dir = v;
+        } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
+            quiet = true;
         } else
             return cli_usage_error("demo", "unknown argument '%s'", argv[i]);
     }
@@ -203,20 +214,21 @@ static int run(int argc, char **argv)
     mr_error err;
     mr_mesh mesh;
     double total0 = cli_now();
-    printf("meshreduce %s demo: the default scan-like mesh\n", mr_version());
+    if (!quiet)
+        printf("meshreduce %s demo: the default scan-like mesh\n", mr_version());
 
+    char ply[4096], obj[4096];
+    snprintf(ply, sizeof ply, "%s/scan.ply", dir);
+    snprintf(obj, sizeof obj, "%s/scan.obj", dir);
     double t0 = cli_now();
     if (mr_generate(MR_GEN_SCAN, (size_t)triangles, 1, &mesh, &err) != MR_OK)
-        return cli_fail_err(&err);
+        return cli_fail_in(ply, NULL, &err); /* the file it was to be */
     double t1 = cli_now();
     snprintf(detail, sizeof detail, "%s vertices, %s triangles",
              cli_count(a, sizeof a, mesh.vertex_count),
              cli_count(b, sizeof b, mesh.triangle_count));
     step("generate scan", t1 - t0, detail);
 
-    char ply[4096], obj[4096];
-    snprintf(ply, sizeof ply, "%s/scan.ply", dir);
-    snprintf(obj, sizeof obj, "%s/scan.obj", dir);
     int rc = round_trip(&mesh, ply, "binary PLY");
     if (rc == CLI_OK)
         rc = round_trip(&mesh, obj, "OBJ");
@@ -231,7 +243,7 @@ static int run(int argc, char **argv)
         mr_mesh_remove_degenerate(&mesh, 1, &degenerate, &err) != MR_OK ||
         mr_mesh_remove_unreferenced(&mesh, &unreferenced, &err) != MR_OK) {
         mr_mesh_free(&mesh);
-        return cli_fail_err(&err);
+        return cli_fail_in(ply, NULL, &err);
     }
     t1 = cli_now();
     snprintf(detail, sizeof detail, "%zu welded, %zu bad triangles, %zu unused vertices",
@@ -243,7 +255,7 @@ static int run(int argc, char **argv)
     if (mr_stats_compute(mesh.positions, 0, mesh.vertex_count, mesh.indices,
                          mesh.triangle_count, &s, &err) != MR_OK) {
         mr_mesh_free(&mesh);
-        return cli_fail_err(&err);
+        return cli_fail_in(ply, NULL, &err);
     }
     t1 = cli_now();
     snprintf(detail, sizeof detail, "%s, %s, %zu component%s, euler %lld",
@@ -251,12 +263,12 @@ static int run(int argc, char **argv)
              s.components, s.components == 1 ? "" : "s", s.euler_characteristic);
     step("statistics", t1 - t0, detail);
 
-    rc = simplify_and_compare(&mesh, dir);
+    rc = simplify_and_compare(&mesh, ply, dir);
     char sheet[4200];
     if (rc == CLI_OK)
         rc = write_sheet(&mesh, dir, sheet, sizeof sheet);
     mr_mesh_free(&mesh);
-    if (rc != CLI_OK)
+    if (rc != CLI_OK || quiet)
         return rc;
     printf("  %-28s %8.3f s\n", "total", cli_now() - total0);
     printf("files: %s %s %s/scan-10pct.ply\n", ply, obj, dir);

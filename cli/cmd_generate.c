@@ -18,7 +18,7 @@ static const char usage[] =
     "  --triangles N       about N triangles (default 1M; accepts 250k, 4M, 1e7)\n"
     "  --seed S            seed of the random detail (default 1)\n"
     "  --ascii             text PLY/STL instead of binary\n"
-    "  -q, --quiet         print nothing on success\n";
+    "  -q, --quiet         no summary on success (errors still print)\n";
 
 /* The mesh to make. */
 typedef struct generate_job {
@@ -31,7 +31,7 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     const generate_job *job = user;
     mr_error err;
     if (mr_generate(job->kind, (size_t)job->triangles, job->seed, result, &err) != MR_OK)
-        return cli_fail_err(&err);
+        return cli_fail_in(io->out, NULL, &err); /* the file it was to be */
     return CLI_OK;
 }
 

@@ -4,12 +4,17 @@
 #include <string.h>
 
 static const char usage[] =
-    "usage: meshreduce info FILE [--json]\n"
+    "usage: meshreduce info FILE [--json] [-q]\n"
     "\n"
     "Print a mesh's counts, bounding box, boundary edges and loops, non-manifold\n"
     "edges and vertices, connected components, Euler characteristic and genus.\n"
+    "The topology is the surface's: vertices that a file splits at one position only\n"
+    "for their attributes (UV seams, hard edges) count as one surface point, and the\n"
+    "splits are reported apart; parts that only touch at a point stay apart.\n"
     "\n"
-    "  --json   one JSON object instead of the table\n";
+    "  --json        one JSON object instead of the table\n"
+    "  -q, --quiet   accepted, as by every command; info prints no progress or\n"
+    "                summary to silence (the table or JSON is its output)\n";
 
 /* Genus of an orientable manifold from chi = 2C - 2g - b; -1 when the
  * formula does not apply (non-manifold or point cloud). */
@@ -35,6 +40,11 @@ static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
            cli_count(a, sizeof a, s->vertex_count),
            cli_count(b, sizeof b, s->referenced_vertices),
            cli_count(c, sizeof c, s->unreferenced_vertices));
+    if (s->split_vertices)
+        printf("%-22s %s surface points; %s vertices repeat one at its position "
+               "(attribute seams, cuts)\n",
+               "", cli_count(a, sizeof a, s->surface_vertices),
+               cli_count(b, sizeof b, s->split_vertices));
     printf("%-22s %s", "triangles", cli_count(a, sizeof a, s->triangle_count));
     if (s->triangle_count == 0)
         printf(" (point cloud)");
@@ -76,6 +86,8 @@ static void print_json(const char *path, const mr_mesh *m, const mr_stats *s, do
            cli_format_name(mr_format_from_path(path)), cli_file_size(path), seconds);
     printf(", \"vertices\": %zu, \"referenced_vertices\": %zu, \"unreferenced_vertices\": %zu",
            s->vertex_count, s->referenced_vertices, s->unreferenced_vertices);
+    printf(", \"surface_vertices\": %zu, \"split_vertices\": %zu", s->surface_vertices,
+           s->split_vertices);
     printf(", \"triangles\": %zu, \"degenerate_triangles\": %zu, \"duplicate_triangles\": %zu",
            s->triangle_count, s->degenerate_triangles, s->duplicate_triangles);
     printf(", \"normals\": %s, \"texcoords\": %s, \"colors\": %s",
@@ -109,6 +121,8 @@ static int run(int argc, char **argv)
     for (int i = 1; i < argc;) {
         if (cli_flag(argc, argv, &i, "--json"))
             json = true;
+        else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet"))
+            continue; /* nothing to silence */
         else if (argv[i][0] == '-' && argv[i][1] != '\0')
             return cli_usage_error("info", "unknown option '%s'", argv[i]);
         else if (path)
@@ -131,7 +145,7 @@ static int run(int argc, char **argv)
     if (mr_stats_compute(mesh.positions, 0, mesh.vertex_count, mesh.indices,
                          mesh.triangle_count, &stats, &err) != MR_OK) {
         mr_mesh_free(&mesh);
-        return cli_fail_err(&err);
+        return cli_fail_in(path, NULL, &err);
     }
     if (json)
         print_json(path, &mesh, &stats, seconds);

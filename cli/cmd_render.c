@@ -10,7 +10,7 @@ static const char usage[] =
     "                         [--yaw DEG] [--pitch DEG] [--size WxH] [--wire]\n"
     "                         [--supersample K] [--point-size PX] [--error-to REF]\n"
     "                         [--error-max PCT] [--samples N] [--columns N]\n"
-    "                         [--title TEXT] [--json]\n"
+    "                         [--title TEXT] [--json] [-q]\n"
     "\n"
     "Render meshes with a software rasterizer: z-buffered, flat-shaded triangles\n"
     "lit from the camera, an orthographic camera framed on the bounding box,\n"
@@ -27,7 +27,8 @@ static const char usage[] =
     "  --view V          iso (default), front (along -z), side (along -x),\n"
     "                    top (along -y)\n"
     "  --yaw, --pitch    degrees: turn about +y from the front view, then look\n"
-    "                    down (instead of --view)\n"
+    "                    down (either or both, 0 for one not given; not with\n"
+    "                    --view)\n"
     "  --size WxH        image size (default 1024x768), or panel size of a sheet\n"
     "                    (default 400x400)\n"
     "  --wire            draw the triangle edges\n"
@@ -38,11 +39,13 @@ static const char usage[] =
     "                    corners and four inner points), with a colour bar; the\n"
     "                    output is a sheet even for one input\n"
     "  --error-max PCT   top of the colour scale in % of REF's diagonal\n"
-    "                    (default: the largest distance found)\n"
+    "                    (default: the largest distance found; needs --error-to)\n"
     "  --samples N       surface samples for the caption's distances (default 100k)\n"
     "  --columns N       panels per row of a sheet (default: all in one row)\n"
     "  --title TEXT      a title line above a sheet's panels\n"
-    "  --json            print what was written as one JSON object\n";
+    "  --json            print what was written as one JSON object\n"
+    "  -q, --quiet       no summary line on success (errors and --json still\n"
+    "                    print)\n";
 
 #define MAX_INPUTS 64
 
@@ -54,7 +57,7 @@ typedef struct render_args {
     int size_given, columns;
     double error_max_pct;
     uint64_t samples;
-    bool json;
+    bool json, quiet;
 } render_args;
 
 static int parse_size(const char *v, int *w, int *h)
@@ -81,7 +84,10 @@ static bool ends_with_png(const char *path)
 /* Returns -1 when the arguments are fine, else the exit status. */
 static int parse(int argc, char **argv, render_args *a)
 {
-    int angles = 0;
+    /* The camera is one choice: a named view, or the angles. */
+    static const char camera[] = "one camera: --view, or --yaw and --pitch";
+    cli_choice view = {NULL}, yaw = {NULL}, pitch = {NULL};
+    int rc;
     for (int i = 1; i < argc;) {
         const char *v = NULL;
         double d;
@@ -90,21 +96,34 @@ static int parse(int argc, char **argv, render_args *a)
             a->ro.wire = 1;
         } else if (cli_flag(argc, argv, &i, "--json")) {
             a->json = true;
+        } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
+            a->quiet = true;
         } else if (cli_value(argc, argv, &i, "-o", &v) || cli_value(argc, argv, &i, "--output", &v)) {
             if (!v)
                 return cli_usage_error("render", "-o needs a PNG path");
+            if (a->out)
+                return cli_usage_error("render", "-o is given twice ('%s' and '%s'): one "
+                                                 "image at a time", a->out, v);
             a->out = v;
         } else if (cli_value(argc, argv, &i, "--view", &v)) {
             if (!v || mr_view_from_name(v, &a->ro.view) != 0)
                 return cli_usage_error("render", "--view is iso, front, side or top");
+            if ((rc = cli_choose(&view, "render", "--view", camera)) != CLI_OK)
+                return rc;
+            if (yaw.given || pitch.given)
+                return cli_choose(yaw.given ? &yaw : &pitch, "render", "--view", camera);
         } else if (cli_value(argc, argv, &i, "--yaw", &v)) {
             if (!v || !cli_parse_double(v, &a->ro.yaw))
                 return cli_usage_error("render", "--yaw needs an angle in degrees");
-            angles = 1;
+            if ((rc = cli_choose(view.given ? &view : &yaw, "render", "--yaw", camera)) !=
+                CLI_OK)
+                return rc;
         } else if (cli_value(argc, argv, &i, "--pitch", &v)) {
             if (!v || !cli_parse_double(v, &a->ro.pitch))
                 return cli_usage_error("render", "--pitch needs an angle in degrees");
-            angles = 1;
+            if ((rc = cli_choose(view.given ? &view : &pitch, "render", "--pitch", camera)) !=
+                CLI_OK)
+                return rc;
         } else if (cli_value(argc, argv, &i, "--size", &v)) {
             if (!v || parse_size(v, &a->ro.width, &a->ro.height) != 0)
                 return cli_usage_error("render", "--size needs WIDTHxHEIGHT, each 1 to 16384 "
@@ -146,8 +165,11 @@ static int parse(int argc, char **argv, render_args *a)
             a->inputs[a->n_inputs++] = argv[i++];
         }
     }
-    if (angles)
+    if (yaw.given || pitch.given)
         a->ro.view = MR_VIEW_CUSTOM;
+    if (a->error_max_pct > 0 && !a->error_to)
+        return cli_usage_error("render", "--error-max sets the colour scale of --error-to "
+                                         "REF, which is not given");
     if (a->n_inputs == 0)
         return cli_usage_error("render", "needs at least one input mesh");
     if (!a->out)
@@ -187,9 +209,11 @@ static int read_mesh(const char *path, mr_mesh *m)
     return CLI_OK;
 }
 
-/* The distances of panel p to the reference: the heat values (when asked)
- * and the caption's error figures. */
-static int measure(const render_args *a, const mr_mesh *ref, panel_data *p, int heat)
+/* The distances of panel p (read from `path`) to the reference: the heat
+ * values (when asked) and the caption's error figures. Errors name the
+ * panel's file. */
+static int measure(const render_args *a, const mr_mesh *ref, const char *path, panel_data *p,
+                   int heat)
 {
     mr_error err;
     const mr_mesh *m = &p->mesh;
@@ -198,19 +222,19 @@ static int measure(const render_args *a, const mr_mesh *ref, panel_data *p, int 
     if (heat || !m->triangle_count) {
         d = malloc(sizeof(float) * (n ? n : 1));
         if (!d)
-            return cli_fail("out of memory");
+            return cli_fail("%s: out of memory for its distances to the reference", path);
         if (mr_surface_distances(ref->positions, ref->vertex_count, ref->indices,
                                  ref->triangle_count, m->positions, m->vertex_count, m->indices,
                                  m->triangle_count, 0, d, &p->heat_max, &err) != MR_OK) {
             free(d);
-            return cli_fail_err(&err);
+            return cli_fail_in(path, NULL, &err);
         }
     }
     mr_stats s;
     if (mr_stats_compute(ref->positions, 0, ref->vertex_count, ref->indices,
                          ref->triangle_count, &s, &err) != MR_OK) {
         free(d);
-        return cli_fail_err(&err);
+        return cli_fail_in(a->error_to ? a->error_to : a->inputs[0], NULL, &err);
     }
     double diag = s.bbox_diagonal > 0 ? s.bbox_diagonal : 1;
     if (m->triangle_count) {
@@ -222,7 +246,7 @@ static int measure(const render_args *a, const mr_mesh *ref, panel_data *p, int 
                        m->positions, m->vertex_count, m->indices, m->triangle_count, &co, &r,
                        &err) != MR_OK) {
             free(d);
-            return cli_fail_err(&err);
+            return cli_fail_in(path, NULL, &err);
         }
         p->hausdorff_rel = r.hausdorff / diag;
         p->rms_rel = r.rms / diag;
@@ -279,7 +303,7 @@ static int run(int argc, char **argv)
     mr_mesh ref;
     mr_mesh_init(&ref);
     if (!p)
-        return cli_fail("out of memory");
+        return cli_fail("%s: out of memory", a.out);
     for (int i = 0; i < a.n_inputs && rc < 0; i++)
         if (read_mesh(a.inputs[i], &p[i].mesh) != CLI_OK)
             rc = CLI_FAIL;
@@ -305,7 +329,8 @@ static int run(int argc, char **argv)
     double heat_max = 0;
     for (int i = 0; i < a.n_inputs && rc < 0 && sheet; i++) {
         int is_ref = a.error_to ? !strcmp(a.inputs[i], a.error_to) : i == 0;
-        if (refm && !is_ref && measure(&a, refm, &p[i], a.error_to != NULL) != CLI_OK)
+        if (refm && !is_ref &&
+            measure(&a, refm, a.inputs[i], &p[i], a.error_to != NULL) != CLI_OK)
             rc = CLI_FAIL;
         if (p[i].heat && p[i].heat_max > heat_max)
             heat_max = p[i].heat_max;
@@ -320,7 +345,7 @@ static int run(int argc, char **argv)
         mr_stats s;
         if (mr_stats_compute(ref.positions, 0, ref.vertex_count, ref.indices,
                              ref.triangle_count, &s, &err) != MR_OK)
-            rc = cli_fail_err(&err);
+            rc = cli_fail_in(a.error_to, NULL, &err);
         diag = s.bbox_diagonal;
     }
     if (rc < 0 && sheet) {
@@ -351,16 +376,16 @@ static int run(int argc, char **argv)
             so.colorbar_max_label = hi;
         }
         if (mr_render_sheet(panels, (size_t)a.n_inputs, &so, &img, &w, &h, &err) != MR_OK)
-            rc = cli_fail_err(&err);
+            rc = cli_fail_in(a.out, NULL, &err); /* the sheet it was to be */
     } else if (rc < 0) {
         w = a.ro.width;
         h = a.ro.height;
         img = malloc((size_t)w * (size_t)h * 4);
         if (!img)
-            rc = cli_fail("out of memory for a %dx%d image", w, h);
+            rc = cli_fail("%s: out of memory for a %dx%d image", a.out, w, h);
         else if (mr_render(p[0].mesh.positions, p[0].mesh.vertex_count, p[0].mesh.indices,
                            p[0].mesh.triangle_count, &a.ro, img, 0, &err) != MR_OK)
-            rc = cli_fail_err(&err);
+            rc = cli_fail_in(a.inputs[0], "render", &err);
     }
     if (rc < 0 && mr_png_write(a.out, img, w, h, &err) != MR_OK)
         rc = cli_fail_err(&err);
@@ -385,7 +410,7 @@ static int run(int argc, char **argv)
             if (a.error_to)
                 printf(", \"heat_max\": %.9g", heat_max);
             printf("}\n");
-        } else {
+        } else if (!a.quiet) {
             printf("wrote %s (%dx%d, %d panel%s) in %.3f s\n", a.out, w, h, a.n_inputs,
                    a.n_inputs == 1 ? "" : "s", t1 - t0);
         }

@@ -15,10 +15,15 @@ static const char usage[] =
     "targets (the first one reached stops; at least one is needed):\n"
     "  --ratio R             keep this fraction of the vertices: 0.1 or 10%\n"
     "  --vertices N          keep N vertices\n"
+    "                        (both count points of the surface: the copies of a vertex\n"
+    "                        that a UV seam or hard edge splits count once)\n"
     "  --triangles N         keep N triangles\n"
     "  --max-error E         stop before a collapse moves the surface by more than E,\n"
     "                        relative to the bounding-box diagonal (0.001 = 0.1%)\n"
     "  --absolute            --max-error is in model units\n"
+    "A target that the rules do not allow (locked vertices, every remaining collapse\n"
+    "refused by the topology or normal tests) is reported as a warning on stderr and\n"
+    "as \"target_reached\": false in --json; the exit status stays 0.\n"
     "\n"
     "options:\n"
     "  -o, --output FILE     output file (required)\n"
@@ -36,7 +41,8 @@ static const char usage[] =
     "                        degrees (default 60)\n"
     "  --stats               print counts, largest error and time per phase\n"
     "  --json                print them as one JSON object on stdout\n"
-    "  -q, --quiet           print nothing on success\n"
+    "  -q, --quiet           no progress, note or summary on success (--stats and\n"
+    "                        --json still print)\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
 /* A progress bar on stderr, only when it is a terminal and the work has
@@ -155,6 +161,13 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
 {
     simplify_job *job = user;
     mr_error err;
+    if (mesh->triangle_count == 0) {
+        char a[32];
+        return cli_fail("%s: a point cloud (%s vertices, no triangles): simplify needs a "
+                        "triangle mesh (`meshreduce weld` and `meshreduce cluster` reduce "
+                        "point clouds)",
+                        io->in, cli_count(a, sizeof a, mesh->vertex_count));
+    }
     progress prog = {cli_now(), 0, -1};
     if (!io->quiet && isatty(STDERR_FILENO)) {
         job->o.progress = show_progress;
@@ -165,8 +178,17 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     job->o.progress_user = NULL;
     if (prog.shown)
         fprintf(stderr, "\r%60s\r", "");
-    if (st != MR_OK)
-        return cli_fail_err(&err);
+    if (st != MR_OK) /* e.g. a --vertices target above the input's */
+        return cli_fail_in(io->in, "simplify", &err);
+    if (!job->s.target_reached) {
+        /* A missed target is a result, not an error: said even with -q. */
+        char a[32], b[32];
+        fprintf(stderr, "meshreduce: warning: %s: target not reached, stopped at %s vertices "
+                        "and %s triangles: %s\n",
+                io->in, cli_count(a, sizeof a, job->s.output_points),
+                cli_count(b, sizeof b, job->s.output_triangles),
+                mr_simplify_stop_string(job->s.stop));
+    }
     if (!io->quiet && job->s.locked_vertices) {
         char a[32];
         fprintf(stderr,
@@ -183,8 +205,12 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
 {
     const mr_simplify_stats *s = &((simplify_job *)user)->s;
     char a[32], b[32], c[32], d[32];
-    fprintf(stderr, "vertices   %s -> %s\n", cli_count(a, sizeof a, s->input_vertices),
-            cli_count(b, sizeof b, s->output_vertices));
+    fprintf(stderr, "vertices   %s -> %s surface points", cli_count(a, sizeof a, s->input_vertices),
+            cli_count(b, sizeof b, s->output_points));
+    if (s->output_vertices != s->output_points)
+        fprintf(stderr, " (%s vertices with the attribute splits)",
+                cli_count(c, sizeof c, s->output_vertices));
+    fprintf(stderr, "\n");
     fprintf(stderr, "triangles  %s -> %s\n", cli_count(c, sizeof c, s->input_triangles),
             cli_count(d, sizeof d, s->output_triangles));
     fprintf(stderr, "collapses  %s, largest error %.6g\n", cli_count(a, sizeof a, s->collapses),
@@ -201,12 +227,18 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
 {
     const mr_simplify_stats *s = &((simplify_job *)user)->s;
     cli_json_io(io);
-    printf(", \"input_vertices\": %zu, \"input_triangles\": %zu, \"output_vertices\": %zu, "
+    static const char *const stops[] = {"target", "max_error", "locked", "refused"};
+    printf(", \"target_reached\": %s, \"stop_reason\": \"%s\", \"stop\": ",
+           s->target_reached ? "true" : "false", stops[s->stop]);
+    cli_json_string(stdout, mr_simplify_stop_string(s->stop));
+    printf(", \"input_vertices\": %zu, \"output_points\": %zu", s->input_vertices,
+           s->output_points);
+    printf(", \"input_triangles\": %zu, \"output_vertices\": %zu, "
            "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
            "\"locked_vertices\": %zu, "
            "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
            "\"output\": %.6f, \"write\": %.6f}}\n",
-           s->input_vertices, s->input_triangles, s->output_vertices, s->output_triangles,
+           s->input_triangles, s->output_vertices, s->output_triangles,
            s->collapses, s->max_error, s->locked_vertices, t->read, s->seconds_setup,
            s->seconds_collapse, s->seconds_output, t->write);
 }

@@ -15,7 +15,7 @@ static const char usage[] =
     "merge_close_vertices (with --strict). Works on meshes and point clouds\n"
     "(PLY/OBJ with vertices only, .xyz).\n"
     "\n"
-    "radius (one is needed):\n"
+    "radius (exactly one):\n"
     "  --eps E               absolute radius, E >= 0 (0 welds exact duplicates)\n"
     "  --eps-rel F           radius as a fraction of the bounding-box diagonal\n"
     "  --reduce P            find the smallest radius that removes P %% of the\n"
@@ -31,7 +31,7 @@ static const char usage[] =
     "  --threads N           worker threads (default: all cores)\n"
     "  --stats               print counts, the radius and the time of each phase\n"
     "  --json                print them as one JSON object on stdout\n"
-    "  -q, --quiet           print nothing on success\n"
+    "  -q, --quiet           no summary on success (--stats and --json still print)\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
 static const char *algorithm_name(mr_weld_algorithm a)
@@ -62,30 +62,40 @@ typedef struct weld_job {
     mr_weld_options o;
     int radius_kind; /* 1 eps, 2 eps-rel, 3 reduce */
     double radius;
+    cli_choice radius_option; /* which of them was given */
     double t_find; /* seconds of the radius search (--reduce) */
     mr_weld_stats s;
 } weld_job;
+
+static const char radius_group[] = "one radius: --eps, --eps-rel or --reduce";
 
 static int option(int argc, char **argv, int *i, void *user)
 {
     weld_job *job = user;
     const char *v;
     double x;
+    int rc;
     if (cli_value(argc, argv, i, "--eps", &v)) {
         if (!cli_parse_double(v, &x) || !(x >= 0) || isinf(x))
             return cli_usage_error("weld", "--eps needs a finite number >= 0, got '%s'",
                                    v ? v : "");
+        if ((rc = cli_choose(&job->radius_option, "weld", "--eps", radius_group)) != CLI_OK)
+            return rc;
         job->radius_kind = 1, job->radius = x;
     } else if (cli_value(argc, argv, i, "--eps-rel", &v)) {
         if (!cli_parse_double(v, &x) || !(x >= 0) || isinf(x))
             return cli_usage_error("weld", "--eps-rel needs a finite number >= 0, got '%s'",
                                    v ? v : "");
+        if ((rc = cli_choose(&job->radius_option, "weld", "--eps-rel", radius_group)) != CLI_OK)
+            return rc;
         job->radius_kind = 2, job->radius = x;
     } else if (cli_value(argc, argv, i, "--reduce", &v)) {
         if (!parse_percent(v, &x) || !(x >= 0 && x < 100))
             return cli_usage_error("weld", "--reduce needs a percentage in [0, 100), "
                                            "got '%s'",
                                    v ? v : "");
+        if ((rc = cli_choose(&job->radius_option, "weld", "--reduce", radius_group)) != CLI_OK)
+            return rc;
         job->radius_kind = 3, job->radius = x;
     } else if (cli_value(argc, argv, i, "--algorithm", &v)) {
         if (v && !strcmp(v, "serial"))
@@ -125,7 +135,7 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         double diagonal;
         if (mesh->vertex_count == 0)
             return cli_fail("%s: no vertices to weld", io->in);
-        int rc = cli_bbox_diagonal(mesh, &diagonal);
+        int rc = cli_bbox_diagonal(io->in, mesh, &diagonal);
         if (rc != CLI_OK)
             return rc;
         job->o.eps = job->radius * diagonal;
@@ -133,11 +143,11 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         double t0 = cli_now();
         if (mr_weld_find_eps(mesh->positions, 0, mesh->vertex_count, job->radius / 100.0,
                              &job->o, &job->o.eps, NULL, &err) != MR_OK)
-            return cli_fail_err(&err);
+            return cli_fail_in(io->in, NULL, &err);
         job->t_find = cli_now() - t0;
     }
     if (mr_mesh_weld(mesh, &job->o, result, NULL, &job->s, &err) != MR_OK)
-        return cli_fail_err(&err);
+        return cli_fail_in(io->in, NULL, &err);
     return CLI_OK;
 }
 

@@ -456,7 +456,7 @@ static void test_errors_faces(void **state)
     expect_error(WITH_TRI("f 1 2 1.5\n"), MR_ERR_PARSE, 4,
                  "x.obj:4: malformed face corner '1.5'");
     expect_error(WITH_TRI("f 1 2 99999999999999999999\n"), MR_ERR_PARSE, 4,
-                 "x.obj:4: malformed face corner");
+                 "x.obj:4: face index '99999999999999999999' is out of range");
     expect_error(WITH_TRI("f 1 2 4294967296\n"), MR_ERR_PARSE, 4,
                  "x.obj:4: face refers to vertex 4294967296, but the file defines only 3");
 #undef WITH_TRI
@@ -469,6 +469,7 @@ static void test_errors_vertices(void **state)
                  "x.obj:2: vertex has too few coordinates (expected x y z)");
     expect_error("v 0 0 0\nv\n", MR_ERR_PARSE, 2, "x.obj:2: vertex has too few coordinates");
     expect_error("v 1 2 x\n", MR_ERR_PARSE, 1, "x.obj:1: malformed number 'x'");
+    expect_error("v 1 2 1e400\n", MR_ERR_PARSE, 1, "x.obj:1: number '1e400' is out of range");
     expect_error("v 1 2 3.5.6\n", MR_ERR_PARSE, 1, "x.obj:1: malformed number '3.5.6'");
     expect_error("v 1 2 0x10\n", MR_ERR_PARSE, 1, "x.obj:1: malformed number '0x10'");
     expect_error("v 1 2 3\nv nan 0 0\n", MR_ERR_PARSE, 2,

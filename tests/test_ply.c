@@ -413,7 +413,7 @@ static void test_polygons_fan(void **state)
         builder b;
         b_header(&b, enc,
                  "element vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
-                 "element face 4\nproperty list uchar int vertex_indices\n");
+                 "element face 3\nproperty list uchar int vertex_indices\n");
         for (int v = 0; v < 6; v++) {
             b_val(&b, "float", v);
             b_val(&b, "float", v * v);
@@ -429,10 +429,6 @@ static void test_polygons_fan(void **state)
         for (int k = 0; k < 5; k++)
             b_val(&b, "int", penta[k]);
         b_row_end(&b);
-        b_val(&b, "uchar", 2); /* a segment: no triangle */
-        b_val(&b, "int", 0);
-        b_val(&b, "int", 1);
-        b_row_end(&b);
         b_val(&b, "uchar", 3);
         for (int k = 0; k < 3; k++)
             b_val(&b, "int", tri[k]);
@@ -444,6 +440,30 @@ static void test_polygons_fan(void **state)
         assert_tris(&m, expect, 6);
         mr_mesh_free(&m);
         free(b.d);
+
+        /* a face of fewer than 3 corners is an error, as in OBJ (it was
+         * dropped silently) */
+        for (int n = 0; n < 3; n++) {
+            b_header(&b, enc,
+                     "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                     "element face 1\nproperty list uchar int vertex_indices\n");
+            for (int v = 0; v < 3; v++) {
+                b_val(&b, "float", v);
+                b_val(&b, "float", 0);
+                b_val(&b, "float", 0);
+                b_row_end(&b);
+            }
+            b_val(&b, "uchar", n);
+            for (int k = 0; k < n; k++)
+                b_val(&b, "int", k);
+            b_row_end(&b);
+            assert_int_equal(read_builder(&b, &m, &err), MR_ERR_PARSE);
+            tu_assert_contains(err.message, n == 0 ? "face 0 has no vertex indices"
+                                                   : "face 0 has only");
+            tu_assert_contains(err.message, "(a face needs at least 3)");
+            mr_mesh_free(&m);
+            free(b.d);
+        }
     }
 }
 

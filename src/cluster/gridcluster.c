@@ -192,7 +192,8 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
                              "%zu vertices: more than 32-bit indices can address", n);
     if (options->target_vertices == 0 && !(options->cell > 0 && isfinite(options->cell)))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                             "grid cell size must be a finite number > 0, got %g",
+                             "grid cell size must be a finite number > 0 when no target "
+                             "vertex count is set, got %g",
                              options->cell);
     if (tc > 0 && !in->indices)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "%zu triangles but no indices",
@@ -342,12 +343,14 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
                 mean[e] /= cnt;
             double x[3];
             quadric_point(q, mean, x);
-            /* keep it inside its cell */
+            /* keep it inside its cell, and the cells at the far side of
+             * the grid inside the input's bounding box (which a cell may
+             * cross, even past the float range) */
             uint64_t ix[3];
             mr_grid_unpack(&grid, c.keys[cc], ix);
             for (int e = 0; e < 3; e++) {
                 double c0 = grid.lo[e] + (double)ix[e] * grid.cell, c1 = c0 + grid.cell;
-                x[e] = fmin(fmax(x[e], c0), c1);
+                x[e] = fmin(fmax(x[e], fmax(c0, lo[e])), fmin(c1, hi[e]));
                 out->positions[3 * cc + (size_t)e] = (float)x[e];
             }
             if (in->normals)

@@ -286,7 +286,10 @@ static inline num_result read_numbers(const char **p, const char *end, double *o
             return NUM_TOO_MANY;
         }
         const char *t = s;
-        if (!mr_parse_double(&t, end, &out[n]) || !is_delim(t, end)) {
+        /* a decimal too large for a double is out of range (fail_number
+         * says so), not an infinite coordinate */
+        if (!mr_parse_double(&t, end, &out[n]) || !is_delim(t, end) ||
+            (isinf(out[n]) && mr_number_too_large(s, end, false))) {
             *p = s;
             return NUM_MALFORMED;
         }
@@ -300,9 +303,9 @@ static inline num_result read_numbers(const char **p, const char *end, double *o
 
 static bool fail_number(obj_chunk *c, const char *pos, const char *end)
 {
-    char tok[32];
-    mr_token_excerpt(pos, end, tok, sizeof tok);
-    return chunk_fail(c, pos, MR_ERR_PARSE, "malformed number '%s'", tok);
+    char msg[160];
+    mr_number_error(pos, end, false, msg, sizeof msg); /* malformed, or out of range */
+    return chunk_fail(c, pos, MR_ERR_PARSE, "%s", msg);
 }
 
 static bool parse_v(const char **p, const char *end, obj_chunk *c, const obj_dest *d,
@@ -404,7 +407,11 @@ static inline bool parse_index(const char **p, const char *end, obj_chunk *c,
 {
     int64_t k;
     if (!mr_parse_i64(p, end, &k)) {
-        char tok[32];
+        char tok[80];
+        if (mr_number_too_large(*p, end, true)) {
+            mr_number_excerpt(*p, end, tok, sizeof tok);
+            return chunk_fail(c, corner, MR_ERR_PARSE, "face index %s is out of range", tok);
+        }
         mr_token_excerpt(corner, end, tok, sizeof tok);
         return chunk_fail(c, corner, MR_ERR_PARSE, "malformed face corner '%s'", tok);
     }

@@ -686,6 +686,20 @@ static mr_status truncated(const ply_reader *r, const ply_elem *e, uint64_t row,
                    (unsigned long long)e->count);
 }
 
+/* A face needs three corners, as in OBJ: a shorter list is an error (at
+ * the list's count), not a face silently dropped. Strips are not faces:
+ * their short runs join strips and make no triangle by the strip rule. */
+static mr_status short_face(const ply_reader *r, uint64_t row, int64_t n, size_t at)
+{
+    if (n == 0)
+        return fail_at(r, MR_ERR_PARSE, at,
+                       "face %llu has no vertex indices (a face needs at least 3)",
+                       (unsigned long long)row);
+    return fail_at(r, MR_ERR_PARSE, at,
+                   "face %llu has only %lld vertex ind%s (a face needs at least 3)",
+                   (unsigned long long)row, (long long)n, n == 1 ? "ex" : "ices");
+}
+
 /* Walk the rows of an element with lists from e->start, checking that each
  * fits in the file; sets e->tris (faces: exact, strips: an upper bound)
  * and *end. With `chunks`, records where every CHUNK_ROWS-th row starts. */
@@ -717,6 +731,8 @@ static mr_status walk_rows(ply_reader *r, ply_elem *e, ply_chunk *chunks, size_t
                                row_noun(e, false, buf, sizeof buf), (unsigned long long)row,
                                (long long)n);
             }
+            if (i == e->index_prop && e->kind == EK_FACE && n < 3)
+                return short_face(r, row, n, pos);
             pos += type_size[p->count_type];
             size_t isz = type_size[p->type];
             if ((uint64_t)n > (size - pos) / isz) {
@@ -760,6 +776,8 @@ static bool try_fixed_stride(ply_reader *r, ply_elem *e)
         pos += type_size[p->count_type];
         if (n < 0 || (uint64_t)n > (r->size - pos) / type_size[p->type])
             return false;
+        if (i == e->index_prop && n < 3)
+            return false; /* the walk reports the short face */
         p->fixed_count = n;
         pos += (size_t)n * type_size[p->type];
     }
@@ -1212,6 +1230,22 @@ static mr_status asc_bad(const ply_reader *r, const ascii_cursor *c, const ply_e
                    name_width(p->name_len), p->name, tok);
 }
 
+static const char *const type_names[] = {"",      "char", "uchar", "short", "ushort",
+                                         "int",   "uint", "float", "double"};
+
+/* A value at the cursor too large for the type t of property p: however
+ * many digits it has, it is out of range rather than malformed. */
+static mr_status asc_range(const ply_reader *r, const ascii_cursor *c, const ply_elem *e,
+                           uint64_t row, const ply_prop *p, ply_type t)
+{
+    char buf[96], num[80];
+    mr_number_excerpt(c->p, c->end, num, sizeof num);
+    return fail_at(r, MR_ERR_PARSE, asc_off(r, c),
+                   "%s %llu: value %s of '%.*s' is out of range for its type %s",
+                   row_noun(e, false, buf, sizeof buf), (unsigned long long)row, num,
+                   name_width(p->name_len), p->name, type_names[t]);
+}
+
 /* The next value as an integer of type t (range-checked). */
 static mr_status asc_int(const ply_reader *r, ascii_cursor *c, ply_type t, const ply_elem *e,
                          uint64_t row, const ply_prop *p, int64_t *out)
@@ -1221,15 +1255,17 @@ static mr_status asc_int(const ply_reader *r, ascii_cursor *c, ply_type t, const
         return asc_missing(r, c, e, row, p);
     const char *s = c->p;
     int64_t v;
-    if (!mr_parse_i64(&s, c->end, &v) || !mr_at_token_end(s, c->end))
+    if (!mr_parse_i64(&s, c->end, &v) || !mr_at_token_end(s, c->end)) {
+        if (mr_number_too_large(c->p, c->end, true))
+            return asc_range(r, c, e, row, p, t);
         return asc_bad(r, c, e, row, p, "an integer");
+    }
     if (v < type_min[t] || v > type_max[t]) {
         char buf[96];
-        static const char *const names[] = {"", "char", "uchar", "short", "ushort", "int", "uint"};
         return fail_at(r, MR_ERR_PARSE, asc_off(r, c),
                        "%s %llu: value %lld of '%.*s' is out of range for its type %s",
                        row_noun(e, false, buf, sizeof buf), (unsigned long long)row,
-                       (long long)v, name_width(p->name_len), p->name, names[t]);
+                       (long long)v, name_width(p->name_len), p->name, type_names[t]);
     }
     c->p = s;
     *out = v;
@@ -1252,6 +1288,8 @@ static mr_status asc_real(const ply_reader *r, ascii_cursor *c, ply_type t, cons
     const char *s = c->p;
     if (!mr_parse_double(&s, c->end, out) || !mr_at_token_end(s, c->end))
         return asc_bad(r, c, e, row, p, "a number");
+    if (isinf(*out) && mr_number_too_large(c->p, c->end, false))
+        return asc_range(r, c, e, row, p, t);
     c->p = s;
     return MR_OK;
 }
@@ -1291,6 +1329,12 @@ static mr_status asc_walk(const ply_reader *r, ascii_cursor *c, const ply_elem *
             if (n < 0)
                 return fail_at(r, MR_ERR_PARSE, asc_off(r, c), "negative list length %lld",
                                (long long)n);
+            if (i == e->index_prop && e->kind == EK_FACE && n < 3) {
+                ascii_cursor at = *c; /* the count itself, not the blank after it */
+                while (at.p > r->data + r->body && !mr_is_space(at.p[-1]) && at.p[-1] != '\n')
+                    at.p--;
+                return short_face(r, row, n, asc_off(r, &at));
+            }
             for (int64_t j = 0; j < n; j++)
                 if ((st = asc_skip_value(r, c, e, row, p)) != MR_OK)
                     return st;
@@ -1622,7 +1666,7 @@ static mr_status write_rows(FILE *f, const ply_writer *w, size_t rows, size_t ma
         }
         for (int64_t b = 0; b < nb && st == MR_OK; b++)
             if (fwrite(buf + (size_t)b * block_cap, 1, len[b], f) != len[b])
-                st = mr_fail_plain(err, MR_ERR_IO, name, "write failed");
+                st = mr_fail_write(err, name, errno);
     }
     free(buf);
     free(len);
@@ -1674,7 +1718,8 @@ mr_status mr_write_ply(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
          * hold them */
         fprintf(f, "element face %zu\nproperty list uchar %s vertex_indices\n",
                 mesh->triangle_count, mesh->vertex_count > (size_t)INT32_MAX + 1 ? "uint" : "int");
-    fputs("end_header\n", f);
+    if (fputs("end_header\n", f) < 0 || ferror(f))
+        return mr_fail_write(err, name, errno);
 
     /* ascii: up to 8 floats of at most 32 characters (with the separator)
      * and 4 color values of at most 4 */

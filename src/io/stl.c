@@ -488,7 +488,12 @@ static mr_status parse_number(ascii_parser *ps, float *out, bool must_be_finite)
         return syntax_error(ps, "a number");
     }
     if (must_be_finite && !isfinite(*out)) {
-        char tok[32];
+        char tok[80];
+        if (mr_number_too_large(start, ps->end, false)) {
+            mr_number_excerpt(start, ps->end, tok, sizeof tok);
+            return mr_fail(ps->err, MR_ERR_PARSE, ps->name, mr_line_of(ps->begin, start),
+                           MR_NO_POSITION, "vertex coordinate %s is out of range", tok);
+        }
         mr_token_excerpt(start, ps->end, tok, sizeof tok);
         return mr_fail(ps->err, MR_ERR_PARSE, ps->name, mr_line_of(ps->begin, start),
                        MR_NO_POSITION, "vertex coordinate '%s' is not a finite float", tok);

@@ -75,7 +75,9 @@ static inline bool mr_parse_i64(const char **p, const char *end, int64_t *out)
     return true;
 }
 
-/* The slow path of mr_parse_double: copy the token and call strtod. */
+/* The slow path of mr_parse_number: decimals of any length (their first
+ * 800 significant digits and whether any later one is nonzero decide the
+ * correctly rounded double), exponents of any size, "inf" and "nan". */
 bool mr_parse_double_slow(const char **p, const char *end, double *out);
 
 /*
@@ -85,7 +87,9 @@ bool mr_parse_double_slow(const char **p, const char *end, double *out);
  * (at most 19 significant digits, exponent within the exactly representable
  * powers of ten) is computed exactly with one double operation (Clinger's
  * fast path); the rest goes through strtod. Returns false, cursor
- * unchanged, when there is no number at the cursor.
+ * unchanged, when there is no number at the cursor. A decimal too large for
+ * a double gives +-infinity, as strtod does (however many digits it has):
+ * mr_number_too_large tells it from a written "inf" for messages.
  */
 static inline bool mr_parse_number(const char **p, const char *end, double *out, bool exact)
 {
@@ -121,7 +125,8 @@ static inline bool mr_parse_number(const char **p, const char *end, double *out,
         if (mant == 0)
             while (s < end && *s == '0') {
                 s++;
-                scale--;
+                if (--scale < -400) /* very many zeros: no int overflow */
+                    return mr_parse_double_slow(p, end, out);
                 any = true;
             }
         while (s < end && mr_is_digit(*s)) {
@@ -221,7 +226,26 @@ uint64_t mr_line_of(const char *begin, const char *pos);
  * back to the same float; returns the length written (buf >= 32 bytes). */
 int mr_format_float(char *buf, float v);
 
-/* A short printable excerpt of the token at p (for error messages). */
+/* A short printable excerpt of the token at p (for error messages): its
+ * first 24 characters, then "..." when it is longer. */
 void mr_token_excerpt(const char *p, const char *end, char *buf, size_t cap);
+
+/* True when the token at p is a well-formed decimal number (an integer
+ * when `integer`: [+-] digits only) that is too large for its type: an
+ * int64 for integers (mr_parse_i64 refuses it), a double otherwise
+ * (mr_parse_double gives infinity). For messages: "out of range" rather
+ * than "malformed". A number ends at the end, a blank, a newline or one of
+ * / # , ; */
+bool mr_number_too_large(const char *p, const char *end, bool integer);
+
+/* The number at p quoted for a message: "'123'", or for a long one its
+ * first 24 characters and its length, "'111111111111111111111111...'
+ * (10000000 digits)". */
+void mr_number_excerpt(const char *p, const char *end, char *buf, size_t cap);
+
+/* The message for a token at p that is not an acceptable number:
+ * "number '...' (N digits) is out of range" when mr_number_too_large,
+ * else "malformed number '...'". */
+void mr_number_error(const char *p, const char *end, bool integer, char *buf, size_t cap);
 
 #endif /* MR_TEXT_H */

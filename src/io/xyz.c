@@ -113,7 +113,12 @@ static mr_status parse_line(const xyz_context *ctx, const char *p, const char *e
         if (!ok || !at_field_end(p, eol))
             return bad_number(ctx, start, eol, err);
         if (!isfinite(f)) {
-            char tok[32];
+            char tok[80];
+            if (mr_number_too_large(start, eol, false)) {
+                mr_number_excerpt(start, eol, tok, sizeof tok);
+                return mr_fail(err, MR_ERR_PARSE, ctx->name, mr_line_of(ctx->begin, start),
+                               MR_NO_POSITION, "value %s is out of range", tok);
+            }
             mr_token_excerpt(start, eol, tok, sizeof tok);
             return mr_fail(err, MR_ERR_PARSE, ctx->name, mr_line_of(ctx->begin, start),
                            MR_NO_POSITION, "value '%s' is not a finite float", tok);

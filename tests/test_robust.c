@@ -1,0 +1,207 @@
+/* No silent failures: outputs that meshreduce can read back whatever the
+ * input's range, a clear error for a mesh with no surface, and a word when
+ * a simplification target cannot be reached. */
+#include "testutil.h"
+
+#include <float.h>
+#include <stdio.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void all_finite(const mr_mesh *m)
+{
+    for (size_t i = 0; i < 3 * m->vertex_count; i++)
+        if (!isfinite(m->positions[i]))
+            fail_msg("coordinate %zu of vertex %zu is %g", i % 3, i / 3,
+                     (double)m->positions[i]);
+}
+
+/* A sphere blown up to the edge of the float range: quadric optima and
+ * grid cells beyond the input's bounding box would overflow to inf. */
+static void test_float_max_scale(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    mr_mesh_init(&m);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 5000, 1, &m, NULL), MR_OK);
+    for (size_t i = 0; i < 3 * m.vertex_count; i++)
+        m.positions[i] *= 3.4e38f;
+    all_finite(&m);
+    for (int kind = 0; kind < 2; kind++)
+        for (int strategy = 0; strategy < 2; strategy++) {
+            mr_simplify_options o;
+            mr_simplify_options_default(&o);
+            o.target_ratio = 0.05;
+            o.collapse = (mr_collapse_kind)kind;
+            o.strategy = (mr_strategy)strategy;
+            mr_mesh out;
+            mr_error err;
+            assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, NULL, &err), MR_OK);
+            all_finite(&out);
+            mr_mesh_free(&out);
+        }
+    mr_cluster_options co;
+    mr_cluster_options_default(&co);
+    co.target_vertices = 100;
+    mr_mesh out;
+    mr_error err;
+    assert_int_equal(mr_mesh_cluster(&m, &co, &out, NULL, &err), MR_OK);
+    all_finite(&out);
+    mr_mesh_free(&out);
+
+    /* and through the tool: every output reads back */
+    const char *in = tu_tmp_path("huge.ply"), *s = tu_tmp_path("huge-s.obj"),
+               *c = tu_tmp_path("huge-c.ply");
+    assert_int_equal(mr_mesh_write(in, &m, NULL, &err), MR_OK);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 5%% -q", in, s), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", s), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("cluster '%s' -o '%s' --target-vertices 100 -q", in, c),
+                                NULL),
+                     0);
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", c), NULL), 0);
+    mr_mesh_free(&m);
+}
+
+/* Every triangle uses a vertex twice: no surface, a clear error and no
+ * file. */
+static void test_all_degenerate(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("degenerate.obj"), *out = tu_tmp_path("degenerate-s.obj");
+    const char text[] = "v 1 1 1\nv 1 1 2\nv 0 0 0\nf 1 1 2\nf 2 2 1\nf 3 1 3\n";
+    tu_write_file(in, text, sizeof text - 1);
+    remove(out);
+    char *msg;
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.5", in, out), &msg), 1);
+    tu_assert_contains(msg, "degenerate.obj");
+    tu_assert_contains(msg, "uses a vertex twice");
+    free(msg);
+    assert_false(tu_file_exists(out));
+
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(mr_mesh_read(in, NULL, &m, &err), MR_OK);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.5;
+    mr_mesh res;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &res, NULL, NULL, &err), MR_ERR_EMPTY);
+    tu_assert_contains(err.message, "no surface to simplify");
+    mr_simplified flat;
+    assert_int_equal(mr_simplify(m.positions, 0, m.vertex_count, m.indices, m.triangle_count,
+                                 &o, &flat, &err),
+                     MR_ERR_EMPTY);
+    mr_mesh_free(&m);
+}
+
+static mr_simplify_stats simplify_stats(const char *text, double ratio, int lock_border)
+{
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(tu_read_string(text, "t.obj", &m, &err), MR_OK);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = ratio;
+    o.lock_border = lock_border;
+    mr_mesh out;
+    mr_simplify_stats st;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, &err), MR_OK);
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+    return st;
+}
+
+/* A closed tetrahedron whose vertices all lie on one line: every collapse
+ * would leave triangles without a normal; and an open square with locked
+ * borders: nothing may move. */
+static const char collinear[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\n"
+                                "f 1 2 3\nf 1 3 4\nf 2 4 3\nf 1 4 2\n";
+static const char square[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+                             "f 1 2 3\nf 1 3 4\nf 2 5 6\nf 2 6 3\n";
+
+static void test_missed_target(void **state)
+{
+    (void)state;
+    mr_simplify_stats st = simplify_stats(collinear, 0.1, 0);
+    assert_false(st.target_reached);
+    assert_int_equal(st.stop, MR_STOP_REFUSED);
+    assert_int_equal(st.collapses, 0);
+    st = simplify_stats(square, 0.1, 1);
+    assert_false(st.target_reached);
+    assert_int_equal(st.stop, MR_STOP_LOCKED);
+    /* the sphere reaches its target */
+    mr_mesh m;
+    mr_mesh_init(&m);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 2000, 1, &m, NULL), MR_OK);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.1;
+    mr_mesh out;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_true(st.target_reached);
+    assert_int_equal(st.stop, MR_STOP_TARGET);
+    mr_mesh_free(&out);
+    /* an error bound that stops first is a target reached */
+    o.max_error = 1e-6;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_true(st.target_reached);
+    assert_int_equal(st.stop, MR_STOP_MAX_ERROR);
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+
+    /* the tool says so, on stderr and in JSON, and exits 0 */
+    const char *in = tu_tmp_path("collinear.obj"), *res = tu_tmp_path("collinear-s.obj");
+    tu_write_file(in, collinear, sizeof collinear - 1);
+    char *msg;
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.1 -q", in, res), &msg),
+                     0);
+    tu_assert_contains(msg, "warning: ");
+    tu_assert_contains(msg, "collinear.obj: target not reached");
+    tu_assert_contains(msg, "refused");
+    free(msg);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.1 --json", in, res),
+                                &msg),
+                     0);
+    tu_assert_contains(msg, "\"target_reached\": false");
+    tu_assert_contains(msg, "\"stop_reason\": \"refused\"");
+    free(msg);
+}
+
+/* Vertices are counted as surface points on both sides of the report: a
+ * seam's copies count once in the input and in the output. */
+static void test_report_counts_points(void **state)
+{
+    (void)state;
+    /* a strip of two quads split along its middle column by a UV seam */
+    static const char strip[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n"
+                                "vt 0 0\nvt 0.4 0\nvt 0.6 0\nvt 1 0\nvt 0 1\nvt 0.4 1\n"
+                                "vt 0.6 1\nvt 1 1\n"
+                                "f 1/1 2/2 5/6\nf 1/1 5/6 4/5\nf 2/3 3/4 6/8\nf 2/3 6/8 5/7\n";
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(tu_read_string(strip, "strip.obj", &m, &err), MR_OK);
+    assert_int_equal(m.vertex_count, 8);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 1;
+    mr_mesh out;
+    mr_simplify_stats st;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, &err), MR_OK);
+    assert_int_equal(st.input_vertices, 6);
+    assert_int_equal(st.output_points, 6);
+    assert_int_equal(st.output_vertices, 8);
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_float_max_scale),
+        cmocka_unit_test(test_all_degenerate),
+        cmocka_unit_test(test_missed_target),
+        cmocka_unit_test(test_report_counts_points),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
