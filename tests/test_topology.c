@@ -4,6 +4,12 @@
  * decides which vertices are one surface point. */
 #include "testutil.h"
 
+#include "qem/collapse.h"
+
+#include <math.h>
+
+#define MR_PI 3.14159265358979323846
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -244,6 +250,122 @@ static void test_data_meshes_keep_topology(void **state)
         skip();
 }
 
+/* One polygon of n corners, fan-triangulated (the OBJ reader's way): one
+ * vertex in n - 2 long thin triangles. */
+static void fanned_polygon(size_t n, mr_mesh *m)
+{
+    mr_mesh_init(m);
+    assert_int_equal(mr_mesh_alloc(m, n, n - 2, 0, NULL), MR_OK);
+    for (size_t i = 0; i < n; i++) {
+        const double a = 2 * MR_PI * (double)i / (double)n, r = 1 + 0.3 * sin(7 * a);
+        m->positions[3 * i] = (float)(r * cos(a));
+        m->positions[3 * i + 1] = (float)(r * sin(a));
+        m->positions[3 * i + 2] = 0;
+    }
+    for (size_t t = 0; t + 2 < n; t++) {
+        m->indices[3 * t] = 0;
+        m->indices[3 * t + 1] = (uint32_t)(t + 1);
+        m->indices[3 * t + 2] = (uint32_t)(t + 2);
+    }
+}
+
+/* A double cone: a rim of n vertices round two apexes of valence n. */
+static void double_cone(size_t n, mr_mesh *m)
+{
+    mr_mesh_init(m);
+    assert_int_equal(mr_mesh_alloc(m, n + 2, 2 * n, 0, NULL), MR_OK);
+    for (size_t i = 0; i < n; i++) {
+        const double a = 2 * MR_PI * (double)i / (double)n;
+        m->positions[3 * i] = (float)cos(a);
+        m->positions[3 * i + 1] = (float)sin(a);
+        m->positions[3 * i + 2] = 0;
+    }
+    const float apex[2][3] = {{0, 0, 0.2f}, {0, 0, -0.2f}};
+    memcpy(m->positions + 3 * n, apex, sizeof apex);
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t a = (uint32_t)i, b = (uint32_t)((i + 1) % n);
+        uint32_t *t = m->indices + 6 * i;
+        t[0] = (uint32_t)n, t[1] = a, t[2] = b;
+        t[3] = (uint32_t)n + 1, t[4] = b, t[5] = a;
+    }
+}
+
+/* Huge valence: simplification stays near-linear (its time is in
+ * bench_fan, not here) and keeps the surface; such vertices can move. */
+static void test_high_valence(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    fanned_polygon(100000, &m);
+    mr_stats in = stats_of(&m);
+    assert_int_equal(in.boundary_loops, 1);
+    assert_true(in.manifold);
+    for (int kind = 0; kind < 2; kind++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = 0.01;
+        o.collapse = (mr_collapse_kind)kind;
+        mr_mesh out;
+        mr_simplify_stats st;
+        assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+        assert_true(st.target_reached);
+        assert_int_equal(st.output_points, 1000);
+        mr_stats s = stats_of(&out);
+        check_kept(&in, &s, 0.01, "fanned polygon");
+        assert_int_equal(s.boundary_loops, 1);
+        assert_true(s.manifold);
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&m);
+
+    double_cone(20000, &m);
+    in = stats_of(&m);
+    assert_true(in.closed);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.001;
+    mr_mesh out;
+    mr_simplify_stats st;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_true(st.target_reached);
+    mr_stats s = stats_of(&out);
+    check_kept(&in, &s, 0.001, "double cone");
+    assert_true(s.closed);
+    assert_int_equal(s.euler_characteristic, 2);
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+
+    /* An apex of valence 1,000 may collapse both ways (the validity test
+     * past its stack arrays), and a collapse that would pinch is still
+     * refused. */
+    double_cone(1000, &m);
+    mr_collapse_mesh cm;
+    const double centre[3] = {0, 0, 0};
+    assert_int_equal(mr_collapse_mesh_init(&cm, m.positions, 0, m.vertex_count, m.indices,
+                                           m.triangle_count, centre, 1.0, NULL),
+                     MR_OK);
+    assert_int_equal(cm.count[1000], 1000);
+    assert_int_equal(cm.flags[1000] & (MR_VF_NONMANIFOLD | MR_VF_BOUNDARY), 0);
+    mr_collapse_limits lim = {cos(60 * MR_PI / 180), 0};
+    double at_rim[3], at_apex[3];
+    mr_collapse_load(&cm, 0, at_rim);
+    mr_collapse_load(&cm, 1000, at_apex);
+    assert_true(mr_collapse_valid(&cm, 1000, 0, at_rim, &lim)); /* the apex goes */
+    assert_true(mr_collapse_valid(&cm, 0, 1000, at_rim, &lim)); /* it moves */
+    /* the rim vertex onto the apex would stand its lower triangles on end */
+    assert_false(mr_collapse_valid(&cm, 0, 1000, at_apex, &lim));
+    /* the two apexes share every rim vertex: no edge, no collapse */
+    assert_false(mr_collapse_valid(&cm, 1000, 1001, at_apex, &lim));
+    /* moving the apex far below the rim flips its triangles */
+    const double below[3] = {0, 0, -5};
+    assert_false(mr_collapse_valid(&cm, 0, 1000, below, &lim));
+    mr_collapse_reserve(&cm, 1000, 0);
+    assert_int_equal(mr_collapse_apply(&cm, 1000, 0, at_rim), 2);
+    assert_int_equal(cm.count[0], 1000 - 2 + 2);
+    mr_collapse_mesh_free(&cm);
+    mr_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -251,6 +373,7 @@ int main(void)
         cmocka_unit_test(test_double_sided_sheet),
         cmocka_unit_test(test_seam_is_one_surface),
         cmocka_unit_test(test_data_meshes_keep_topology),
+        cmocka_unit_test(test_high_valence),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -346,3 +346,67 @@ void mr_edge_table_free(mr_edge_table *et)
     free(et->entries);
     memset(et, 0, sizeof *et);
 }
+
+/* ---- fans ------------------------------------------------------------------ */
+
+static int fan_next_cmp(const void *pa, const void *pb)
+{
+    const mr_fan_entry *a = pa, *b = pb;
+    if (a->next != b->next)
+        return a->next < b->next ? -1 : 1;
+    return a->prev < b->prev ? -1 : a->prev > b->prev;
+}
+
+/* The entry whose next is x, or -1 (entries sorted by next, distinct). */
+static ptrdiff_t fan_find_next(const mr_fan_entry *e, size_t n, uint32_t x)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (e[mid].next < x)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && e[lo].next == x ? (ptrdiff_t)lo : -1;
+}
+
+int mr_fan_classify(uint32_t c, mr_fan_entry *e, size_t n, uint8_t *seen)
+{
+    if (n == 0)
+        return -1;
+    qsort(e, n, sizeof *e, fan_next_cmp);
+    for (size_t i = 0; i < n; i++) {
+        if (e[i].next == c || e[i].prev == c || e[i].next == e[i].prev)
+            return -1;
+        if (i > 0 && e[i].next == e[i - 1].next)
+            return -1; /* two triangles run one edge from c */
+    }
+    /* Each triangle leads to its neighbour across edge (c, prev), the one
+     * that runs that edge from c (whose next is this prev): a map without
+     * two triangles leading to one is a set of chains and rings, with one
+     * chain per opening (a prev that is no triangle's next). One fan is
+     * one ring, or one chain, through all n. */
+    memset(seen, 0, n);
+    size_t openings = 0;
+    for (size_t i = 0; i < n; i++) {
+        const ptrdiff_t j = fan_find_next(e, n, e[i].prev);
+        if (j < 0)
+            openings++;
+        else if (seen[j]++)
+            return -1; /* two triangles run one edge into c */
+    }
+    if (openings > 1)
+        return -1;
+    size_t start = 0;
+    while (openings && seen[start])
+        start++; /* the chain's first triangle: none leads to it */
+    memset(seen, 0, n);
+    size_t visited = 0;
+    for (ptrdiff_t i = (ptrdiff_t)start; i >= 0 && !seen[i];) {
+        seen[i] = 1;
+        visited++;
+        i = fan_find_next(e, n, e[i].prev);
+    }
+    return visited == n ? (int)openings : -1;
+}

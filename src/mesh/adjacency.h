@@ -70,6 +70,24 @@ mr_status mr_radix_sort_u32(uint32_t *keys, uint32_t *values, size_t n, unsigned
  */
 size_t mr_mark_repeats(uint64_t *pairs, size_t n, uint8_t *flags);
 
+/* ---- fans ---------------------------------------------------------------- */
+
+/* A triangle around a centre vertex c, by the vertices after and before c
+ * in it: the triangle runs c -> next and prev -> c. */
+typedef struct mr_fan_entry {
+    uint32_t next, prev;
+} mr_fan_entry;
+
+/*
+ * The shape of the n triangles around centre c: 0 when they form one
+ * closed manifold fan (a disk), 1 one open fan (a half-disk, two boundary
+ * edges), -1 anything else -- a degenerate triangle, an edge of three or
+ * more triangles or of two wound the same way (two equal nexts or prevs),
+ * several fans. Sorts e by next; seen is n bytes of scratch. O(n log n),
+ * whatever the valence.
+ */
+int mr_fan_classify(uint32_t c, mr_fan_entry *e, size_t n, uint8_t *seen);
+
 /* ---- union-find --------------------------------------------------------- */
 
 /* A disjoint-set forest is a plain uint32_t parent array (parent[i] == i

@@ -37,73 +37,6 @@ static int seam_edge_cmp(const void *pa, const void *pb)
     return a->he < b->he ? -1 : a->he > b->he;
 }
 
-typedef struct fan_entry {
-    uint32_t next, prev; /* the corners after and before the centre */
-} fan_entry;
-
-static int fan_next_cmp(const void *pa, const void *pb)
-{
-    const fan_entry *a = pa, *b = pb;
-    if (a->next != b->next)
-        return a->next < b->next ? -1 : 1;
-    return a->prev < b->prev ? -1 : a->prev > b->prev;
-}
-
-/* The entry whose next is x, or -1 (entries sorted by next, distinct). */
-static ptrdiff_t find_next(const fan_entry *e, size_t n, uint32_t x)
-{
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (e[mid].next < x)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < n && e[lo].next == x ? (ptrdiff_t)lo : -1;
-}
-
-/* Do the n triangles (sorted by next in e) around centre c form one
- * manifold fan: every neighbour at most once before and once after c, no
- * degenerate triangle, and one chain from one triangle to the next across
- * their shared edges (a closed ring, or one open run)? */
-static bool one_fan(uint32_t c, fan_entry *e, size_t n, uint8_t *seen)
-{
-    for (size_t i = 0; i < n; i++) {
-        if (e[i].next == c || e[i].prev == c || e[i].next == e[i].prev)
-            return false;
-        if (i > 0 && e[i].next == e[i - 1].next)
-            return false; /* two triangles on one edge, the same way round */
-    }
-    /* Each triangle leads to its neighbour across edge (c, prev), the one
-     * that runs that edge from c (whose next is this prev): a map without
-     * two triangles leading to one is a set of chains and rings, with one
-     * chain per opening (a prev that is no triangle's next). One fan is
-     * one ring, or one chain, through all n. */
-    memset(seen, 0, n);
-    size_t openings = 0;
-    for (size_t i = 0; i < n; i++) {
-        const ptrdiff_t j = find_next(e, n, e[i].prev);
-        if (j < 0)
-            openings++;
-        else if (seen[j]++)
-            return false;
-    }
-    if (openings > 1)
-        return false;
-    size_t start = 0;
-    while (openings && seen[start])
-        start++; /* the chain's first triangle: none leads to it */
-    memset(seen, 0, n);
-    size_t visited = 0;
-    for (ptrdiff_t i = (ptrdiff_t)start; i >= 0 && !seen[i];) {
-        seen[i] = 1;
-        visited++;
-        i = find_next(e, n, e[i].prev);
-    }
-    return visited == n;
-}
-
 static void normal_of(const float *positions, const uint32_t *tri, double n[3])
 {
     double p[3][3];
@@ -155,7 +88,7 @@ mr_status mr_surface_points(const float *positions, size_t vertex_count,
     uint32_t *size = mr_calloc_array(vc, sizeof *size);
     seam_edge *edges = NULL;
     uint32_t *members = NULL, *mstart = NULL, *corners = NULL, *cstart = NULL;
-    fan_entry *fan = NULL;
+    mr_fan_entry *fan = NULL;
     uint8_t *seen = NULL;
     if (!geo || !size) {
         st = mr_fail_nomem(err, NULL, vc * 8);
@@ -304,8 +237,7 @@ mr_status mr_surface_points(const float *positions, size_t vertex_count,
                 fan[n].prev = point[tri[mr_local_prev(j)]];
                 n++;
             }
-            qsort(fan, n, sizeof *fan, fan_next_cmp);
-            if (!one_fan((uint32_t)r, fan, n, seen)) {
+            if (mr_fan_classify((uint32_t)r, fan, n, seen) < 0) {
                 for (uint32_t i = m0; i < m1; i++)
                     point[members[i]] = members[i];
                 changed = true;

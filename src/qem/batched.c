@@ -70,7 +70,11 @@ static inline float key_float(uint32_t u)
  * Runs the block once for every live edge of triangle t, as (a, b) along
  * one of its half-edges: an inner edge from the half-edge that runs from
  * its smaller end (its other half-edge runs from the larger one), a
- * boundary edge from its only half-edge, whichever way it runs. The
+ * boundary edge from its only half-edge, whichever way it runs; an inner
+ * edge between two boundary vertices never (its collapse would pinch the
+ * surface: mr_collapse_valid refuses it, and as a candidate it would hold
+ * back the edges around it -- the spokes of a fanned polygon cost nothing
+ * and would block its rim). The
  * inner test is written without a branch (which end is the smaller is a
  * coin toss); `take` is false for the half-edges the block must ignore.
  */
@@ -80,7 +84,7 @@ static inline float key_float(uint32_t u)
         for (int j_ = 0; j_ < 3; j_++) {                                               \
             const uint32_t a = tri_[j_], b = tri_[j_ == 2 ? 0 : j_ + 1];               \
             bool take = a < b;                                                         \
-            if (!take && ((m)->flags[a] & (m)->flags[b] & MR_VF_BOUNDARY))             \
+            if ((m)->flags[a] & (m)->flags[b] & MR_VF_BOUNDARY)                        \
                 take = mr_collapse_edge_triangles((m), a, b) == 1;                     \
             __VA_ARGS__                                                                \
         }                                                                              \
@@ -98,6 +102,7 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
         open += (m->flags[v] & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD)) ? 2 * (size_t)m->count[v] : 0;
     const size_t t3 = 3 * m->live_triangles;
     s->cand_cap = (t3 + (open < t3 ? open : t3)) / 2 + 1;
+    s->m.lazy = true; /* only an edge's two ends read lists here */
     s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
     s->mark = mr_calloc_array(m->vertex_count, 1);
     s->hist = mr_alloc_array(HIST_BUCKETS, sizeof *s->hist);
@@ -125,12 +130,7 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
 
 /* Every live edge whose collapse may happen (cost finite and within the
  * limit), with its ends and cost, in triangle order. Returns how
- * many were written (at most s->cand_cap). Edges at a vertex of more than
- * MR_COLLAPSE_MAX_DEGREE triangles are left out: they cannot collapse yet
- * (mr_collapse_valid), and as candidates the cheap ones would hold back
- * every edge around them -- the spokes of a flat fan cost nothing, so the
- * rim of a 200-triangle fan would never collapse, and the fan's centre
- * loses a triangle with every rim collapse. */
+ * many were written (at most s->cand_cap). */
 static size_t gather(mr_simplifier *s, double limit)
 {
     const mr_collapse_mesh *m = &s->m;
@@ -173,8 +173,7 @@ static size_t gather(mr_simplifier *s, double limit)
                 __builtin_prefetch(s->q + b);
                 ea[nb] = a;
                 eb[nb] = b;
-                nb += take & (m->count[a] <= MR_COLLAPSE_MAX_DEGREE) &
-                      (m->count[b] <= MR_COLLAPSE_MAX_DEGREE);
+                nb += take;
             });
             if (nb > B - 3)
                 FLUSH();
@@ -251,7 +250,11 @@ static bool try_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double 
                          double cost, double limit, double *worst)
 {
     mr_collapse_mesh *m = &s->m;
-    if (!(cost <= limit && cost < INFINITY) || !mr_collapse_valid(m, r, k, target, &s->limits) ||
+    if (!(cost <= limit && cost < INFINITY))
+        return false;
+    mr_collapse_clean(m, r);
+    mr_collapse_clean(m, k);
+    if (!mr_collapse_valid(m, r, k, target, &s->limits) ||
         (s->attr_valid && !s->attr_valid(s, r, k)))
         return false;
     mr_simplifier_collapse(s, r, k, target);

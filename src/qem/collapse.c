@@ -4,6 +4,7 @@
 #include "../mesh/adjacency.h"
 #include "quadric.h"
 
+#include <assert.h>
 #include <math.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -19,6 +20,10 @@ static inline unsigned lanes_equal(__m128i v0, __m128i v1, __m128i x)
 /* Marks a list's first entry during compaction; corner ids stay below it
  * (3 * triangle_count <= LIST_TAG, checked at init). */
 #define LIST_TAG 0x80000000u
+
+/* Lists longer than this are cleaned of deleted triangles lazily (see
+ * list_remove). */
+#define LAZY_MIN 64
 
 static inline bool tri_has(const uint32_t *t, uint32_t x)
 {
@@ -37,6 +42,11 @@ static inline uint32_t tri_prev(const uint32_t *t, uint32_t v)
 
 uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint32_t w)
 {
+    if (m->count[w] < m->count[v]) { /* both lists hold the edge's triangles */
+        const uint32_t x = v;
+        v = w;
+        w = x;
+    }
     const uint32_t *list = mr_collapse_vertex_tris(m, v);
     uint32_t n = 0;
     for (uint32_t i = 0; i < m->count[v]; i++)
@@ -45,40 +55,6 @@ uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint3
 }
 
 /* ---- classification ------------------------------------------------------ */
-
-/* The triangle of v's list other than `not` that holds w, or NONE. */
-static uint32_t other_triangle(const mr_collapse_mesh *m, uint32_t v, uint32_t w, uint32_t not)
-{
-    const uint32_t *list = mr_collapse_vertex_tris(m, v);
-    for (uint32_t i = 0; i < m->count[v]; i++)
-        if (list[i] / 3 != not && tri_has(m->tris + (list[i] - list[i] % 3), w))
-            return list[i] / 3;
-    return MR_COLLAPSE_NONE;
-}
-
-/* Walk v's fan from t0 across the edge to the vertex after v (forward) or
- * before it, until a boundary edge or back at t0. Returns the number of
- * triangles stepped onto (t0 not counted) and whether it closed. */
-static uint32_t walk_fan(const mr_collapse_mesh *m, uint32_t v, uint32_t t0, bool forward,
-                         bool *closed)
-{
-    uint32_t t = t0, steps = 0;
-    *closed = false;
-    for (uint32_t guard = 0; guard <= m->count[v]; guard++) {
-        const uint32_t *tri = m->tris + 3 * (size_t)t;
-        uint32_t w = forward ? tri_next(tri, v) : tri_prev(tri, v);
-        uint32_t s = other_triangle(m, v, w, t);
-        if (s == MR_COLLAPSE_NONE)
-            return steps;
-        if (s == t0) {
-            *closed = true;
-            return steps;
-        }
-        t = s;
-        steps++;
-    }
-    return steps;
-}
 
 /* Fans up to this many triangles are classified on local copies of their
  * edges (classify_small); larger ones by walking the lists. */
@@ -170,49 +146,34 @@ static uint8_t classify_small(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
     return open ? MR_VF_BOUNDARY : 0;
 }
 
+/* A fan of more than SMALL_FAN triangles: the same answer by sorting
+ * (mr_fan_classify), O(n log n) at any valence. */
+static uint8_t classify_large(const mr_collapse_mesh *m, uint32_t v, uint32_t n)
+{
+    mr_fan_entry *e = mr_alloc_array(n, sizeof *e);
+    uint8_t *seen = mr_alloc_array(n, 1);
+    int shape = -1;
+    if (e && seen) {
+        const uint32_t *list = mr_collapse_vertex_tris(m, v);
+        for (uint32_t i = 0; i < n; i++) {
+            const uint32_t j = list[i] % 3, *tri = m->tris + (list[i] - j);
+            e[i].next = tri[mr_local_next(j)];
+            e[i].prev = tri[mr_local_prev(j)];
+        }
+        shape = mr_fan_classify(v, e, n, seen);
+    }
+    free(e);
+    free(seen);
+    /* (out of memory: locked, which is safe) */
+    return shape < 0 ? MR_VF_NONMANIFOLD | MR_VF_LOCKED : shape ? MR_VF_BOUNDARY : 0;
+}
+
 /* MR_VF_BOUNDARY, MR_VF_NONMANIFOLD | MR_VF_LOCKED, or 0 for an inner
  * manifold vertex. */
 static uint8_t classify_vertex(const mr_collapse_mesh *m, uint32_t v)
 {
     const uint32_t n = m->count[v];
-    if (n <= SMALL_FAN)
-        return classify_small(m, v, n);
-    const uint32_t *list = mr_collapse_vertex_tris(m, v);
-    uint32_t boundary_edges = 0;
-    for (uint32_t i = 0; i < n; i++) {
-        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
-        /* Edge v -> a of this triangle; each edge at v is seen once from
-         * each side, so look at the forward ones and at the backward ones
-         * that are boundary edges. */
-        const uint32_t ends[2] = {tri_next(tri, v), tri_prev(tri, v)};
-        for (int k = 0; k < 2; k++) {
-            uint32_t w = ends[k];
-            uint32_t c = mr_collapse_edge_triangles(m, v, w);
-            if (c > 2)
-                return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
-            if (c == 1) {
-                boundary_edges++;
-                continue;
-            }
-            /* Two triangles: they must run along the edge in opposite
-             * directions (consistent orientation). */
-            uint32_t s = other_triangle(m, v, w, list[i] / 3);
-            const uint32_t *o = m->tris + 3 * (size_t)s;
-            bool here_forward = k == 0;
-            bool there_forward = tri_next(o, v) == w;
-            if (here_forward == there_forward)
-                return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
-        }
-    }
-    if (boundary_edges != 0 && boundary_edges != 2)
-        return MR_VF_NONMANIFOLD | MR_VF_LOCKED;
-    bool closed;
-    uint32_t seen = 1 + walk_fan(m, v, list[0] / 3, true, &closed);
-    if (!closed)
-        seen += walk_fan(m, v, list[0] / 3, false, &closed);
-    if (seen != n)
-        return MR_VF_NONMANIFOLD | MR_VF_LOCKED; /* several fans */
-    return boundary_edges ? MR_VF_BOUNDARY : 0;
+    return n <= SMALL_FAN ? classify_small(m, v, n) : classify_large(m, v, n);
 }
 
 /* ---- setup ---------------------------------------------------------------- */
@@ -227,6 +188,7 @@ void mr_collapse_mesh_free(mr_collapse_mesh *m)
     free(m->count);
     free(m->refs);
     free(m->flags);
+    free(m->dead);
     memset(m, 0, sizeof *m);
 }
 
@@ -283,10 +245,12 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
         total += c;
         live_vertices += c > 0;
     }
-    /* Live lists never take more than `total` entries, so after a
-     * compaction there is always room for the merged list of two vertices
-     * of MR_COLLAPSE_MAX_DEGREE triangles each. */
-    const size_t capacity = total + total / 4 + 2 * MR_COLLAPSE_MAX_DEGREE + 64;
+    /* Live lists never take more than `total` (3 per live triangle)
+     * entries, and a merged list no more than one per live triangle (a
+     * triangle has at most one corner at each end; those on the edge, at
+     * both, die): so after a compaction there is always room for it, at
+     * any valence. */
+    const size_t capacity = total + total / 3 + 64;
     m->refs = mr_alloc_array(capacity, sizeof *m->refs);
     if (!m->refs) {
         mr_collapse_mesh_free(m);
@@ -377,6 +341,131 @@ static inline uint32_t corner_prev(const uint32_t *tri, uint32_t j)
     return tri[mr_local_prev(j)];
 }
 
+static int u32_cmp(const void *pa, const void *pb)
+{
+    const uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return a < b ? -1 : a > b;
+}
+
+/* Does a sorted array of n ids share one with a sorted array of k? */
+static bool sorted_meet(const uint32_t *a, size_t n, const uint32_t *b, size_t k)
+{
+    for (size_t i = 0, j = 0; i < n && j < k;) {
+        if (a[i] == b[j])
+            return true;
+        if (a[i] < b[j])
+            i++;
+        else
+            j++;
+    }
+    return false;
+}
+
+/*
+ * mr_collapse_valid where u or v has more than MR_COLLAPSE_MAX_DEGREE
+ * triangles: the same rules on heap arrays, the link condition by sorting
+ * both neighbourhoods (O(n log n) instead of O(nu nv)), the normal test
+ * in blocks of RING triangles. The flag and lock tests are done.
+ */
+static bool valid_large(const mr_collapse_mesh *m, uint32_t u, uint32_t v, const double t[3],
+                        bool v_stays, const mr_collapse_limits *limits)
+{
+    const uint8_t fu = m->flags[u], fv = m->flags[v];
+    const uint32_t nu = m->count[u], nv = m->count[v];
+    const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
+    const bool inner = !((fu | fv) & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD));
+    /* u's off-edge triangles (a, b), then v's (x, y), then the two
+     * neighbour sets to sort */
+    uint32_t *buf = mr_alloc_array(4 * ((size_t)nu + nv), sizeof *buf);
+    double *fan = mr_alloc_array(9 * RING, sizeof *fan);
+    bool ok = false;
+    if (!buf || !fan)
+        goto done; /* out of memory: refused, which is safe */
+    uint32_t *ua = buf, *ub = buf + nu, *vx = buf + 2 * (size_t)nu, *vy = vx + nv;
+    uint32_t opp[2] = {MR_COLLAPSE_NONE, MR_COLLAPSE_NONE}, ne = 0, no = 0, nw = 0;
+    for (uint32_t i = 0; i < nu; i++) {
+        const uint32_t e = lu[i], j = e % 3, *tri = CORNER_TRI(m, e);
+        const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
+        if (a == v || b == v) {
+            if (ne < 2)
+                opp[ne] = a == v ? b : a;
+            ne++;
+        } else {
+            ua[no] = a;
+            ub[no++] = b;
+        }
+    }
+    if (ne == 0 || ne > 2 || (ne == 2 && opp[0] == opp[1]))
+        goto done;
+    if (ne == 2 && (fu & MR_VF_BOUNDARY) && (fv & MR_VF_BOUNDARY))
+        goto done;
+    if (nu == ne && nv == ne)
+        goto done;
+    for (uint32_t i = 0; i < nv; i++) {
+        const uint32_t e = lv[i], j = e % 3, *tri = CORNER_TRI(m, e);
+        const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
+        if (a != u && b != u) {
+            vx[nw] = a;
+            vy[nw++] = b;
+        }
+    }
+    /* (1) the link condition, as in mr_collapse_valid: u's neighbours
+     * (after u; before u too off an inner vertex) against v's, the
+     * opposite vertices left out of v's */
+    {
+        uint32_t *su = buf + 2 * ((size_t)nu + nv), *sv = su + 2 * (size_t)nu;
+        size_t kn = 0, kv = 0;
+        for (uint32_t i = 0; i < no; i++) {
+            su[kn++] = ua[i];
+            if (!inner)
+                su[kn++] = ub[i];
+        }
+        for (uint32_t i = 0; i < nw; i++) {
+            if (vx[i] != opp[0] && vx[i] != opp[1])
+                sv[kv++] = vx[i];
+            if (!inner && vy[i] != opp[0] && vy[i] != opp[1])
+                sv[kv++] = vy[i];
+        }
+        qsort(su, kn, sizeof *su, u32_cmp);
+        qsort(sv, kv, sizeof *sv, u32_cmp);
+        if (sorted_meet(su, kn, sv, kv))
+            goto done;
+    }
+    /* (3) no duplicate triangle over both opposite vertices */
+    for (uint32_t i = 0; i < no && ne == 2; i++) {
+        const uint32_t a = ua[i], b = ub[i];
+        if ((a == opp[0] && b == opp[1]) || (a == opp[1] && b == opp[0]))
+            for (uint32_t j = 0; j < nv; j++) {
+                const uint32_t *o = CORNER_TRI(m, lv[j]);
+                if (tri_has(o, a) && tri_has(o, b))
+                    goto done;
+            }
+    }
+    /* (2) the normals, RING triangles at a time */
+    const size_t total = (size_t)no + (v_stays ? 0 : nw);
+    for (size_t i0 = 0; i0 < total; i0 += RING) {
+        const size_t nf = total - i0 < RING ? total - i0 : RING;
+        for (size_t i = 0; i < nf; i++) {
+            const size_t k = i0 + i;
+            if (k < no)
+                fan_add(m, fan, i, u, ua[k], ub[k]);
+            else
+                fan_add(m, fan, i, v, vx[k - no], vy[k - no]);
+        }
+        const size_t nf4 = (nf + 3) & ~(size_t)3;
+        for (size_t i = nf; i < nf4; i++)
+            for (int k = 0; k < 9; k++)
+                fan[k * RING + i] = fan[k * RING];
+        if (!fan_ok(fan, nf4, t, limits->min_cos_turn))
+            goto done;
+    }
+    ok = true;
+done:
+    free(buf);
+    free(fan);
+    return ok;
+}
+
 bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                        const double target[3], const mr_collapse_limits *limits)
 {
@@ -396,9 +485,10 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         if ((fu & keep) & ~(fv & keep))
             return false;
     }
+    assert(!((fu | fv) & MR_VF_DIRTY)); /* mr_collapse_clean first */
     const uint32_t nu = m->count[u], nv = m->count[v];
     if (nu > MR_COLLAPSE_MAX_DEGREE || nv > MR_COLLAPSE_MAX_DEGREE)
-        return false;
+        return valid_large(m, u, v, t, v_stays, limits);
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
 
     /* u's triangles off the edge, as the neighbours across u's corner
@@ -532,6 +622,9 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
 static void compact_refs(mr_collapse_mesh *m)
 {
     uint32_t *refs = m->refs;
+    if (m->dead) /* exact lists: the room left is then as init sized it */
+        for (size_t v = 0; v < m->vertex_count; v++)
+            mr_collapse_clean(m, (uint32_t)v);
     for (size_t v = 0; v < m->vertex_count; v++) {
         if (!m->count[v])
             continue;
@@ -562,10 +655,46 @@ void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
         compact_refs(m);
 }
 
+void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v)
+{
+    if (!(m->flags[v] & MR_VF_DIRTY))
+        return;
+    uint32_t *list = m->refs + m->start[v];
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < m->count[v]; i++) {
+        list[n] = list[i];
+        n += m->tris[list[i] - list[i] % 3] != MR_COLLAPSE_NONE;
+    }
+    m->count[v] = n;
+    m->dead[v] = 0;
+    m->flags[v] &= (uint8_t)~MR_VF_DIRTY;
+}
+
+/* Live triangles of c: its list less the dead entries a lazy removal left. */
+static inline uint32_t live_count(const mr_collapse_mesh *m, uint32_t c)
+{
+    return m->count[c] - (m->flags[c] & MR_VF_DIRTY ? m->dead[c] : 0);
+}
+
 /* Take corner id e out of its vertex c's list (order does not matter):
- * the whole list is looked at, without a branch on where e is. */
+ * the whole list is looked at, without a branch on where e is. A long
+ * list of a lazy mesh keeps the entry instead (its triangle is marked
+ * dead by the caller), counted in dead[c], and is cleaned once half of it
+ * is dead or before it is next read as an end of a collapse: a vertex of
+ * valence n that loses its triangles one by one then costs O(n) in all,
+ * not O(n) each time. */
 static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
 {
+    if (m->lazy && m->count[c] > LAZY_MIN) {
+        if (!m->dead)
+            m->dead = mr_calloc_array(m->vertex_count, sizeof *m->dead);
+        if (m->dead) {
+            m->flags[c] |= MR_VF_DIRTY;
+            m->dead[c]++;
+            return;
+        }
+        /* no memory for the counts: remove it now */
+    }
     uint32_t *list = m->refs + m->start[c];
     const uint32_t n = m->count[c];
     uint32_t at = n;
@@ -580,6 +709,7 @@ static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
 unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
                            const double target[3])
 {
+    assert(!((m->flags[u] | m->flags[v]) & MR_VF_DIRTY)); /* mr_collapse_clean first */
     const uint32_t nu = m->count[u], nv = m->count[v];
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
     /* u's corners become v's; the triangles on the edge (one or two, as
@@ -598,12 +728,15 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
     }
     for (unsigned d = 0; d < nd; d++) {
         const uint32_t ec = dead[d], base = ec - ec % 3, c = m->tris[ec];
+        m->tris[base] = m->tris[base + 1] = m->tris[base + 2] = MR_COLLAPSE_NONE;
         list_remove(m, c, ec);
-        if (m->count[c] == 0) { /* an ear's tip: now unreferenced */
+        if (live_count(m, c) == 0) { /* an ear's tip: now unreferenced */
+            mr_collapse_clean(m, c);
             m->flags[c] |= MR_VF_REMOVED;
             m->live_vertices--;
+        } else if (MR_UNLIKELY(m->flags[c] & MR_VF_DIRTY) && 2 * m->dead[c] > m->count[c]) {
+            mr_collapse_clean(m, c);
         }
-        m->tris[base] = m->tris[base + 1] = m->tris[base + 2] = MR_COLLAPSE_NONE;
     }
     const unsigned deleted = nd;
     /* v's merged list, at the end of refs: v's surviving triangles, then

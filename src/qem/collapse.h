@@ -35,8 +35,9 @@
 
 #define MR_COLLAPSE_NONE UINT32_MAX
 
-/* Collapses around a vertex with more triangles than this are refused (the
- * validity check works on stack arrays of this size). */
+/* The validity test works on stack arrays for vertices of up to this many
+ * triangles, and on heap arrays (sorting instead of comparing every pair)
+ * beyond: a vertex of any valence may collapse. */
 #define MR_COLLAPSE_MAX_DEGREE 128
 
 enum {
@@ -47,6 +48,9 @@ enum {
     MR_VF_REMOVED = 1u << 3,     /* collapsed away, or never referenced */
     MR_VF_MOVED = 1u << 4,       /* position differs from the input's */
     MR_VF_NONMANIFOLD = 1u << 5,
+    MR_VF_DIRTY = 1u << 7,       /* the list still holds deleted triangles
+                                    (a lazy mesh's long lists: see
+                                    mr_collapse_clean) */
     MR_VF_BLOCKED = 1u << 6      /* simplifier's bookkeeping: an edge at
                                     this vertex was found invalid and left
                                     the queue until the ring changes */
@@ -61,6 +65,9 @@ typedef struct mr_collapse_mesh {
     uint32_t *refs;      /* refs_capacity */
     size_t refs_size, refs_capacity;
     uint8_t *flags;      /* vertex_count, MR_VF_* */
+    uint32_t *dead;      /* vertex_count, or NULL until the first lazy
+                            removal: deleted triangles a DIRTY list holds */
+    bool lazy;           /* long lists keep deleted triangles until cleaned */
     size_t live_vertices;  /* referenced, not removed */
     size_t live_triangles;
 } mr_collapse_mesh;
@@ -147,10 +154,25 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                        const double target[3], const mr_collapse_limits *limits);
 
 /* Room for one more collapse of u and v in refs: compacts refs when
- * needed. Needs exclusive access to the whole mesh. u and v must have at
- * most MR_COLLAPSE_MAX_DEGREE triangles each (as mr_collapse_valid
- * requires): refs keeps room for two such lists beyond all live ones. */
+ * needed. Needs exclusive access to the whole mesh. refs keeps room for
+ * one list per live triangle beyond all live lists, the most a merged
+ * list can hold. */
 void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v);
+
+/*
+ * Lists of a lazy mesh (m->lazy): taking a deleted triangle out of a list
+ * of more than 64 entries would cost the list's length at every deletion
+ * -- quadratic around a vertex of huge valence (the centre of a fanned
+ * polygon loses a triangle with every collapse on its rim). Such a list
+ * keeps the entry, the vertex is flagged DIRTY and counts it in dead[];
+ * it is cleaned once half of it is dead, at compaction, and by this call,
+ * which every reader of a DIRTY vertex's list makes first: the collapse's
+ * two ends before mr_collapse_valid and mr_collapse_apply (they assert
+ * it). A deleted triangle's entries never match a vertex
+ * (mr_collapse_edge_triangles counts right on a DIRTY list). Writes only
+ * v's list and count.
+ */
+void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v);
 
 /*
  * Collapse u into v, v moving to `target`: the triangles on the edge are

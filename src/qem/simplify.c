@@ -1205,7 +1205,7 @@ static mr_simplify_stop stop_reason(mr_simplifier *s, const mr_simplify_goal *g)
 {
     if (mr_simplifier_reached(s, g))
         return MR_STOP_TARGET;
-    const mr_collapse_mesh *m = &s->m;
+    mr_collapse_mesh *m = &s->m;
     bool movable = false;
     for (size_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *tri = m->tris + 3 * t;
@@ -1214,6 +1214,8 @@ static mr_simplify_stop stop_reason(mr_simplifier *s, const mr_simplify_goal *g)
         for (int j = 0; j < 3; j++) {
             const uint32_t a = tri[j], b = tri[(j + 1) % 3];
             double cost;
+            mr_collapse_clean(&s->m, a);
+            mr_collapse_clean(&s->m, b);
             if (mr_simplifier_valid(s, a, b, &cost) ||
                 (s->half && mr_simplifier_valid(s, b, a, &cost)))
                 return MR_STOP_MAX_ERROR;
