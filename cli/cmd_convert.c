@@ -1,6 +1,7 @@
 /* meshreduce convert IN OUT and meshreduce clean IN -o OUT. */
 #include "cli.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 /* The cleanup steps, in the order that makes each one's result final. */
@@ -54,10 +55,40 @@ typedef struct clean_job {
     clean_counts counts;
 } clean_job;
 
+/* The attributes the output leaves out (--no-normals, --no-texcoords,
+ * --no-colors) go before the write, and with them the vertex splits that
+ * only they caused (a UV seam, once the texture coordinates are dropped):
+ * the vertices of one surface point that no longer differ are merged. */
+static int drop_unwritten(const cli_io *io, mr_mesh *m)
+{
+    bool dropped = false;
+    if (m->normals && !io->write.write_normals) {
+        free(m->normals);
+        m->normals = NULL;
+        dropped = true;
+    }
+    if (m->texcoords && !io->write.write_texcoords) {
+        free(m->texcoords);
+        m->texcoords = NULL;
+        dropped = true;
+    }
+    if (m->colors && !io->write.write_colors) {
+        free(m->colors);
+        m->colors = NULL;
+        dropped = true;
+    }
+    mr_error err;
+    if (dropped && mr_mesh_weld_seams(m, NULL, &err) != MR_OK)
+        return cli_fail_in(io->in, NULL, &err);
+    return CLI_OK;
+}
+
 static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
 {
     clean_job *job = user;
-    int rc = job->clean ? clean_mesh(io->in, mesh, &job->steps, &job->counts) : CLI_OK;
+    int rc = drop_unwritten(io, mesh);
+    if (rc == CLI_OK && job->clean)
+        rc = clean_mesh(io->in, mesh, &job->steps, &job->counts);
     if (rc == CLI_OK) {
         *result = *mesh;
         mr_mesh_init(mesh);
@@ -84,7 +115,9 @@ static const char convert_usage[] =
     "usage: meshreduce convert IN OUT [options]\n"
     "\n"
     "Convert a mesh or point cloud between OBJ, PLY, STL and XYZ (formats by\n"
-    "extension). Vertex order and triangles are kept as read.\n"
+    "extension). Vertex order and triangles are kept as read; when --no-normals,\n"
+    "--no-texcoords or --no-colors drops an attribute, the vertices that only it\n"
+    "split (a UV seam) are merged back into one.\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP
     "  --clean          also clean the mesh as `meshreduce clean` does (weld exact\n"
     "                   duplicates; remove degenerate, duplicate triangles and\n"

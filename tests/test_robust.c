@@ -168,16 +168,17 @@ static void test_missed_target(void **state)
     free(msg);
 }
 
+/* a strip of two quads split along its middle column by a UV seam */
+static const char strip[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n"
+                                "vt 0 0\nvt 0.4 0\nvt 0.6 0\nvt 1 0\nvt 0 1\nvt 0.4 1\n"
+                                "vt 0.6 1\nvt 1 1\n"
+                                "f 1/1 2/2 5/6\nf 1/1 5/6 4/5\nf 2/3 3/4 6/8\nf 2/3 6/8 5/7\n";
+
 /* Vertices are counted as surface points on both sides of the report: a
  * seam's copies count once in the input and in the output. */
 static void test_report_counts_points(void **state)
 {
     (void)state;
-    /* a strip of two quads split along its middle column by a UV seam */
-    static const char strip[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n"
-                                "vt 0 0\nvt 0.4 0\nvt 0.6 0\nvt 1 0\nvt 0 1\nvt 0.4 1\n"
-                                "vt 0.6 1\nvt 1 1\n"
-                                "f 1/1 2/2 5/6\nf 1/1 5/6 4/5\nf 2/3 3/4 6/8\nf 2/3 6/8 5/7\n";
     mr_mesh m;
     mr_error err;
     assert_int_equal(tu_read_string(strip, "strip.obj", &m, &err), MR_OK);
@@ -195,6 +196,37 @@ static void test_report_counts_points(void **state)
     mr_mesh_free(&m);
 }
 
+/* info describes the surface: the seam is no cut; convert --no-texcoords
+ * merges the copies that only the texture coordinates kept apart. */
+static void test_info_and_convert_seams(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("strip.obj"), *out = tu_tmp_path("strip-nouv.obj");
+    tu_write_file(in, strip, sizeof strip - 1);
+    char *msg;
+    assert_int_equal(tu_run_cli(tu_fmt("info --json '%s'", in), &msg), 0);
+    tu_assert_contains(msg, "\"vertices\": 8");
+    tu_assert_contains(msg, "\"surface_vertices\": 6, \"split_vertices\": 2");
+    tu_assert_contains(msg, "\"boundary_loops\": 1");
+    tu_assert_contains(msg, "\"components\": 1");
+    tu_assert_contains(msg, "\"genus\": 0");
+    free(msg);
+    assert_int_equal(tu_run_cli(tu_fmt("info '%s'", in), &msg), 0);
+    tu_assert_contains(msg, "6 surface points; 2 vertices repeat one");
+    free(msg);
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s' --no-texcoords -q", in, out), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("info --json '%s'", out), &msg), 0);
+    tu_assert_contains(msg, "\"vertices\": 6");
+    tu_assert_contains(msg, "\"split_vertices\": 0");
+    tu_assert_contains(msg, "\"texcoords\": false");
+    free(msg);
+    /* kept, the texture coordinates keep the split */
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s' -q", in, out), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("info --json '%s'", out), &msg), 0);
+    tu_assert_contains(msg, "\"vertices\": 8");
+    free(msg);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -202,6 +234,7 @@ int main(void)
         cmocka_unit_test(test_all_degenerate),
         cmocka_unit_test(test_missed_target),
         cmocka_unit_test(test_report_counts_points),
+        cmocka_unit_test(test_info_and_convert_seams),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
