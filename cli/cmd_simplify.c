@@ -1,7 +1,9 @@
 /* meshreduce simplify IN -o OUT: greedy quadric-error edge collapse. */
 #include "cli.h"
 
+#include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -17,10 +19,16 @@ static const char usage[] =
     "  --vertices N          keep N vertices\n"
     "                        (both count points of the surface: the copies of a vertex\n"
     "                        that a UV seam or hard edge splits count once)\n"
-    "  --triangles N         keep N triangles\n"
-    "  --max-error E         stop before a collapse moves the surface by more than E,\n"
-    "                        relative to the bounding-box diagonal (0.001 = 0.1%)\n"
+    "  --triangles N         keep N triangles; 0: as few as --max-error allows (or,\n"
+    "                        without it, as the rules allow)\n"
+    "  --max-error E         stop before a collapse whose error exceeds E, relative\n"
+    "                        to the diagonal of the input's bounding box (all its\n"
+    "                        vertices, as `meshreduce info` prints it; 0.001 = 0.1%)\n"
     "  --absolute            --max-error is in model units\n"
+    "The error of a collapse is a quadric error: the RMS distance of the merged\n"
+    "vertex to the planes of the original triangles it stands for (area-weighted),\n"
+    "not a Hausdorff bound; `meshreduce compare` measures the surface distance.\n"
+    "--stats and --json report the largest one as max_error, in the same units.\n"
     "A target that the rules do not allow (locked vertices, every remaining collapse\n"
     "refused by the topology or normal tests) is reported as a warning on stderr and\n"
     "as \"target_reached\": false in --json; the exit status stays 0.\n"
@@ -35,6 +43,13 @@ static const char usage[] =
     "                        greedy: always the single cheapest collapse, from a\n"
     "                        heap (the reference; about 5x slower)\n"
     "  --lock-border         never move boundary vertices\n"
+    "  --prune               drop the disconnected pieces no larger than the error\n"
+    "                        bound (--max-error, or the largest collapse error made;\n"
+    "                        their bounding-box diagonal), never the largest piece\n"
+    "  --lock FILE           never move these vertices: 0-based indices in the\n"
+    "                        input's vertex order (OBJ's v lines, PLY's vertex\n"
+    "                        element), separated by spaces, commas or lines; # starts\n"
+    "                        a comment\n"
     "  --boundary-weight W   weight of the quadrics that hold boundaries and seams\n"
     "                        (default 1, 0 = none)\n"
     "  --max-normal-turn D   refuse collapses that turn a triangle by more than D\n"
@@ -98,7 +113,76 @@ static bool parse_ratio(const char *s, double *out)
 typedef struct simplify_job {
     mr_simplify_options o;
     mr_simplify_stats s;
+    const char *lock_path; /* --lock FILE */
+    uint8_t *lock;         /* its vertices, one byte per input vertex */
 } simplify_job;
+
+/*
+ * --lock FILE: vertex indices (0-based, in the input's vertex order),
+ * separated by white space or commas, '#' to the end of a line a comment.
+ * Fills job->lock for a mesh of vertex_count vertices; an unreadable file
+ * or a word that is no vertex index is an error naming the file and line.
+ */
+static int read_locks(simplify_job *job, size_t vertex_count)
+{
+    FILE *f = fopen(job->lock_path, "rb");
+    if (!f)
+        return cli_fail("%s: cannot open for reading: %s", job->lock_path, strerror(errno));
+    job->lock = calloc(vertex_count ? vertex_count : 1, 1);
+    if (!job->lock) {
+        fclose(f);
+        return cli_fail("%s: out of memory", job->lock_path);
+    }
+    char word[64];
+    size_t len = 0, line = 1, word_line = 1;
+    bool comment = false;
+    int rc = CLI_OK;
+    for (int ch = 0; ch != EOF && rc == CLI_OK;) {
+        ch = fgetc(f);
+        const bool sep = ch == EOF || ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r' ||
+                         ch == ',' || ch == '#';
+        if (!sep && !comment) {
+            if (len == 0)
+                word_line = line;
+            if (len + 1 < sizeof word)
+                word[len] = (char)ch;
+            len++;
+            continue;
+        }
+        if (len) {
+            uint64_t v;
+            if (len >= sizeof word) {
+                rc = cli_fail("%s:%zu: '%.20s...' is no vertex index", job->lock_path,
+                              word_line, word);
+            } else {
+                word[len] = '\0';
+                if (!cli_parse_count(word, &v) || strpbrk(word, "kKmMeE."))
+                    rc = cli_fail("%s:%zu: '%s' is no vertex index (0-based integers)",
+                                  job->lock_path, word_line, word);
+                else if (v >= vertex_count)
+                    rc = cli_fail("%s:%zu: vertex %s does not exist (the mesh has %zu "
+                                  "vertices, 0 to %zu)",
+                                  job->lock_path, word_line, word, vertex_count,
+                                  vertex_count ? vertex_count - 1 : 0);
+                else
+                    job->lock[v] = 1;
+            }
+            len = 0;
+        }
+        if (ch == '#')
+            comment = true;
+        if (ch == '\n') {
+            comment = false;
+            line++;
+        }
+    }
+    if (rc == CLI_OK && ferror(f))
+        rc = cli_fail("%s: read failed: %s", job->lock_path, strerror(errno));
+    fclose(f);
+    if (rc == CLI_OK)
+        job->o.vertex_lock = job->lock;
+    return rc;
+}
 
 static int option(int argc, char **argv, int *i, void *user)
 {
@@ -117,9 +201,11 @@ static int option(int argc, char **argv, int *i, void *user)
             return cli_usage_error("simplify", "--vertices needs a positive count");
         o->target_vertices = (size_t)n;
     } else if (cli_value(argc, argv, i, "--triangles", &v)) {
-        if (!cli_parse_count(v, &n) || n == 0)
-            return cli_usage_error("simplify", "--triangles needs a positive count");
+        if (!cli_parse_count(v, &n))
+            return cli_usage_error("simplify", "--triangles needs a count (0: as far as "
+                                               "--max-error allows)");
         o->target_triangles = (size_t)n;
+        o->until_error = n == 0;
     } else if (cli_value(argc, argv, i, "--max-error", &v)) {
         if (!cli_parse_double(v, &x) || !(x > 0))
             return cli_usage_error("simplify", "--max-error needs a positive number");
@@ -142,6 +228,12 @@ static int option(int argc, char **argv, int *i, void *user)
             return cli_usage_error("simplify", "--strategy is greedy or batched");
     } else if (cli_flag(argc, argv, i, "--lock-border")) {
         o->lock_border = 1;
+    } else if (cli_flag(argc, argv, i, "--prune")) {
+        o->prune = 1;
+    } else if (cli_value(argc, argv, i, "--lock", &v)) {
+        if (!v || !*v)
+            return cli_usage_error("simplify", "--lock needs a file of vertex indices");
+        ((simplify_job *)user)->lock_path = v;
     } else if (cli_value(argc, argv, i, "--boundary-weight", &v)) {
         if (!cli_parse_double(v, &x) || x < 0)
             return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
@@ -168,12 +260,20 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
                         "point clouds)",
                         io->in, cli_count(a, sizeof a, mesh->vertex_count));
     }
+    if (job->lock_path) {
+        int rc = read_locks(job, mesh->vertex_count);
+        if (rc != CLI_OK)
+            return rc;
+    }
     progress prog = {cli_now(), 0, -1};
     if (!io->quiet && isatty(STDERR_FILENO)) {
         job->o.progress = show_progress;
         job->o.progress_user = &prog;
     }
     mr_status st = mr_mesh_simplify(mesh, &job->o, result, NULL, &job->s, &err);
+    free(job->lock);
+    job->lock = NULL;
+    job->o.vertex_lock = NULL;
     job->o.progress = NULL;
     job->o.progress_user = NULL;
     if (prog.shown)
@@ -217,6 +317,8 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
             s->max_error);
     fprintf(stderr, "locked     %s vertices (non-manifold or misoriented fans)\n",
             cli_count(a, sizeof a, s->locked_vertices));
+    if (s->pruned_parts)
+        fprintf(stderr, "pruned     %s pieces\n", cli_count(a, sizeof a, s->pruned_parts));
     fprintf(stderr, "time       read %.3f s, setup %.3f s, collapse %.3f s, output %.3f s, "
                     "write %.3f s\n",
             t->read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t->write);
@@ -235,11 +337,12 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
            s->output_points);
     printf(", \"input_triangles\": %zu, \"output_vertices\": %zu, "
            "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
-           "\"locked_vertices\": %zu, "
+           "\"locked_vertices\": %zu, \"pruned_parts\": %zu, "
            "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
            "\"output\": %.6f, \"write\": %.6f}}\n",
            s->input_triangles, s->output_vertices, s->output_triangles,
-           s->collapses, s->max_error, s->locked_vertices, t->read, s->seconds_setup,
+           s->collapses, s->max_error, s->locked_vertices, s->pruned_parts, t->read,
+           s->seconds_setup,
            s->seconds_collapse, s->seconds_output, t->write);
 }
 
@@ -255,13 +358,13 @@ static int run(int argc, char **argv)
 {
     cli_io io;
     cli_io_init(&io, "simplify", CLI_ACCEPT_OUTPUT | CLI_ACCEPT_WRITE | CLI_ACCEPT_REPORT);
-    simplify_job job;
+    simplify_job job = {.lock_path = NULL, .lock = NULL};
     mr_simplify_options_default(&job.o);
     int rc = cli_io_parse(&io, argc, argv, option, &job);
     if (rc != CLI_OK)
         return rc;
     if (job.o.target_ratio == 0 && job.o.target_vertices == 0 && job.o.target_triangles == 0 &&
-        job.o.max_error == 0)
+        job.o.max_error == 0 && !job.o.until_error)
         return cli_usage_error("simplify", "no target given (--ratio, --vertices, "
                                            "--triangles or --max-error)");
     if ((rc = cli_check_output_path(io.cmd, io.out)) != CLI_OK)

@@ -360,8 +360,12 @@ typedef struct mr_simplify_options {
     size_t target_triangles;
     double max_error;           /* stop before a collapse whose error (a
                                    distance) exceeds this; 0 = no limit */
+    int until_error;            /* no count target: collapse as far as
+                                   max_error (or, without it, the rules)
+                                   allow; the CLI's --triangles 0 */
     int error_absolute;         /* max_error is absolute (1) or relative to
-                                   the bounding-box diagonal (0, default) */
+                                   the bounding-box diagonal of all the
+                                   input's vertices (0, default) */
 
     mr_collapse_kind collapse;  /* MR_COLLAPSE_FULL by default */
     mr_strategy strategy;       /* MR_STRATEGY_BATCHED by default */
@@ -373,6 +377,11 @@ typedef struct mr_simplify_options {
                                    (default 60 degrees); flips are always
                                    refused */
     int lock_border;            /* never move boundary vertices */
+    int prune;                  /* after the collapses, drop the connected
+                                   parts whose bounding-box diagonal is at
+                                   most the error bound (max_error, or else
+                                   the largest collapse error made), never
+                                   the part with the most triangles */
     const uint8_t *vertex_lock; /* optional, one byte per input vertex:
                                    nonzero = this vertex never moves */
     int threads;                /* 0 = all cores (parallel algorithms) */
@@ -416,7 +425,9 @@ typedef struct mr_simplify_stats {
                                    more) */
     size_t output_triangles;
     size_t collapses;
-    int target_reached;         /* stop is MR_STOP_TARGET or _MAX_ERROR */
+    size_t pruned_parts;        /* parts dropped by options.prune */
+    int target_reached;         /* stop is MR_STOP_TARGET or _MAX_ERROR,
+                                   or any with until_error */
     mr_simplify_stop stop;
     double max_error;           /* largest collapse error, as a distance */
     double seconds_setup;       /* adjacency, quadrics, queue */

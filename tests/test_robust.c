@@ -4,6 +4,7 @@
 #include "testutil.h"
 
 #include <float.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
@@ -227,6 +228,121 @@ static void test_info_and_convert_seams(void **state)
     free(msg);
 }
 
+/* A unit sphere with five specks (spheres 1/500 its size) beside it. */
+static void sphere_and_specks(mr_mesh *m)
+{
+    mr_mesh one;
+    mr_mesh_init(&one);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 500, 1, &one, NULL), MR_OK);
+    const size_t vc = one.vertex_count, tc = one.triangle_count;
+    mr_mesh_init(m);
+    assert_int_equal(mr_mesh_alloc(m, 6 * vc, 6 * tc, 0, NULL), MR_OK);
+    for (size_t p = 0; p < 6; p++) {
+        const float scale = p ? 0.002f : 1.0f, shift = p ? 1.5f + 0.1f * (float)p : 0;
+        for (size_t v = 0; v < vc; v++)
+            for (int k = 0; k < 3; k++)
+                m->positions[3 * (p * vc + v) + k] =
+                    one.positions[3 * v + k] * scale + (k == 0 ? shift : 0);
+        for (size_t c = 0; c < 3 * tc; c++)
+            m->indices[3 * p * tc + c] = one.indices[c] + (uint32_t)(p * vc);
+    }
+    mr_mesh_free(&one);
+}
+
+static size_t components_of(const mr_mesh *m)
+{
+    mr_stats s;
+    assert_int_equal(mr_stats_compute(m->positions, 0, m->vertex_count, m->indices,
+                                      m->triangle_count, &s, NULL),
+                     MR_OK);
+    return s.components;
+}
+
+/* --prune drops the pieces no larger than the error bound; a target of 0
+ * triangles goes as far as the bound allows; --lock keeps vertices. */
+static void test_prune_zero_target_and_locks(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    sphere_and_specks(&m);
+    assert_int_equal(components_of(&m), 6);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.5;
+    o.max_error = 0.01;
+    mr_mesh out;
+    mr_simplify_stats st;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_int_equal(components_of(&out), 6);
+    assert_int_equal(st.pruned_parts, 0);
+    mr_mesh_free(&out);
+    o.prune = 1;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_int_equal(components_of(&out), 1);
+    assert_int_equal(st.pruned_parts, 5);
+    mr_mesh_free(&out);
+    /* a bound below the specks' size keeps them */
+    o.max_error = 1e-4;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_int_equal(st.pruned_parts, 0);
+    mr_mesh_free(&out);
+
+    /* --triangles 0: no count target, as far as the bound allows */
+    const char *in = tu_tmp_path("specks.ply"), *res = tu_tmp_path("specks-s.ply");
+    assert_int_equal(mr_mesh_write(in, &m, NULL, NULL), MR_OK);
+    char *msg;
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --triangles 0 --max-error 0.001 --json -q",
+                          in, res),
+                   &msg),
+        0);
+    tu_assert_contains(msg, "\"target_reached\": true");
+    tu_assert_contains(msg, "\"stop_reason\": \"max_error\"");
+    free(msg);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --triangles 0 --max-error 0.01 --prune --json",
+                          in, res),
+                   &msg),
+        0);
+    tu_assert_contains(msg, "\"pruned_parts\": 5");
+    free(msg);
+
+    /* --lock FILE: the listed vertices keep their place */
+    const char *locks = tu_tmp_path("locks.txt");
+    static const char list[] = "# the first three\n0, 1\n2 # and done\n";
+    tu_write_file(locks, list, sizeof list - 1);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.05 --lock '%s' -q", in, res, locks),
+                   NULL),
+        0);
+    mr_mesh r;
+    assert_int_equal(mr_mesh_read(res, NULL, &r, NULL), MR_OK);
+    for (size_t v = 0; v < 3; v++) {
+        bool found = false;
+        for (size_t w = 0; w < r.vertex_count && !found; w++)
+            found = !memcmp(r.positions + 3 * w, m.positions + 3 * v, 12);
+        assert_true(found);
+    }
+    mr_mesh_free(&r);
+    static const char bad[] = "0\n12x\n";
+    tu_write_file(locks, bad, sizeof bad - 1);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.05 --lock '%s'", in, res, locks),
+                   &msg),
+        1);
+    tu_assert_contains(msg, "locks.txt:2: '12x' is no vertex index");
+    free(msg);
+    static const char big[] = "99999999\n";
+    tu_write_file(locks, big, sizeof big - 1);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.05 --lock '%s'", in, res, locks),
+                   &msg),
+        1);
+    tu_assert_contains(msg, "locks.txt:1: vertex 99999999 does not exist");
+    free(msg);
+    mr_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -235,6 +351,7 @@ int main(void)
         cmocka_unit_test(test_missed_target),
         cmocka_unit_test(test_report_counts_points),
         cmocka_unit_test(test_info_and_convert_seams),
+        cmocka_unit_test(test_prune_zero_target_and_locks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

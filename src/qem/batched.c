@@ -417,6 +417,6 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
     if (o->progress)
         o->progress(1.0, o->progress_user);
     const double e = sqrt(worst);
-    *max_error = o->error_absolute ? e * s->diagonal : e;
+    *max_error = mr_simplifier_error(s, o, e);
     return done;
 }

@@ -386,6 +386,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const size_t output_points = s.m.live_vertices;
     const mr_simplify_stop stop = s.stop;
+    const size_t pruned = s.pruned;
     mr_simplifier_free(&s);
     free(geo);
     free_ctx(&a);
@@ -401,7 +402,8 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         stats->output_points = output_points;
         stats->output_triangles = nt;
         stats->stop = stop;
-        stats->target_reached = stop <= MR_STOP_MAX_ERROR;
+        stats->target_reached = stop <= MR_STOP_MAX_ERROR || (options && options->until_error);
+        stats->pruned_parts = pruned;
         stats->collapses = collapses;
         stats->max_error = max_error;
         stats->seconds_setup = t1 - t0;

@@ -19,9 +19,11 @@
  *
  * Geometry is normalised (centre of the referenced vertices' bounding box
  * at the origin, diagonal 1), so a cost is the squared RMS distance to the
- * planes the merged vertex stands for (quadric.h), relative to the
- * diagonal; max_error and stats.max_error are its square root, scaled to
- * world units when error_absolute is set.
+ * planes the merged vertex stands for (quadric.h), relative to that
+ * diagonal; max_error and stats.max_error are its square root, in world
+ * units when error_absolute is set, else relative to the diagonal of the
+ * bounding box of all the input's vertices (error_base, the one that
+ * `meshreduce info` prints: unreferenced vertices may widen it).
  */
 #include "simplify_internal.h"
 
@@ -999,10 +1001,10 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown strategy %d", (int)o->strategy);
     if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
-        o->max_error == 0)
+        o->max_error == 0 && !o->until_error)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: no target: set a target ratio, vertex or triangle "
-                             "count, or a max error");
+                             "count, a max error, or until_error");
     if (o->target_triangles > input_triangles)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: target of %zu triangles exceeds the input's %zu",
@@ -1043,11 +1045,18 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     for (size_t i = 0; i < 3 * triangle_count; i++)
         used[indices[i]] = 1;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    /* every finite vertex's box too: the base of relative errors, as
+     * `meshreduce info` and mr_stats give it */
+    double alo[3] = {INFINITY, INFINITY, INFINITY}, ahi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < vertex_count; v++) {
-        if (!used[v])
-            continue;
         float p[3];
         memcpy(p, (const char *)positions + v * stride, sizeof p);
+        for (int k = 0; k < 3 && is_finite(p[0]) && is_finite(p[1]) && is_finite(p[2]); k++) {
+            alo[k] = p[k] < alo[k] ? p[k] : alo[k];
+            ahi[k] = p[k] > ahi[k] ? p[k] : ahi[k];
+        }
+        if (!used[v])
+            continue;
         if (!is_finite(p[0]) || !is_finite(p[1]) || !is_finite(p[2])) {
             free(used);
             return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -1067,6 +1076,10 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         s->centre[k] = 0.5 * (lo[k] + hi[k]);
     s->diagonal = diag;
     s->scale = 1.0 / diag;
+    const double ad = sqrt((ahi[0] - alo[0]) * (ahi[0] - alo[0]) +
+                           (ahi[1] - alo[1]) * (ahi[1] - alo[1]) +
+                           (ahi[2] - alo[2]) * (ahi[2] - alo[2]));
+    s->error_base = ad > 0 ? ad : diag;
     for (int k = 0; k < 3; k++) {
         s->lo[k] = (float)lo[k];
         s->hi[k] = (float)hi[k];
@@ -1184,7 +1197,10 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
     g->triangles = o->target_triangles;
     g->limit = INFINITY;
     if (o->max_error > 0) {
-        double rel = o->error_absolute ? o->max_error / s->diagonal : o->max_error;
+        /* normalised by the referenced vertices' diagonal; relative
+         * errors are relative to the whole input's */
+        const double rel = (o->error_absolute ? o->max_error : o->max_error * s->error_base) /
+                           s->diagonal;
         g->limit = rel * rel;
     }
     /* Progress: the share of the collapses the vertex target needs. */
@@ -1243,6 +1259,86 @@ const char *mr_simplify_stop_string(mr_simplify_stop stop)
 
 static size_t run_greedy(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
 
+/*
+ * Drop the connected parts whose bounding-box diagonal (normalised) is at
+ * most `bound` -- removing them moves the surface by no more -- but never
+ * the part with the most triangles. Returns the number of parts dropped.
+ * A part is a set of live triangles joined through shared vertices.
+ */
+static size_t prune(mr_simplifier *s, double bound)
+{
+    mr_collapse_mesh *m = &s->m;
+    const size_t vc = m->vertex_count, tc = m->triangle_count;
+    uint32_t *parent = mr_alloc_array(vc, sizeof *parent);
+    float *box = mr_alloc_array(vc, 6 * sizeof *box);
+    uint32_t *tris = mr_calloc_array(vc, sizeof *tris);
+    size_t dropped = 0;
+    if (!parent || !box || !tris)
+        goto done; /* out of memory: nothing pruned */
+    mr_uf_init(parent, vc);
+    for (size_t t = 0; t < tc; t++) {
+        const uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] != NONE) {
+            mr_uf_union(parent, tri[0], tri[1]);
+            mr_uf_union(parent, tri[0], tri[2]);
+        }
+    }
+    for (size_t v = 0; v < vc; v++) {
+        float *b = box + 6 * v;
+        b[0] = b[1] = b[2] = INFINITY;
+        b[3] = b[4] = b[5] = -INFINITY;
+    }
+    for (size_t v = 0; v < vc; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        float *b = box + 6 * (size_t)mr_uf_find(parent, (uint32_t)v);
+        const float *p = m->pos + 3 * v;
+        for (int k = 0; k < 3; k++) {
+            b[k] = p[k] < b[k] ? p[k] : b[k];
+            b[3 + k] = p[k] > b[3 + k] ? p[k] : b[3 + k];
+        }
+    }
+    uint32_t largest = NONE;
+    for (size_t t = 0; t < tc; t++)
+        if (m->tris[3 * t] != NONE) {
+            const uint32_t r = mr_uf_find(parent, m->tris[3 * t]);
+            tris[r]++;
+            largest = largest == NONE || tris[r] > tris[largest] ||
+                              (tris[r] == tris[largest] && r < largest)
+                          ? r
+                          : largest;
+        }
+    /* tris[r] becomes the verdict: 1 = drop part r */
+    for (size_t v = 0; v < vc; v++) {
+        if (!tris[v])
+            continue;
+        const float *b = box + 6 * v;
+        const double dx = (double)b[3] - b[0], dy = (double)b[4] - b[1], dz = (double)b[5] - b[2];
+        tris[v] = v != largest && sqrt(dx * dx + dy * dy + dz * dz) <= bound;
+        dropped += tris[v];
+    }
+    if (!dropped)
+        goto done;
+    for (size_t t = 0; t < tc; t++) {
+        uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] != NONE && tris[mr_uf_find(parent, tri[0])]) {
+            tri[0] = tri[1] = tri[2] = NONE;
+            m->live_triangles--;
+        }
+    }
+    for (size_t v = 0; v < vc; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED) && tris[mr_uf_find(parent, (uint32_t)v)]) {
+            m->flags[v] |= MR_VF_REMOVED;
+            m->count[v] = 0;
+            m->live_vertices--;
+        }
+done:
+    free(parent);
+    free(box);
+    free(tris);
+    return dropped;
+}
+
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
 {
     size_t done = s->batched ? mr_simplifier_run_batched(s, o, max_error)
@@ -1250,6 +1346,15 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
     mr_simplify_goal g;
     mr_simplifier_targets(s, o, &g);
     s->stop = stop_reason(s, &g);
+    s->pruned = 0;
+    if (o->prune) {
+        /* the error bound, or the largest error the collapses made,
+         * normalised */
+        const double e = o->max_error > 0 ? o->max_error : *max_error;
+        const double bound =
+            (o->error_absolute ? e : e * s->error_base) / s->diagonal;
+        s->pruned = prune(s, bound);
+    }
     return done;
 }
 
@@ -1331,7 +1436,7 @@ static size_t run_greedy(mr_simplifier *s, const mr_simplify_options *o, double 
     if (o->progress)
         o->progress(1.0, o->progress_user);
     double e = sqrt(worst);
-    *max_error = o->error_absolute ? e * s->diagonal : e;
+    *max_error = mr_simplifier_error(s, o, e);
     return done;
 }
 
@@ -1412,6 +1517,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     st = mr_simplifier_output(&s, positions, stride, out, err);
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const mr_simplify_stop stop = s.stop;
+    const size_t pruned = s.pruned;
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;
@@ -1424,7 +1530,8 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     stats->output_points = out->vertex_count;
     stats->output_triangles = out->triangle_count;
     stats->stop = stop;
-    stats->target_reached = stop <= MR_STOP_MAX_ERROR;
+    stats->target_reached = stop <= MR_STOP_MAX_ERROR || options->until_error;
+    stats->pruned_parts = pruned;
     stats->collapses = collapses;
     stats->max_error = max_error;
     stats->seconds_setup = t1 - t0;

@@ -34,12 +34,15 @@ struct mr_simplifier {
     uint8_t pin_flags;       /* flags that pin a full collapse's target to
                                 that end (MR_VF_SEAM with attributes) */
     double centre[3], scale, diagonal;
+    double error_base;       /* bounding-box diagonal of all the input's
+                                vertices: relative errors are relative to it */
     float lo[3], hi[3];      /* bounding box of the referenced input vertices */
     double box[3];           /* its half extents, normalised: targets stay
                                 inside (|target[k]| <= box[k]) */
     size_t input_vertices;
     size_t blocked_vertices; /* non-manifold or inconsistently wound: locked */
     mr_simplify_stop stop;   /* why mr_simplifier_run stopped */
+    size_t pruned;           /* parts dropped by options.prune */
     /* Attribute hooks (mr_mesh_simplify): extra validity, and an action
      * before a collapse r -> k to target is applied. */
     bool (*attr_valid)(mr_simplifier *s, uint32_t r, uint32_t k);
@@ -70,6 +73,13 @@ static inline void mr_simplifier_position(const mr_simplifier *s, uint32_t v, fl
         const float f = (float)((double)s->m.pos[3 * (size_t)v + k] * s->diagonal + s->centre[k]);
         p[k] = f < s->lo[k] ? s->lo[k] : f > s->hi[k] ? s->hi[k] : f;
     }
+}
+
+/* A normalised distance e as the error the options speak in. */
+static inline double mr_simplifier_error(const mr_simplifier *s, const mr_simplify_options *o,
+                                         double e)
+{
+    return o->error_absolute ? e * s->diagonal : e * s->diagonal / s->error_base;
 }
 
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
