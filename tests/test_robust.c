@@ -343,6 +343,114 @@ static void test_prune_zero_target_and_locks(void **state)
     mr_mesh_free(&m);
 }
 
+/* An n x n grid over the unit square, its middle column a UV seam (the
+ * right half's faces use their own texture coordinates there). */
+static void seamed_grid(int n, mr_mesh *m)
+{
+    static char text[1 << 16];
+    size_t len = 0;
+    const int mid = (n - 1) / 2;
+    for (int y = 0; y < n; y++)
+        for (int x = 0; x < n; x++)
+            len += (size_t)snprintf(text + len, sizeof text - len, "v %g %g 0\n",
+                                    (double)x / (n - 1), (double)y / (n - 1));
+    for (int y = 0; y < n; y++)
+        for (int x = 0; x < n; x++)
+            len += (size_t)snprintf(text + len, sizeof text - len, "vt %g %g\n",
+                                    0.45 * x / (n - 1), (double)y / (n - 1));
+    for (int y = 0; y < n; y++) /* the seam's right-hand copies */
+        len += (size_t)snprintf(text + len, sizeof text - len, "vt %g %g\n",
+                                0.55 + 0.45 * mid / (n - 1), (double)y / (n - 1));
+    for (int y = 0; y + 1 < n; y++)
+        for (int x = 0; x + 1 < n; x++) {
+            const int right = x >= mid;
+            const int cx[4] = {x, x + 1, x + 1, x}, cy[4] = {y, y, y + 1, y + 1};
+            const int tri[2][3] = {{0, 1, 2}, {0, 2, 3}};
+            for (int t = 0; t < 2; t++) {
+                len += (size_t)snprintf(text + len, sizeof text - len, "f");
+                for (int k = 0; k < 3; k++) {
+                    const int px = cx[tri[t][k]], py = cy[tri[t][k]], v = py * n + px + 1;
+                    const int uv = right && px == mid ? n * n + py + 1 : v;
+                    len += (size_t)snprintf(text + len, sizeof text - len, " %d/%d", v, uv);
+                }
+                len += (size_t)snprintf(text + len, sizeof text - len, "\n");
+            }
+        }
+    mr_error err;
+    assert_int_equal(tu_read_string(text, "grid.obj", m, &err), MR_OK);
+}
+
+static bool has_position(const mr_mesh *m, float x, float y, float tolerance)
+{
+    for (size_t v = 0; v < m->vertex_count; v++)
+        if (fabsf(m->positions[3 * v] - x) <= tolerance &&
+            fabsf(m->positions[3 * v + 1] - y) <= tolerance)
+            return true;
+    return false;
+}
+
+/* The collapse rules: a full collapse keeps boundary and seam vertices on
+ * their polylines and may take a seam vertex onto a locked one; it never
+ * does worse than the half-edge collapse on these grids. */
+static void test_seams_borders_locks(void **state)
+{
+    (void)state;
+    mr_mesh g;
+    seamed_grid(4, &g);
+    size_t kept[2];
+    for (int kind = 0; kind < 2; kind++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_triangles = 4;
+        o.collapse = (mr_collapse_kind)kind;
+        mr_mesh out;
+        mr_simplify_stats st;
+        assert_int_equal(mr_mesh_simplify(&g, &o, &out, NULL, &st, NULL), MR_OK);
+        assert_true(st.target_reached);
+        /* the four corners stay, and the surface stays in its plane */
+        assert_true(has_position(&out, 0, 0, 1e-6f));
+        assert_true(has_position(&out, 1, 0, 1e-6f));
+        assert_true(has_position(&out, 0, 1, 1e-6f));
+        assert_true(has_position(&out, 1, 1, 1e-6f));
+        for (size_t v = 0; v < out.vertex_count; v++)
+            assert_true(out.positions[3 * v + 2] == 0);
+        mr_compare_result cr;
+        assert_int_equal(mr_compare(g.positions, g.vertex_count, g.indices, g.triangle_count,
+                                    out.positions, out.vertex_count, out.indices,
+                                    out.triangle_count, NULL, &cr, NULL),
+                         MR_OK);
+        assert_true(cr.hausdorff < 1e-5);
+        kept[kind] = out.triangle_count;
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&g);
+
+    /* Locked borders: the seam's inner vertices may go onto its locked
+     * ends, so full collapses get as far as half ones, and no border
+     * vertex moves. */
+    seamed_grid(5, &g);
+    for (int kind = 0; kind < 2; kind++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_triangles = 1;
+        o.lock_border = 1;
+        o.collapse = (mr_collapse_kind)kind;
+        mr_mesh out;
+        assert_int_equal(mr_mesh_simplify(&g, &o, &out, NULL, NULL, NULL), MR_OK);
+        kept[kind] = out.triangle_count;
+        for (int i = 0; i < 5; i++) {
+            const float f = (float)i / 4;
+            assert_true(has_position(&out, f, 0, 0));
+            assert_true(has_position(&out, f, 1, 0));
+            assert_true(has_position(&out, 0, f, 0));
+            assert_true(has_position(&out, 1, f, 0));
+        }
+        mr_mesh_free(&out);
+    }
+    assert_true(kept[MR_COLLAPSE_FULL] <= kept[MR_COLLAPSE_HALF]);
+    mr_mesh_free(&g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -352,6 +460,7 @@ int main(void)
         cmocka_unit_test(test_report_counts_points),
         cmocka_unit_test(test_info_and_convert_seams),
         cmocka_unit_test(test_prune_zero_target_and_locks),
+        cmocka_unit_test(test_seams_borders_locks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -296,7 +296,6 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         return st;
     }
     s.attr = &a;
-    s.pin_flags = MR_VF_SEAM;
     /* Without seams every geometric vertex has one wedge: the attribute
      * rules cannot refuse a collapse, and without attributes the only
      * work of attr_apply -- giving moved corners the survivor's wedge --

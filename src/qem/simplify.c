@@ -171,20 +171,52 @@ static inline void free_cost_inputs(const mr_simplifier *s, uint32_t u, uint32_t
 }
 
 /*
+ * The collapse rules, one table for both kinds of collapse (as
+ * meshoptimizer's kCanCollapse): may vertex u (flags fu) go to where w
+ * (flags fw) is -- the half-edge collapse u -> w, or a full collapse that
+ * keeps w in place?
+ *   locked:           never;
+ *   on a boundary:    only onto the boundary (a boundary vertex, locked or
+ *                     not; an inner edge between two boundary vertices is
+ *                     refused by mr_collapse_valid), so it stays on its
+ *                     polyline;
+ *   on a seam (mr_mesh_simplify's attribute seams): only onto the seam;
+ *   any other:        anywhere.
+ * A full collapse moves both ends to the optimum when both may go onto
+ * each other and neither is on a boundary or seam; to the best point of
+ * the edge when both may and they share a boundary or seam (they stay on
+ * it); onto the end that may not go when only one may; not at all when
+ * neither may.
+ */
+static inline bool may_go_onto(uint8_t fu, uint8_t fw)
+{
+    if (fu & MR_VF_LOCKED)
+        return false;
+    if (fu & MR_VF_BOUNDARY)
+        return (fw & MR_VF_BOUNDARY) != 0;
+    if (fu & MR_VF_SEAM)
+        return (fw & MR_VF_SEAM) != 0;
+    return true;
+}
+
+/* Flags that keep a full collapse off the free optimum. */
+#define PINNING (MR_VF_LOCKED | MR_VF_BOUNDARY | MR_VF_SEAM)
+
+/*
  * The full collapse of edge (u, w): the target relative to w's position
- * (x) and the cost. Locked (or, with attributes, seam) ends pin the target.
+ * (x) and the cost, by the rules above.
  */
 static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x[3])
 {
     const mr_collapse_mesh *m = &s->m;
     const uint8_t fu = m->flags[u], fw = m->flags[w];
-    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
-    if (!((fu | fw) & pin)) {
+    if (!((fu | fw) & PINNING)) {
         float in[FREE_INPUTS];
         free_cost_inputs(s, u, w, in, 1);
         return free_cost(in, 1, x, 1, s->box);
     }
-    if ((fu & pin) && (fw & pin) && (fu & MR_VF_LOCKED || fw & MR_VF_LOCKED)) {
+    const bool gu = may_go_onto(fu, fw), gw = may_go_onto(fw, fu);
+    if (!gu && !gw) {
         x[0] = x[1] = x[2] = 0; /* no collapse: w stays where it is */
         return INFINITY;
     }
@@ -199,14 +231,14 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
     const double back[3] = {-d[0], -d[1], -d[2]};
     mr_quadric_shift(&qu, back);
     mr_quadric_add(&qu, &qw);
-    if ((fu & pin) && !(fw & pin)) {
+    if (!gu) { /* w goes onto u */
         x[0] = d[0];
         x[1] = d[1];
         x[2] = d[2];
-    } else if ((fw & pin) && !(fu & pin)) {
+    } else if (!gw) { /* u goes onto w */
         x[0] = x[1] = x[2] = 0;
     } else {
-        /* two seam (not locked) ends: stay on the seam's edge */
+        /* two ends on one boundary or seam: stay on its edge */
         const double zero[3] = {0, 0, 0};
         mr_quadric_segment_optimum(&qu, zero, d, x);
     }
@@ -219,11 +251,7 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
 static double half_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
 {
     const mr_collapse_mesh *m = &s->m;
-    const uint8_t fu = m->flags[u], fw = m->flags[w];
-    if (fu & MR_VF_LOCKED)
-        return INFINITY;
-    const uint8_t keep = MR_VF_BOUNDARY | MR_VF_SEAM;
-    if ((fu & keep) & ~(fw & keep))
+    if (!may_go_onto(m->flags[u], m->flags[w]))
         return INFINITY;
     mr_quadric qu, qw;
     load_quadric(s, u, &qu);
@@ -324,13 +352,12 @@ static double plan(const mr_simplifier *s, uint32_t u, uint32_t w, uint32_t *r, 
     }
     double x[3];
     double c = full_cost(s, u, w, x);
-    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
     double pw[3];
     mr_collapse_load(m, w, pw);
     target[0] = pw[0] + x[0];
     target[1] = pw[1] + x[1];
     target[2] = pw[2] + x[2];
-    if ((m->flags[u] & pin) && !(m->flags[w] & pin)) {
+    if (!may_go_onto(m->flags[u], m->flags[w]) && may_go_onto(m->flags[w], m->flags[u])) {
         *r = w;
         *k = u;
         mr_collapse_load(m, u, target); /* exactly u's position */
@@ -466,12 +493,13 @@ static double plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t
                         uint32_t *k, double target[3])
 {
     const mr_collapse_mesh *m = &s->m;
-    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
-    const bool pa = (m->flags[a] & pin) != 0, pb = (m->flags[b] & pin) != 0;
+    /* the end that may not go stays; else the larger id goes */
+    const bool ga = may_go_onto(m->flags[a], m->flags[b]),
+               gb = may_go_onto(m->flags[b], m->flags[a]);
     uint32_t rr, kk;
-    if (pa != pb) {
-        kk = pa ? a : b;
-        rr = pa ? b : a;
+    if (ga != gb) {
+        kk = ga ? b : a;
+        rr = ga ? a : b;
     } else {
         kk = a < b ? a : b;
         rr = a < b ? b : a;
@@ -585,7 +613,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
             plan_one(s, a[i], b[i], i, cost, r, k, target);
         return;
     }
-    const uint8_t pin = MR_VF_LOCKED | s->pin_flags;
+    const uint8_t pin = PINNING;
     float in[FREE_INPUTS * COST_BATCH];
     double out[COST_BATCH], x[3 * COST_BATCH];
     uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];

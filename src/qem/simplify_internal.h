@@ -31,8 +31,6 @@ struct mr_simplifier {
     uint8_t *mark;           /* batched: per vertex, changed in this pass */
     uint32_t *hist;          /* batched: histogram */
     uint64_t *best64;        /* batched: per vertex, its cheapest candidate */
-    uint8_t pin_flags;       /* flags that pin a full collapse's target to
-                                that end (MR_VF_SEAM with attributes) */
     double centre[3], scale, diagonal;
     double error_base;       /* bounding-box diagonal of all the input's
                                 vertices: relative errors are relative to it */
