@@ -160,6 +160,7 @@ static void test_bvh_vs_brute_force(void **state)
     mr_error err;
     assert_int_equal(mr_tri_bvh_build(&t, m.positions, m.indices, m.triangle_count, 0, &err),
                      MR_OK);
+    assert_int_equal(t.thin.prim_count, 0); /* no slivers: one box tree */
     uint64_t rng = 12345;
     uint32_t hint = MR_NO_HINT;
     for (int i = 0; i < 10000; i++) {
@@ -235,6 +236,208 @@ static void test_bvh_tiny_and_flat(void **state)
     }
     mr_bvh b;
     assert_int_equal(mr_bvh_build(&b, pos, pos, 0, 0, &err), MR_ERR_INVALID_ARGUMENT);
+}
+
+/* ---- fans of slivers: one vertex in every triangle ------------------------ */
+
+/*
+ * A polygon of `corners` corners on the ellipse x = cos t, y = 0.6 sin t
+ * (its radius scaled by 1 + 0.15 sin 5t + 0.05 sin(17t + 1) when
+ * `irregular`; z = crown sin 3t), fan-triangulated as an OBJ reader does a
+ * face `f 1 2 ... N`: triangles (0, i, i + 1), one vertex in all of them,
+ * long slivers. `shift` moves every vertex.
+ */
+#define FAN_PI 3.14159265358979323846
+
+static mr_mesh polygon_fan(size_t corners, int irregular, double crown, const double shift[3])
+{
+    mr_mesh m;
+    mr_mesh_init(&m);
+    m.vertex_count = corners;
+    m.triangle_count = corners - 2;
+    m.positions = malloc(3 * corners * sizeof *m.positions);
+    m.indices = malloc(3 * m.triangle_count * sizeof *m.indices);
+    assert_non_null(m.positions);
+    assert_non_null(m.indices);
+    for (size_t i = 0; i < corners; i++) {
+        const double t = 2 * FAN_PI * (double)i / (double)corners;
+        const double r = irregular ? 1 + 0.15 * sin(5 * t) + 0.05 * sin(17 * t + 1) : 1;
+        m.positions[3 * i] = (float)(r * cos(t) + shift[0]);
+        m.positions[3 * i + 1] = (float)(0.6 * r * sin(t) + shift[1]);
+        m.positions[3 * i + 2] = (float)(crown * sin(3 * t) + shift[2]);
+    }
+    for (size_t i = 0; i < m.triangle_count; i++) {
+        m.indices[3 * i] = 0;
+        m.indices[3 * i + 1] = (uint32_t)(i + 1);
+        m.indices[3 * i + 2] = (uint32_t)(i + 2);
+    }
+    return m;
+}
+
+static const double no_shift[3] = {0, 0, 0};
+
+/* A point of triangle t at barycentric (1 - r1, r1 (1 - r2), r1 r2). */
+static void point_on(const mr_mesh *m, size_t t, double r1, double r2, double p[3])
+{
+    for (int k = 0; k < 3; k++) {
+        const double a = m->positions[3 * m->indices[3 * t] + k];
+        const double b = m->positions[3 * m->indices[3 * t + 1] + k];
+        const double c = m->positions[3 * m->indices[3 * t + 2] + k];
+        p[k] = (1 - r1) * a + r1 * (1 - r2) * b + r1 * r2 * c;
+    }
+}
+
+/* The nearest triangle of slivers (and of a mix of slivers and ordinary
+ * triangles): bitwise the brute-force minimum, for points on, near and
+ * far from the surface and at the shared vertex, with and without hints. */
+static void check_nearest_exact(const mr_mesh *m, int queries, uint64_t seed)
+{
+    mr_tri_bvh t;
+    mr_error err;
+    assert_int_equal(mr_tri_bvh_build(&t, m->positions, m->indices, m->triangle_count, 0, &err),
+                     MR_OK);
+    /* the slivers have their tree of oriented boxes */
+    assert_true(t.thin.prim_count > m->triangle_count / 2);
+    uint64_t rng = seed;
+    uint32_t hint = MR_NO_HINT;
+    for (int i = 0; i < queries; i++) {
+        double p[3];
+        const size_t tri = (size_t)(test_random(&rng) * (double)m->triangle_count);
+        point_on(m, tri, sqrt(test_random(&rng)), test_random(&rng), p);
+        switch (i % 5) {
+        case 1: /* just off the surface */
+            for (int k = 0; k < 3; k++)
+                p[k] += 1e-3 * (2 * test_random(&rng) - 1);
+            break;
+        case 2: /* anywhere around it */
+            random_point(&rng, p, 1.6);
+            break;
+        case 3: /* the shared vertex, or near it */
+            for (int k = 0; k < 3; k++)
+                p[k] = m->positions[k] + (i % 10 == 3 ? 0 : 1e-4 * (2 * test_random(&rng) - 1));
+            break;
+        default: /* on the surface */
+            break;
+        }
+        uint32_t got;
+        const double d = mr_tri_bvh_nearest(&t, p, i % 3 ? hint : MR_NO_HINT, &got, NULL);
+        const double want = brute_triangle(m, p);
+        if (!(d == want)) {
+            print_error("query %d (%.17g %.17g %.17g): %.17g, brute force %.17g\n", i, p[0],
+                        p[1], p[2], d, want);
+            fail();
+        }
+        assert_true(got < m->triangle_count);
+        double v[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                v[k][j] = m->positions[3 * m->indices[3 * got + k] + j];
+        assert_true(mr_point_triangle_dist2(p, v[0], v[1], v[2], NULL) == d);
+        hint = got;
+    }
+    mr_tri_bvh_free(&t);
+}
+
+static void test_fan_nearest_exact(void **state)
+{
+    (void)state;
+    mr_mesh flat = polygon_fan(20000, 0, 0, no_shift);
+    check_nearest_exact(&flat, 400, 1);
+    mr_mesh_free(&flat);
+    mr_mesh crown = polygon_fan(20000, 0, 0.2, no_shift);
+    check_nearest_exact(&crown, 400, 2);
+    mr_mesh_free(&crown);
+    mr_mesh irregular = polygon_fan(20000, 1, 0, no_shift);
+    check_nearest_exact(&irregular, 400, 3);
+    mr_mesh_free(&irregular);
+
+    /* Slivers and ordinary triangles in one mesh: a torus around a fan. */
+    mr_mesh torus = generated(MR_GEN_TORUS, 4000, 5);
+    mr_mesh fan = polygon_fan(20000, 0, 0.1, no_shift);
+    mr_mesh mix;
+    mr_mesh_init(&mix);
+    mix.vertex_count = torus.vertex_count + fan.vertex_count;
+    mix.triangle_count = torus.triangle_count + fan.triangle_count;
+    mix.positions = malloc(3 * mix.vertex_count * sizeof *mix.positions);
+    mix.indices = malloc(3 * mix.triangle_count * sizeof *mix.indices);
+    memcpy(mix.positions, fan.positions, 3 * fan.vertex_count * sizeof *mix.positions);
+    for (size_t i = 0; i < 3 * torus.vertex_count; i++)
+        mix.positions[3 * fan.vertex_count + i] = 1.5f * torus.positions[i];
+    memcpy(mix.indices, fan.indices, 3 * fan.triangle_count * sizeof *mix.indices);
+    for (size_t i = 0; i < 3 * torus.triangle_count; i++)
+        mix.indices[3 * fan.triangle_count + i] = torus.indices[i] + (uint32_t)fan.vertex_count;
+    check_nearest_exact(&mix, 600, 4);
+    mr_mesh_free(&mix);
+    mr_mesh_free(&fan);
+    mr_mesh_free(&torus);
+}
+
+/* A face of 100,000 corners, as `meshreduce compare poly.obj ...` reads it:
+ * exact distances to itself, to a copy lifted off its plane and to one
+ * moved within it, the same at every thread count. (Before the hierarchy
+ * had a tree of oriented boxes for slivers, this took minutes.) */
+static void test_fan_compare(void **state)
+{
+    (void)state;
+    const size_t n = 100000;
+    mr_mesh fan = polygon_fan(n, 0, 0, no_shift);
+    const float dz = 1e-3f;
+    mr_mesh lifted = polygon_fan(n, 0, 0, (double[3]){0, 0, dz});
+    const double diag = sqrt(4 + 1.2 * 1.2); /* the box is [-1, 1] x [-0.6, 0.6] x 0 */
+
+    mr_compare_result r = compare_meshes(&fan, &fan, 200000, 0);
+    assert_near(r.diagonal, diag, 1e-6);
+    assert_true(r.hausdorff < 1e-9 * diag);
+    assert_true(r.rms < 1e-10 * diag);
+    assert_true(r.modified_hausdorff == 0);
+
+    /* Every point is exactly dz above or below the other surface. */
+    r = compare_meshes(&fan, &lifted, 200000, 0);
+    assert_near(r.hausdorff, dz, 1e-12);
+    assert_near(r.ref_to_test_rms, dz, 1e-12);
+    assert_near(r.test_to_ref_rms, dz, 1e-12);
+    assert_near(r.mean, dz, 1e-12);
+    assert_near(r.modified_hausdorff, dz, 1e-15);
+    mr_compare_result r1 = compare_meshes(&fan, &lifted, 200000, 1);
+    assert_memory_equal(&r, &r1, sizeof r);
+
+    /* Moved by dx along the long axis: the left end (a vertex) is dx from
+     * the moved ellipse, nothing is farther, up to the polygon's chords. */
+    const double dx = 0.01;
+    mr_mesh moved = polygon_fan(n, 0, 0, (double[3]){dx, 0, 0});
+    r = compare_meshes(&fan, &moved, 50000, 0);
+    assert_near(r.ref_to_test_max, dx, 1e-6);
+    assert_near(r.test_to_ref_max, dx, 1e-6);
+    assert_true(r.rms > 0 && r.rms < dx);
+    mr_mesh_free(&moved);
+    mr_mesh_free(&lifted);
+    mr_mesh_free(&fan);
+}
+
+/* A point on a needle triangle (angle 3e-5 at its first corner) is at
+ * distance 0 from it to rounding, not 1e-7 (the barycentric formula's
+ * cancellation), in every corner order. */
+static void test_point_triangle_needle(void **state)
+{
+    (void)state;
+    const double t = 3e-5;
+    const double a[3] = {1, 0, 0}, b[3] = {-1, 0, 0}, c[3] = {cos(FAN_PI - t), sin(FAN_PI - t), 0};
+    uint64_t rng = 9;
+    for (int i = 0; i < 2000; i++) {
+        const double r1 = sqrt(test_random(&rng)), r2 = test_random(&rng);
+        double p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = (1 - r1) * a[k] + r1 * (1 - r2) * b[k] + r1 * r2 * c[k];
+        assert_true(sqrt(mr_point_triangle_dist2(p, a, b, c, NULL)) < 1e-11);
+        /* the small angle elsewhere costs the general formula 1e-16 / sin */
+        assert_true(sqrt(mr_point_triangle_dist2(p, b, c, a, NULL)) < 1e-10);
+        assert_true(sqrt(mr_point_triangle_dist2(p, c, a, b, NULL)) < 1e-10);
+        /* above the plane: the height, and the foot as the closest point */
+        double up[3] = {p[0], p[1], 0.5}, q[3];
+        assert_near(mr_point_triangle_dist2(up, a, b, c, q), 0.25, 1e-12);
+        assert_near(q[2], 0, 1e-12);
+        assert_near(q[0], p[0], 1e-11);
+    }
 }
 
 /* ---- mr_compare ------------------------------------------------------------- */
@@ -552,6 +755,9 @@ int main(void)
         cmocka_unit_test(test_point_triangle_degenerate),
         cmocka_unit_test(test_bvh_vs_brute_force),
         cmocka_unit_test(test_bvh_tiny_and_flat),
+        cmocka_unit_test(test_point_triangle_needle),
+        cmocka_unit_test(test_fan_nearest_exact),
+        cmocka_unit_test(test_fan_compare),
         cmocka_unit_test(test_parallel_planes),
         cmocka_unit_test(test_self_compare),
         cmocka_unit_test(test_concentric_spheres),

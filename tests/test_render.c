@@ -343,6 +343,263 @@ static void test_surface_distances(void **state)
     tu_assert_contains(err.message, "vertex 9");
 }
 
+/* ---- fans of slivers ------------------------------------------------------------- */
+
+#define FAN_PI 3.14159265358979323846
+
+/*
+ * The polygon of `corners` corners on the ellipse (cos t, 0.6 sin t, dz),
+ * triangulated as the OBJ reader does a face `f 1 2 ... N` (the fan (0, i,
+ * i + 1): one vertex in every triangle, long slivers) or, with `pinwheel`,
+ * around an extra centre vertex (the last one).
+ */
+static mr_mesh polygon(size_t corners, int pinwheel, float dz)
+{
+    mr_mesh m;
+    mr_mesh_init(&m);
+    m.vertex_count = corners + (pinwheel ? 1 : 0);
+    m.triangle_count = pinwheel ? corners : corners - 2;
+    m.positions = malloc(3 * m.vertex_count * sizeof *m.positions);
+    m.indices = malloc(3 * m.triangle_count * sizeof *m.indices);
+    assert_non_null(m.positions);
+    assert_non_null(m.indices);
+    for (size_t i = 0; i < corners; i++) {
+        const double t = 2 * FAN_PI * (double)i / (double)corners;
+        m.positions[3 * i] = (float)cos(t);
+        m.positions[3 * i + 1] = (float)(0.6 * sin(t));
+        m.positions[3 * i + 2] = dz;
+    }
+    if (pinwheel) {
+        float *c = m.positions + 3 * corners;
+        c[0] = c[1] = 0;
+        c[2] = dz;
+    }
+    for (size_t i = 0; i < m.triangle_count; i++) {
+        uint32_t *t = m.indices + 3 * i;
+        t[0] = pinwheel ? (uint32_t)corners : 0;
+        t[1] = (uint32_t)(pinwheel ? i : i + 1);
+        t[2] = (uint32_t)(pinwheel ? (i + 1) % corners : i + 2);
+    }
+    return m;
+}
+
+/* A 100,000-corner polygon (it took a minute when every sliver scanned its
+ * whole bounding box): its pixels are the ellipse's, and exactly those of
+ * another triangulation of the same polygon, as a triangulation cannot
+ * change which samples a polygon covers (shared edges give each sample to
+ * one side, the boundary edges are the same). */
+static void test_fan_render(void **state)
+{
+    (void)state;
+    const size_t n = 100000;
+    mr_mesh fan = polygon(n, 0, 0), wheel = polygon(n, 1, 0);
+    mr_render_options o;
+    front_options(&o, 300);
+    o.height = 200;
+    for (int k = 1; k <= 3; k += 2) {
+        o.supersample = k;
+        uint8_t *a = render(fan.positions, fan.vertex_count, fan.indices, fan.triangle_count, &o);
+        uint8_t *b = render(wheel.positions, wheel.vertex_count, wheel.indices,
+                            wheel.triangle_count, &o);
+        assert_memory_equal(a, b, 300 * 200 * 4);
+        /* Framed without margin: 150 pixels per unit (the ellipse is 2 x
+         * 1.2 units in 300 x 200 pixels), area pi 0.6 150^2 pixels. */
+        const double want = FAN_PI * 0.6 * 150 * 150;
+        const size_t got = count_not(a, 300, 200, 0xffffff);
+        assert_true(fabs((double)got - want) < 0.01 * want);
+        assert_int_equal(pixel(a, 300, 150, 100), o.color);
+        assert_int_equal(pixel(a, 300, 2, 2), 0xffffff);
+        free(a);
+        free(b);
+    }
+    /* The wireframe: every sample is within a sliver's width of an edge. */
+    o.wire = 1;
+    uint8_t *w = render(fan.positions, fan.vertex_count, fan.indices, fan.triangle_count, &o);
+    assert_int_equal(pixel(w, 300, 150, 100), o.wire_color);
+    assert_int_equal(pixel(w, 300, 2, 2), 0xffffff);
+    free(w);
+    mr_mesh_free(&fan);
+    mr_mesh_free(&wheel);
+}
+
+/* Wide triangles walk the exact span of each row, small ones scan their
+ * box: the same samples and depths either way. A square as 2 triangles and
+ * as 64 x 64 x 2 (their corners on the sample grid, so the outline is the
+ * same), behind a triangle that crosses it, render identically. */
+static void test_span_matches_box(void **state)
+{
+    (void)state;
+    const int g = 64;
+    const size_t nv = (size_t)(g + 1) * (g + 1) + 3, nt = 2 * (size_t)g * g + 1;
+    float *pos = malloc(3 * nv * sizeof *pos);
+    uint32_t *fine = malloc(3 * nt * sizeof *fine);
+    float *heat = malloc(nt * sizeof *heat);
+    for (int y = 0; y <= g; y++)
+        for (int x = 0; x <= g; x++) {
+            float *p = pos + 3 * ((size_t)y * (g + 1) + (size_t)x);
+            p[0] = (float)x / g;
+            p[1] = (float)y / g;
+            p[2] = 0;
+        }
+    const float front[9] = {0.1f, 0.23f, 0.5f, 0.93f, 0.41f, 0.5f, 0.27f, 0.97f, 0.5f};
+    memcpy(pos + 3 * (nv - 3), front, sizeof front);
+    size_t k = 0;
+    for (int y = 0; y < g; y++)
+        for (int x = 0; x < g; x++) {
+            const uint32_t i = (uint32_t)(y * (g + 1) + x);
+            const uint32_t t[6] = {i, i + 1, i + g + 2, i, i + g + 2, i + g + 1};
+            memcpy(fine + 3 * k, t, sizeof t);
+            k += 2;
+        }
+    const uint32_t last[3] = {(uint32_t)nv - 3, (uint32_t)nv - 2, (uint32_t)nv - 1};
+    memcpy(fine + 3 * k, last, sizeof last);
+    const uint32_t c00 = 0, c10 = (uint32_t)g, c11 = (uint32_t)((g + 1) * (g + 1) - 1),
+                   c01 = (uint32_t)(g * (g + 1));
+    const uint32_t coarse[9] = {c00, c10, c11, c00, c11, c01, last[0], last[1], last[2]};
+    for (size_t i = 0; i < nt; i++)
+        heat[i] = i + 1 < nt ? 0.0f : 1.0f;
+    const float coarse_heat[3] = {0, 0, 1};
+    mr_render_options o;
+    front_options(&o, 128);
+    o.height = 96;
+    o.scalar_min = 0;
+    o.scalar_max = 1;
+    for (int ss = 1; ss <= 3; ss++) {
+        o.supersample = ss;
+        o.face_scalar = heat;
+        uint8_t *a = render(pos, nv, fine, nt, &o);
+        o.face_scalar = coarse_heat;
+        uint8_t *b = render(pos, nv, coarse, 3, &o);
+        assert_memory_equal(a, b, 128 * 96 * 4);
+        free(a);
+        free(b);
+    }
+    free(pos);
+    free(fine);
+    free(heat);
+}
+
+/* The samples a triangle covers, independently of the rasterizer: with the
+ * camera framed on the unit box from the front (no margin, 1 sample a
+ * pixel), corner x maps to w / 2 + s (x - 0.5), y to h / 2 - s (y - 0.5),
+ * s = min(w, h), rounded to 1/256 sample; a sample centre (i + 1/2, j +
+ * 1/2) strictly inside counts in *inside, one exactly on an edge (which
+ * the tie rule gives to one side or none) in *edge. */
+static void expected_coverage(const float v[9], int w, int h, size_t *inside, size_t *edge)
+{
+    const double s = w < h ? w : h;
+    int64_t x[3], y[3];
+    for (int k = 0; k < 3; k++) {
+        x[k] = (int64_t)lrint((0.5 * w + s * ((double)v[3 * k] - 0.5)) * 256);
+        y[k] = (int64_t)lrint((0.5 * h - s * ((double)v[3 * k + 1] - 0.5)) * 256);
+    }
+    *inside = *edge = 0;
+    for (int j = 0; j < h; j++)
+        for (int i = 0; i < w; i++) {
+            const int64_t px = (int64_t)i * 256 + 128, py = (int64_t)j * 256 + 128;
+            int pos = 0, neg = 0, zero = 0;
+            for (int k = 0; k < 3; k++) {
+                const int a = k, b = (k + 1) % 3;
+                const int64_t o = (x[b] - x[a]) * (py - y[a]) - (y[b] - y[a]) * (px - x[a]);
+                pos += o > 0;
+                neg += o < 0;
+                zero += o == 0;
+            }
+            if (zero == 0 && (pos == 3 || neg == 3))
+                (*inside)++;
+            else if (zero > 0 && (pos == 0 || neg == 0) && zero < 3)
+                (*edge)++;
+        }
+}
+
+/* Random triangles one at a time, wide and narrow, slivers in every
+ * direction, some reaching out of the image: each covers the samples
+ * inside it, plus some of those exactly on its edges, and no others. */
+static void test_raster_exact_coverage(void **state)
+{
+    (void)state;
+    const int w = 160, h = 120;
+    mr_render_options o;
+    front_options(&o, w);
+    o.height = h;
+    o.threads = 1; /* 400 small images: threads would only wait on each other */
+    o.use_bounds = 1;
+    for (int k = 0; k < 3; k++) {
+        o.bounds_lo[k] = 0;
+        o.bounds_hi[k] = 1;
+    }
+    const uint32_t idx[3] = {0, 1, 2};
+    uint64_t rng = 77;
+    for (int n = 0; n < 400; n++) {
+        float v[9];
+        for (int k = 0; k < 3; k++) {
+            rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+            v[3 * k] = (float)((rng >> 11) * 0x1p-53 * 1.2 - 0.1);
+            rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+            v[3 * k + 1] = (float)((rng >> 11) * 0x1p-53 * 1.2 - 0.1);
+            v[3 * k + 2] = 0.5f;
+        }
+        if (n % 4 == 1) { /* a sliver: the third corner close to the first */
+            v[6] = v[0] + (v[3] - v[0]) * 0.5f + 0.003f * (float)(n % 7);
+            v[7] = v[1] + (v[4] - v[1]) * 0.5f - 0.002f * (float)(n % 5);
+        } else if (n % 4 == 2) { /* small */
+            for (int k = 3; k < 9; k += 3) {
+                v[k] = v[0] + 0.03f * (v[k] - v[0]);
+                v[k + 1] = v[1] + 0.03f * (v[k + 1] - v[1]);
+            }
+        }
+        uint8_t *img = render(v, 3, idx, 1, &o);
+        const size_t got = count_not(img, w, h, 0xffffff);
+        size_t inside, edge;
+        expected_coverage(v, w, h, &inside, &edge);
+        if (!(got >= inside && got <= inside + edge)) {
+            print_error("triangle %d: %zu pixels, want %zu inside + up to %zu on edges\n", n,
+                        got, inside, edge);
+            fail();
+        }
+        free(img);
+    }
+}
+
+/* Heat values of a fan against a copy lifted off its plane: every face is
+ * dz away; a sheet of both. */
+static void test_fan_heat_and_sheet(void **state)
+{
+    (void)state;
+    const size_t n = 100000;
+    const float dz = 1e-3f;
+    mr_mesh fan = polygon(n, 0, 0), lifted = polygon(n, 0, dz);
+    float *d = malloc(fan.triangle_count * sizeof *d);
+    double mx = 0;
+    mr_error err;
+    assert_int_equal(mr_surface_distances(lifted.positions, lifted.vertex_count, lifted.indices,
+                                          lifted.triangle_count, fan.positions,
+                                          fan.vertex_count, fan.indices, fan.triangle_count, 0,
+                                          d, &mx, &err),
+                     MR_OK);
+    for (size_t i = 0; i < fan.triangle_count; i++)
+        assert_float_equal(d[i], dz, 1e-9);
+    assert_float_equal(mx, dz, 1e-9);
+
+    mr_sheet_panel panels[2] = {
+        {lifted.positions, lifted.vertex_count, lifted.indices, lifted.triangle_count, "lifted",
+         NULL, NULL},
+        {fan.positions, fan.vertex_count, fan.indices, fan.triangle_count, "fan", d, NULL}};
+    mr_sheet_options so;
+    mr_sheet_options_default(&so);
+    so.render.width = 160;
+    so.render.height = 120;
+    so.scalar_max = 2 * dz;
+    uint8_t *img;
+    int w, h;
+    assert_int_equal(mr_render_sheet(panels, 2, &so, &img, &w, &h, &err), MR_OK);
+    assert_true(w > 2 * 160 && h > 120);
+    free(img);
+    free(d);
+    mr_mesh_free(&fan);
+    mr_mesh_free(&lifted);
+}
+
 /* ---- text and sheets ------------------------------------------------------------ */
 
 static void test_text(void **state)
@@ -617,6 +874,10 @@ int main(void)
         cmocka_unit_test(test_colormap_endpoints),
         cmocka_unit_test(test_heat_render_endpoints),
         cmocka_unit_test(test_surface_distances),
+        cmocka_unit_test(test_fan_render),
+        cmocka_unit_test(test_span_matches_box),
+        cmocka_unit_test(test_raster_exact_coverage),
+        cmocka_unit_test(test_fan_heat_and_sheet),
         cmocka_unit_test(test_text),
         cmocka_unit_test(test_sheet_same_camera),
         cmocka_unit_test(test_bad_render_input),

@@ -18,7 +18,10 @@
  * (median split where the heuristic finds nothing), subtrees in parallel
  * as OpenMP tasks, and then laid out depth-first. Its shape depends only
  * on the input, never on the thread count, so every query returns the
- * same bits for every thread count.
+ * same bits for every thread count. Long thin triangles, when there are
+ * enough of them to matter, get a hierarchy of oriented boxes of their own
+ * (mr_tri_bvh below): a fan of N slivers around one vertex costs a query
+ * about log N node visits rather than N triangle tests.
  */
 #ifndef MR_DISTANCE_H
 #define MR_DISTANCE_H
@@ -34,7 +37,10 @@
  * triangle (coincident vertices, or so thin that the face region is
  * numerically meaningless: sine of the angle at a below 1e-10) is treated
  * as the union of its three edges, which is then within 1e-10 of its
- * longest edge length of the exact answer. `closest` may be NULL.
+ * longest edge length of the exact answer. With the angle at a below 1e-3
+ * (a needle or a cap) the face region's point is p's projection onto the
+ * plane, not the barycentric formula, whose cancellation would be off by
+ * about 1e-16 / sin^2 of the triangle's size. `closest` may be NULL.
  */
 double mr_point_triangle_dist2(const double p[3], const double a[3], const double b[3],
                                const double c[3], double closest[3]);
@@ -83,17 +89,33 @@ typedef struct mr_tri_rec {
     uint32_t id;      /* the triangle's id in the input */
 } mr_tri_rec;
 
+/*
+ * Two hierarchies over one mesh. A long thin triangle's axis-aligned box
+ * can be far larger than the triangle, and where many such boxes overlap
+ * (a fan of slivers around one vertex) a query near the surface is inside
+ * most of them. So when slivers make up much of the boxes' area (see
+ * distance.c), they get a tree of oriented boxes instead: each node is the
+ * intersection of three slabs along its own orthonormal frame, fitted to
+ * its triangles. The records of both trees are in `tri`: the box tree's
+ * first, then the thin tree's; a query searches both and gets the same
+ * exact distance either way. Ordinary meshes have no thin tree at all.
+ */
 typedef struct mr_tri_bvh {
-    mr_bvh bvh;
+    mr_bvh bvh;       /* axis-aligned, records tri[0 .. bvh.prim_count) */
+    mr_bvh thin;      /* oriented, records tri[bvh.prim_count ..); nodes'
+                         lo/hi are slab bounds along their axes */
+    double *thin_axes; /* 9 per thin node: its three unit axes, row by row */
+    double thin_reach; /* largest |x|_1 of a thin triangle's corner */
     mr_tri_rec *tri;  /* triangle_count, in hierarchy order */
-    uint32_t *slot;   /* triangle id -> hierarchy slot (for hints) */
+    uint32_t *slot;   /* triangle id -> record slot (for hints) */
     size_t triangle_count;
 } mr_tri_bvh;
 
 /*
  * Hierarchy over the triangles of a mesh (packed float positions; the
  * indices must be in range). Degenerate triangles are kept: their points
- * are part of the surface too. triangle_count must be at least 1.
+ * are part of the surface too. triangle_count must be at least 1. The
+ * shape depends only on the input, never on `threads`.
  */
 mr_status mr_tri_bvh_build(mr_tri_bvh *t, const float *positions, const uint32_t *indices,
                            size_t triangle_count, int threads, mr_error *err);

@@ -22,7 +22,11 @@
  *
  * Triangles are rasterized with exact integer edge functions (64-bit) at
  * sample centres, with a tie rule that gives a sample on an edge shared by
- * two triangles to exactly one of them: no cracks, no double hits. Shading
+ * two triangles to exactly one of them: no cracks, no double hits. A small
+ * triangle tests every sample of its bounding box; a wide one walks the
+ * exact first and last sample of each row (integer floors stepped row by
+ * row), so a long sliver costs its height and its samples, not its box.
+ * Both cover the same samples at the same depths. Shading
  * is deferred: the raster loop writes only depth and id, and the colour of
  * a sample is computed once, from the id (the face's headlight Lambert
  * term, the heat colour, the wireframe distance to the nearest edge).
@@ -450,6 +454,175 @@ static mr_status bin_primitives(ctx *c, int nthreads, mr_error *err)
 
 /* ---- rasterization of one band ------------------------------------------- */
 
+/* Triangles at most this many samples wide scan their bounding box row by
+ * row (a few cheap tests per sample); wider ones walk the exact span of
+ * each row, so a long sliver costs its height plus its covered samples,
+ * never its bounding box. Both paths cover the same samples with the same
+ * depths: the choice changes only the speed. */
+#define SPAN_MIN_WIDTH 16
+
+/* The row loop below is instantiated for each side of the pair of walks. */
+#if defined(__GNUC__)
+#define MR_RASTER_INLINE __attribute__((always_inline))
+#else
+#define MR_RASTER_INLINE
+#endif
+
+/* floor(n / d) = q with remainder r (0 <= r < d), for d > 0, kept exact
+ * while n grows by a fixed step each row: the quotient and remainder of
+ * the step are added and one carry fixes the remainder. */
+typedef struct floor_walk {
+    int64_t q, r, d, sq, sr;
+} floor_walk;
+
+/* A walk whose bound never binds: q stays far beyond any sample index. */
+#define WALK_NONE ((floor_walk){INT64_MAX / 4, 0, 1, 0, 0})
+
+static inline void floor_div(int64_t n, int64_t d, int64_t *q, int64_t *r)
+{
+    int64_t qq = n / d, rr = n % d;
+    if (rr < 0) {
+        rr += d;
+        qq--;
+    }
+    *q = qq;
+    *r = rr;
+}
+
+static inline floor_walk floor_walk_start(int64_t n, int64_t d, int64_t step)
+{
+    floor_walk w;
+    w.d = d;
+    floor_div(n, d, &w.q, &w.r);
+    floor_div(step, d, &w.sq, &w.sr);
+    return w;
+}
+
+static inline void floor_walk_next(floor_walk *w)
+{
+    w->q += w->sq;
+    w->r += w->sr;
+    const bool carry = w->r >= w->d;
+    w->r -= carry ? w->d : 0;
+    w->q += carry;
+}
+
+/* Depth test and write of samples [xa, xb] of one row; w1, w2 are the
+ * (biased) edge weights of v1 and v2 at xa. */
+static inline void raster_run(const tri_setup *t, uint32_t id, int xa, int xb, int64_t w1,
+                              int64_t w2, int64_t s1, int64_t s2, double z0, double dz1,
+                              double dz2, float *drow, uint32_t *irow)
+{
+    for (int x = xa; x <= xb; x++, w1 += s1, w2 += s2) {
+        /* Unbiased weights of v1 and v2 for the depth. */
+        float z = (float)(z0 + (double)(w1 - t->e[1].bias) * dz1 +
+                          (double)(w2 - t->e[2].bias) * dz2);
+        if (z > drow[x]) {
+            drow[x] = z;
+            irow[x] = id;
+        }
+    }
+}
+
+/* The rows of raster_triangle_spans: `pair` are the two walks of one
+ * side (left when pair_left), `one` the walk of the other. */
+static inline MR_RASTER_INLINE void
+span_rows(const tri_setup *t, uint32_t id, int y0, int y1, int r0, int sw,
+          const int64_t alpha[3], const int64_t beta[3], const floor_walk pair[2],
+          floor_walk one, const int pair_left, double z0, double dz1, double dz2,
+          float *depth, uint32_t *ids)
+{
+    floor_walk p0 = pair[0], p1 = pair[1];
+    const int64_t s1 = alpha[1], s2 = alpha[2];
+    const int64_t db1 = t->e[1].b * SUB_ONE, db2 = t->e[2].b * SUB_ONE;
+    int64_t b1 = beta[1], b2 = beta[2];
+    for (int y = y0; y <= y1; y++, b1 += db1, b2 += db2) {
+        int64_t lo, hi;
+        if (pair_left) {
+            lo = -p0.q > -p1.q ? -p0.q : -p1.q;
+            hi = one.q;
+        } else {
+            lo = -one.q;
+            hi = p0.q < p1.q ? p0.q : p1.q;
+        }
+        lo = lo > t->x0 ? lo : t->x0;
+        hi = hi < t->x1 ? hi : t->x1;
+        floor_walk_next(&p0);
+        floor_walk_next(&p1);
+        floor_walk_next(&one);
+        if (lo > hi)
+            continue;
+        const int xa = (int)lo;
+        const size_t row = (size_t)(y - r0) * (size_t)sw;
+        raster_run(t, id, xa, (int)hi, s1 * xa + b1, s2 * xa + b2, s1, s2, z0, dz1, dz2,
+                   depth + row, ids + row);
+    }
+}
+
+/*
+ * Edge i at sample (x, y) is w_i = alpha_i x + beta_i(y), alpha_i = A_i
+ * SUB_ONE, beta_i growing by B_i SUB_ONE per row; the sample is in the
+ * triangle when every w_i >= 0. An edge with alpha > 0 bounds the row from
+ * the left, x >= ceil(-beta / alpha) = -floor(beta / alpha); one with alpha
+ * < 0 from the right, x <= floor(beta / -alpha); both floors are walked
+ * exactly. The alphas sum to 0, so a triangle has one or two edges of each
+ * side, and at most one with alpha = 0 (a horizontal edge), which bounds
+ * the rows instead: beta(y) >= 0.
+ */
+static void raster_triangle_spans(const tri_setup *t, uint32_t id, int y0, int y1, int r0,
+                                  int sw, double z0, double dz1, double dz2, float *depth,
+                                  uint32_t *ids)
+{
+    /* A horizontal edge: beta(y0 + j) = beta0 + j step >= 0 holds for j >=
+     * -floor(beta0 / step) when step > 0, for j <= floor(beta0 / -step)
+     * when step < 0. */
+    for (int i = 0; i < 3; i++) {
+        const edge *e = &t->e[i];
+        if (e->a != 0)
+            continue;
+        const int64_t beta0 = e->b * ((int64_t)y0 * SUB_ONE + SUB_HALF) + e->c + e->bias;
+        const int64_t step = e->b * SUB_ONE;
+        int64_t q, r;
+        if (step > 0) {
+            floor_div(beta0, step, &q, &r);
+            if (-q > (int64_t)y1 - y0)
+                return;
+            if (-q > 0)
+                y0 += (int)-q;
+        } else if (step < 0) {
+            floor_div(beta0, -step, &q, &r);
+            if (q < 0)
+                return;
+            if (q < (int64_t)y1 - y0)
+                y1 = y0 + (int)q;
+        } else if (beta0 < 0) {
+            return;
+        }
+    }
+    floor_walk left[2] = {WALK_NONE, WALK_NONE}, right[2] = {WALK_NONE, WALK_NONE};
+    int nl = 0, nr = 0;
+    const int64_t py0 = (int64_t)y0 * SUB_ONE + SUB_HALF;
+    int64_t alpha[3], beta[3];
+    for (int i = 0; i < 3; i++) {
+        const edge *e = &t->e[i];
+        alpha[i] = e->a * SUB_ONE;
+        beta[i] = e->a * SUB_HALF + e->b * py0 + e->c + e->bias;
+        const int64_t step = e->b * SUB_ONE;
+        if (alpha[i] > 0 && nl < 2)
+            left[nl++] = floor_walk_start(beta[i], alpha[i], step);
+        else if (alpha[i] < 0 && nr < 2)
+            right[nr++] = floor_walk_start(beta[i], -alpha[i], step);
+    }
+    /* Two edges on one side, one on the other (or, with a horizontal edge,
+     * one each: the second walk is then WALK_NONE). */
+    if (nl == 2)
+        span_rows(t, id, y0, y1, r0, sw, alpha, beta, left, right[0], 1, z0, dz1, dz2, depth,
+                  ids);
+    else
+        span_rows(t, id, y0, y1, r0, sw, alpha, beta, right, left[0], 0, z0, dz1, dz2, depth,
+                  ids);
+}
+
 static void raster_triangle(const ctx *c, uint32_t id, int r0, int r1, float *depth,
                             uint32_t *ids)
 {
@@ -460,6 +633,10 @@ static void raster_triangle(const ctx *c, uint32_t id, int r0, int r1, float *de
     const double inv = 1.0 / (double)t.area;
     const double z0 = t.v[0].z, dz1 = ((double)t.v[1].z - z0) * inv,
                  dz2 = ((double)t.v[2].z - z0) * inv;
+    if (t.x1 - t.x0 >= SPAN_MIN_WIDTH) {
+        raster_triangle_spans(&t, id, y0, y1, r0, c->sw, z0, dz1, dz2, depth, ids);
+        return;
+    }
     const int64_t px0 = (int64_t)t.x0 * SUB_ONE + SUB_HALF;
     for (int y = y0; y <= y1; y++) {
         const int64_t py = (int64_t)y * SUB_ONE + SUB_HALF;
