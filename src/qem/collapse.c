@@ -409,10 +409,21 @@ static bool valid_large(const mr_collapse_mesh *m, uint32_t u, uint32_t v, const
             vy[nw++] = b;
         }
     }
-    /* (1) the link condition, as in mr_collapse_valid: u's neighbours
-     * (after u; before u too off an inner vertex) against v's, the
-     * opposite vertices left out of v's */
-    {
+    /* (1) the link condition: no neighbour of u but the opposite
+     * vertices is a neighbour of v. When one end has a short list, each
+     * of its neighbours is looked up in the mesh (the shorter of its and
+     * the other end's lists); else both neighbourhoods are sorted. */
+    if (no <= MR_COLLAPSE_MAX_DEGREE || nw <= MR_COLLAPSE_MAX_DEGREE) {
+        const bool from_u = no <= nw;
+        const uint32_t *xs = from_u ? ua : vx, *ys = from_u ? ub : vy;
+        const uint32_t other = from_u ? v : u, nn = from_u ? no : nw;
+        for (uint32_t i = 0; i < nn; i++)
+            for (int side = 0; side < 2; side++) {
+                const uint32_t x = side ? ys[i] : xs[i];
+                if (x != opp[0] && x != opp[1] && mr_collapse_edge_triangles(m, x, other))
+                    goto done;
+            }
+    } else {
         uint32_t *su = buf + 2 * ((size_t)nu + nv), *sv = su + 2 * (size_t)nu;
         size_t kn = 0, kv = 0;
         for (uint32_t i = 0; i < no; i++) {

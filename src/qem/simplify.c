@@ -478,6 +478,16 @@ static void update_around(mr_simplifier *s, uint32_t r, uint32_t k)
 static uint32_t he_twin(const mr_collapse_mesh *m, uint32_t h)
 {
     const uint32_t a = m->tris[h], b = he_dst(m, h), t = h / 3;
+    if (m->count[b] < m->count[a]) {
+        /* the shorter list: b's corner whose next vertex is a starts it */
+        const uint32_t *lb = mr_collapse_vertex_tris(m, b);
+        for (uint32_t i = 0, n = m->count[b]; i < n; i++) {
+            const uint32_t j = lb[i] % 3, base = lb[i] - j;
+            if (m->tris[base + mr_local_next(j)] == a && base != 3 * t)
+                return lb[i];
+        }
+        return NONE;
+    }
     const uint32_t *list = mr_collapse_vertex_tris(m, a);
     for (uint32_t i = 0, n = m->count[a]; i < n; i++) {
         const uint32_t j = list[i] % 3, base = list[i] - j, p = mr_local_prev(j);
@@ -702,6 +712,32 @@ static void edge_enqueue(mr_simplifier *s, uint32_t h, uint32_t tw)
         mr_heap_remove(&s->heap, rep);
 }
 
+static int u64_cmp(const void *pa, const void *pb)
+{
+    const uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+    return a < b ? -1 : a > b;
+}
+
+/* In keys sorted as (key << 32 | index), the last index with this key
+ * other than `skip` (as the pairwise scan finds the last), or NONE. */
+static uint32_t find_keyed(const uint64_t *keys, uint32_t n, uint32_t key, uint32_t skip)
+{
+    uint32_t lo = 0, hi = n;
+    const uint64_t want = (uint64_t)key << 32;
+    while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (keys[mid] < want)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    uint32_t found = NONE;
+    for (uint32_t i = lo; i < n && keys[i] >> 32 == key; i++)
+        if ((uint32_t)keys[i] != skip)
+            found = (uint32_t)keys[i];
+    return found;
+}
+
 /* Every edge at k anew: each inner edge is k's outgoing half-edge in one
  * triangle and incoming in another; a boundary edge has one of them. */
 static void edge_update_around(mr_simplifier *s, uint32_t k)
@@ -740,28 +776,44 @@ static void edge_update_around(mr_simplifier *s, uint32_t k)
         }
         return;
     }
+    /* A large fan: the same twins by sorting k's triangles by the vertex
+     * before k and by the one after it (O(n log n) instead of every
+     * pair). */
+    uint64_t *byprev = mr_alloc_array(2 * (size_t)n, sizeof *byprev);
+    if (!byprev) {
+        /* no memory: the edges at k requeued without their twins, which
+         * only queues an inner edge from both sides */
+        for (uint32_t i = 0; i < n; i++)
+            edge_enqueue(s, list[i], NONE);
+        return;
+    }
+    uint64_t *bynext = byprev + n;
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t j = list[i] % 3, *tri = m->tris + (list[i] - j);
+        byprev[i] = (uint64_t)tri[mr_local_prev(j)] << 32 | i;
+        bynext[i] = (uint64_t)tri[mr_local_next(j)] << 32 | i;
+    }
+    qsort(byprev, n, sizeof *byprev, u64_cmp);
+    qsort(bynext, n, sizeof *bynext, u64_cmp);
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t j = list[i] % 3, t = list[i] / 3;
         const uint32_t *tri = m->tris + 3 * (size_t)t;
         const uint32_t jn = mr_local_next(j), jp = mr_local_prev(j);
         const uint32_t x = tri[jn], p = tri[jp];
+        /* k -> x is twinned by the triangle whose vertex before k is x
+         * (its half-edge x -> k, from the corner before k's); p -> k by
+         * one whose vertex after k is p */
         uint32_t tw_out = NONE;
-        bool in_twinned = false;
-        for (uint32_t i2 = 0; i2 < n; i2++) {
-            if (i2 == i)
-                continue;
+        const uint32_t i2 = find_keyed(byprev, n, x, i);
+        if (i2 != NONE) {
             const uint32_t j2 = list[i2] % 3;
-            const uint32_t *o = m->tris + (list[i2] - j2);
-            const uint32_t j2n = j2 == 2 ? 0 : j2 + 1, j2p = j2 == 0 ? 2 : j2 - 1;
-            if (o[j2p] == x)
-                tw_out = list[i2] - j2 + j2p;
-            if (o[j2n] == p)
-                in_twinned = true;
+            tw_out = list[i2] - j2 + mr_local_prev(j2);
         }
         edge_enqueue(s, 3 * t + j, tw_out);
-        if (!in_twinned)
+        if (find_keyed(bynext, n, p, i) == NONE)
             edge_enqueue(s, 3 * t + jp, NONE);
     }
+    free(byprev);
 }
 
 /* Re-queue the edges of a BLOCKED vertex x that are out of the queue
