@@ -175,6 +175,28 @@ static const char strip[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 
                                 "vt 0.6 1\nvt 1 1\n"
                                 "f 1/1 2/2 5/6\nf 1/1 5/6 4/5\nf 2/3 3/4 6/8\nf 2/3 6/8 5/7\n";
 
+/* A triangle that repeats a vertex has no edges: it does not undo the
+ * join of a seam's copies it touches. */
+static void test_degenerate_triangle_keeps_seam(void **state)
+{
+    (void)state;
+    static const char extra[] = "f 2/2 2/2 5/6\n";
+    char text[sizeof strip + sizeof extra];
+    memcpy(text, strip, sizeof strip - 1);
+    memcpy(text + sizeof strip - 1, extra, sizeof extra);
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(tu_read_string(text, "strip.obj", &m, &err), MR_OK);
+    uint32_t point[16];
+    size_t split = 0;
+    assert_true(m.vertex_count <= 16);
+    assert_int_equal(mr_surface_points(m.positions, m.vertex_count, m.indices,
+                                       m.triangle_count, point, &split, NULL),
+                     MR_OK);
+    assert_int_equal(split, 2);
+    mr_mesh_free(&m);
+}
+
 /* Vertices are counted as surface points on both sides of the report: a
  * seam's copies count once in the input and in the output. */
 static void test_report_counts_points(void **state)
@@ -458,6 +480,7 @@ int main(void)
         cmocka_unit_test(test_all_degenerate),
         cmocka_unit_test(test_missed_target),
         cmocka_unit_test(test_report_counts_points),
+        cmocka_unit_test(test_degenerate_triangle_keeps_seam),
         cmocka_unit_test(test_info_and_convert_seams),
         cmocka_unit_test(test_prune_zero_target_and_locks),
         cmocka_unit_test(test_seams_borders_locks),

@@ -335,6 +335,24 @@ static void test_high_valence(void **state)
     mr_mesh_free(&out);
     mr_mesh_free(&m);
 
+    /* A missed target around a huge valence: the reason is found from
+     * the costs, in one pass (it used to test every edge's validity, each
+     * test as long as the apex's list). */
+    double_cone(20000, &m);
+    for (size_t i = 0; i < 20000; i++) /* only the upper cone: open, its rim locked */
+        memcpy(m.indices + 3 * i, m.indices + 6 * i, 12);
+    m.triangle_count = 20000;
+    m.vertex_count = 20001;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.5;
+    o.lock_border = 1;
+    o.max_normal_turn = 1 * MR_PI / 180;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+    assert_false(st.target_reached);
+    assert_int_equal(st.stop, MR_STOP_REFUSED);
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+
     /* An apex of valence 1,000 may collapse both ways (the validity test
      * past its stack arrays), and a collapse that would pinch is still
      * refused. */

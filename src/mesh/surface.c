@@ -233,6 +233,9 @@ mr_status mr_surface_points(const float *positions, size_t vertex_count,
             size_t n = 0;
             for (uint32_t c = cstart[m0]; c < cstart[m1]; c++) {
                 const uint32_t h = corners[c], j = h % 3, *tri = indices + (h - j);
+                const uint32_t p0 = point[tri[0]], p1 = point[tri[1]], p2 = point[tri[2]];
+                if (p0 == p1 || p1 == p2 || p0 == p2)
+                    continue; /* no edges: the simplifier and stats drop it */
                 fan[n].next = point[tri[mr_local_next(j)]];
                 fan[n].prev = point[tri[mr_local_prev(j)]];
                 n++;

@@ -177,7 +177,8 @@ static inline void free_cost_inputs(const mr_simplifier *s, uint32_t u, uint32_t
  * keeps w in place?
  *   locked:           never;
  *   on a boundary:    only onto the boundary (a boundary vertex, locked or
- *                     not; an inner edge between two boundary vertices is
+ *                     not, or a non-manifold one, where boundaries may
+ *                     meet; an inner edge between two boundary vertices is
  *                     refused by mr_collapse_valid), so it stays on its
  *                     polyline;
  *   on a seam (mr_mesh_simplify's attribute seams): only onto the seam;
@@ -192,8 +193,8 @@ static inline bool may_go_onto(uint8_t fu, uint8_t fw)
 {
     if (fu & MR_VF_LOCKED)
         return false;
-    if (fu & MR_VF_BOUNDARY)
-        return (fw & MR_VF_BOUNDARY) != 0;
+    if (fu & MR_VF_BOUNDARY) /* a non-manifold end may be where boundaries meet */
+        return (fw & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD)) != 0;
     if (fu & MR_VF_SEAM)
         return (fw & MR_VF_SEAM) != 0;
     return true;
@@ -1291,29 +1292,30 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
 }
 
 /*
- * Why the run stopped, when no count target was met: a look at every edge
- * left. A valid collapse that was not taken must cost more than the error
- * bound; an edge that may not move at all has locked (or two pinned) ends;
- * the rest are refused by the validity tests. Costs a pass over the
- * triangles with a validity test per edge, only when a target is missed.
+ * Why the run stopped, when no count target was met, from the costs of
+ * the edges left (no validity test: the strategies stop only once every
+ * collapse within the bound has been found invalid): one within reach but
+ * for the error bound means the bound stopped it; else one that may happen
+ * at all means the validity tests refused the rest; else every edge has
+ * locked (or two pinned) ends. One pass over the triangles, O(E), only
+ * when a target is missed.
  */
-static mr_simplify_stop stop_reason(mr_simplifier *s, const mr_simplify_goal *g)
+static mr_simplify_stop stop_reason(const mr_simplifier *s, const mr_simplify_goal *g)
 {
     if (mr_simplifier_reached(s, g))
         return MR_STOP_TARGET;
-    mr_collapse_mesh *m = &s->m;
+    const mr_collapse_mesh *m = &s->m;
     bool movable = false;
     for (size_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *tri = m->tris + 3 * t;
         if (tri[0] == NONE)
             continue;
         for (int j = 0; j < 3; j++) {
-            const uint32_t a = tri[j], b = tri[(j + 1) % 3];
-            double cost;
-            mr_collapse_clean(&s->m, a);
-            mr_collapse_clean(&s->m, b);
-            if (mr_simplifier_valid(s, a, b, &cost) ||
-                (s->half && mr_simplifier_valid(s, b, a, &cost)))
+            uint32_t r, k;
+            double target[3];
+            const double cost = mr_simplifier_plan_edge(s, tri[j], tri[(j + 1) % 3], &r, &k,
+                                                        target);
+            if (cost < INFINITY && cost > g->limit)
                 return MR_STOP_MAX_ERROR;
             movable |= cost < INFINITY;
         }
@@ -1408,7 +1410,9 @@ static size_t prune(mr_simplifier *s, double bound)
     }
     for (size_t v = 0; v < vc; v++)
         if (!(m->flags[v] & MR_VF_REMOVED) && tris[mr_uf_find(parent, (uint32_t)v)]) {
-            m->flags[v] |= MR_VF_REMOVED;
+            m->flags[v] = (uint8_t)((m->flags[v] & ~MR_VF_DIRTY) | MR_VF_REMOVED);
+            if (m->dead)
+                m->dead[v] = 0;
             m->count[v] = 0;
             m->live_vertices--;
         }
