@@ -86,14 +86,16 @@ void cli_json_string(FILE *f, const char *s);
     "  --big-endian     binary big-endian PLY\n"                                \
     "  --no-normals     drop vertex normals\n"                                  \
     "  --no-texcoords   drop texture coordinates\n"                             \
-    "  --no-colors      drop vertex colors\n"
+    "  --no-colors      drop vertex colors\n"                                  \
+    "  --format F       obj, ply, stl or xyz: the output's format when its name\n" \
+    "                   has no extension (-o /dev/stdout, a FIFO)\n"
 
 /* Match one output option at argv[*i]; returns true when it was one. */
 bool cli_output_option(int argc, char **argv, int *i, mr_write_options *w);
 
 /* Usage error unless the output path names a format (checked before any
  * work is done). */
-int cli_check_output_path(const char *cmd, const char *out);
+int cli_check_output_path(const char *cmd, const char *out, mr_format format);
 
 /* Format name for messages. */
 const char *cli_format_name(mr_format f);

@@ -237,11 +237,11 @@ bool cli_output_option(int argc, char **argv, int *i, mr_write_options *w)
     return true;
 }
 
-int cli_check_output_path(const char *cmd, const char *out)
+int cli_check_output_path(const char *cmd, const char *out, mr_format format)
 {
-    if (mr_format_from_path(out) == MR_FORMAT_AUTO)
+    if (format == MR_FORMAT_AUTO && mr_format_from_path(out) == MR_FORMAT_AUTO)
         return cli_usage_error(cmd, "cannot tell the output format of '%s' "
-                                    "(use .obj, .ply, .stl or .xyz)", out);
+                                    "(use .obj, .ply, .stl or .xyz, or --format)", out);
     return CLI_OK;
 }
 
@@ -267,6 +267,21 @@ int cli_io_option(cli_io *io, int argc, char **argv, int *i)
         }
         if (cli_output_option(argc, argv, i, &io->write))
             return CLI_OK;
+        if (cli_value(argc, argv, i, "--format", &v)) {
+            /* the output's format where its name has no extension:
+             * /dev/stdout, a FIFO */
+            static const struct { const char *name; mr_format f; } names[] = {
+                {"obj", MR_FORMAT_OBJ}, {"ply", MR_FORMAT_PLY}, {"stl", MR_FORMAT_STL},
+                {"xyz", MR_FORMAT_XYZ}};
+            io->write.format = MR_FORMAT_AUTO;
+            for (size_t k = 0; v && k < sizeof names / sizeof *names; k++)
+                if (!strcmp(v, names[k].name))
+                    io->write.format = names[k].f;
+            if (io->write.format == MR_FORMAT_AUTO)
+                return cli_usage_error(io->cmd, "--format is obj, ply, stl or xyz, got '%s'",
+                                       v ? v : "");
+            return CLI_OK;
+        }
     }
     if ((io->accepts & CLI_ACCEPT_OUTPUT) &&
         (cli_value(argc, argv, i, "-o", &v) || cli_value(argc, argv, i, "--output", &v))) {

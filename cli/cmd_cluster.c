@@ -151,7 +151,7 @@ static int run(int argc, char **argv)
     if (job.o.cell == 0 && job.cell_rel == 0 && job.o.target_vertices == 0)
         return cli_usage_error("cluster", "no cell size given (--cell, --cell-rel or "
                                           "--target-vertices)");
-    if ((rc = cli_check_output_path(io.cmd, io.out)) != CLI_OK)
+    if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
     return cli_run_job(&io, &steps, &job);

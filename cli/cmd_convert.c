@@ -139,7 +139,7 @@ static int run_convert(int argc, char **argv)
     clean_job job = {.steps = {.weld = true}, .clean = false};
     int rc = cli_io_parse(&io, argc, argv, convert_option, &job);
     if (rc == CLI_OK)
-        rc = cli_check_output_path(io.cmd, io.out);
+        rc = cli_check_output_path(io.cmd, io.out, io.write.format);
     return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
 }
 
@@ -202,7 +202,7 @@ static int run_clean(int argc, char **argv)
     clean_job job = {.steps = {.weld = true}, .clean = true};
     int rc = cli_io_parse(&io, argc, argv, clean_option, &job);
     if (rc == CLI_OK)
-        rc = cli_check_output_path(io.cmd, io.out);
+        rc = cli_check_output_path(io.cmd, io.out, io.write.format);
     return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
 }
 

@@ -83,7 +83,7 @@ static int run(int argc, char **argv)
                                kind_name);
     if (!io.out)
         return cli_usage_error("generate", "no output file given (-o FILE)");
-    int rc = cli_check_output_path(io.cmd, io.out);
+    int rc = cli_check_output_path(io.cmd, io.out, io.write.format);
     if (rc != CLI_OK)
         return rc;
     /* io.in stays NULL: nothing is read, the work makes the mesh. */

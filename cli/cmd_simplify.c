@@ -367,7 +367,7 @@ static int run(int argc, char **argv)
         job.o.max_error == 0 && !job.o.until_error)
         return cli_usage_error("simplify", "no target given (--ratio, --vertices, "
                                            "--triangles or --max-error)");
-    if ((rc = cli_check_output_path(io.cmd, io.out)) != CLI_OK)
+    if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
     return cli_run_job(&io, &steps, &job);

@@ -215,7 +215,7 @@ static int run(int argc, char **argv)
         return rc;
     if (!job.radius_kind)
         return cli_usage_error("weld", "no radius given (--eps, --eps-rel or --reduce)");
-    if ((rc = cli_check_output_path(io.cmd, io.out)) != CLI_OK)
+    if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
     return cli_run_job(&io, &steps, &job);

@@ -3,6 +3,8 @@
  * a simplification target cannot be reached. */
 #include "testutil.h"
 
+#include <sys/stat.h>
+
 #include <float.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -473,6 +475,30 @@ static void test_seams_borders_locks(void **state)
     mr_mesh_free(&g);
 }
 
+/* Outputs without an extension take --format: -o /dev/null, /dev/stdout. */
+static void test_format_option(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("fmt-strip.obj");
+    tu_write_file(in, strip, sizeof strip - 1);
+    char *msg;
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o /dev/null --ratio 1 -q", in), &msg), 2);
+    tu_assert_contains(msg, "or --format");
+    free(msg);
+    assert_int_equal(
+        tu_run_cli(tu_fmt("simplify '%s' -o /dev/null --ratio 1 --format ply -q", in), NULL), 0);
+    struct stat sb;
+    assert_int_equal(stat("/dev/null", &sb), 0);
+    assert_true(S_ISCHR(sb.st_mode));
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' /dev/stdout --format obj -q", in), &msg), 0);
+    tu_assert_contains(msg, "v 1 1 0");
+    tu_assert_contains(msg, "f ");
+    free(msg);
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' /dev/stdout --format jpg", in), &msg), 2);
+    tu_assert_contains(msg, "--format is obj, ply, stl or xyz, got 'jpg'");
+    free(msg);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -484,6 +510,7 @@ int main(void)
         cmocka_unit_test(test_info_and_convert_seams),
         cmocka_unit_test(test_prune_zero_target_and_locks),
         cmocka_unit_test(test_seams_borders_locks),
+        cmocka_unit_test(test_format_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
