@@ -499,6 +499,21 @@ static void test_format_option(void **state)
     free(msg);
 }
 
+/* A PNG that cannot be written says why, as the mesh writers do. */
+static void test_png_write_reason(void **state)
+{
+    (void)state;
+    const size_t w = 1500, h = 1500;
+    uint8_t *img = malloc(w * h * 4);
+    assert_non_null(img);
+    for (size_t i = 0; i < w * h * 4; i++)
+        img[i] = (uint8_t)(i * 2654435761u >> 24); /* incompressible */
+    mr_error err;
+    assert_int_equal(mr_png_write("/dev/full", img, (int)w, (int)h, &err), MR_ERR_IO);
+    tu_assert_contains(err.message, "No space left on device");
+    free(img);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -511,6 +526,7 @@ int main(void)
         cmocka_unit_test(test_prune_zero_target_and_locks),
         cmocka_unit_test(test_seams_borders_locks),
         cmocka_unit_test(test_format_option),
+        cmocka_unit_test(test_png_write_reason),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,12 +1,32 @@
 /* PNG output through libpng, written atomically (temporary file + rename). */
 #include "../core/internal.h"
 
+#include <errno.h>
 #include <png.h>
 #include <stdio.h>
+#include <string.h>
 
 typedef struct png_failure {
     char message[200];
+    FILE *f;
+    int write_errno; /* of the failed write, or 0 */
 } png_failure;
+
+/* libpng's own writer reports a short write as "Write Error" and loses
+ * errno: write through stdio here and keep the reason. */
+static void on_png_write(png_structp png, png_bytep data, size_t length)
+{
+    png_failure *f = png_get_io_ptr(png);
+    if (fwrite(data, 1, length, f->f) != length) {
+        f->write_errno = errno ? errno : EIO;
+        png_error(png, strerror(f->write_errno));
+    }
+}
+
+static void on_png_flush(png_structp png)
+{
+    (void)png; /* mr_output_close flushes and reports */
+}
 
 static void on_png_error(png_structp png, png_const_charp msg)
 {
@@ -40,7 +60,8 @@ static int encode(FILE *f, const uint8_t *rgba, int width, int height, png_failu
         png_destroy_write_struct(&png, &info);
         return -1;
     }
-    png_init_io(png, f);
+    fail->f = f;
+    png_set_write_fn(png, fail, on_png_write, on_png_flush);
     png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 8, PNG_COLOR_TYPE_RGB,
                  PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     png_write_info(png, info);
@@ -65,8 +86,10 @@ mr_status mr_png_write(const char *path, const uint8_t *rgba, int width, int hei
     mr_status st = mr_output_open(&out, path, err);
     if (st != MR_OK)
         return st;
-    png_failure fail = {""};
+    png_failure fail = {"", NULL, 0};
     if (encode(out.f, rgba, width, height, &fail) != 0)
-        st = mr_fail_plain(err, MR_ERR_IO, path, "PNG encoding failed: %s", fail.message);
+        st = fail.write_errno
+                 ? mr_fail_plain(err, MR_ERR_IO, path, "write failed: %s", fail.message)
+                 : mr_fail_plain(err, MR_ERR_IO, path, "PNG encoding failed: %s", fail.message);
     return mr_output_close(&out, path, st, err);
 }
