@@ -200,6 +200,39 @@ static void test_deterministic_across_threads(void **state)
     }
     free(ref);
     mr_mesh_free(&m);
+
+    /* A fanned polygon: wide slivers take the row-span path. */
+    enum { N = 3000 };
+    float *fp = malloc(3 * N * sizeof *fp);
+    uint32_t *fi = malloc(3 * (N - 2) * sizeof *fi);
+    assert_non_null(fp);
+    assert_non_null(fi);
+    for (int i = 0; i < N; i++) {
+        const double a = 6.283185307179586 * i / N;
+        fp[3 * i] = (float)cos(a);
+        fp[3 * i + 1] = (float)(0.6 * sin(a));
+        fp[3 * i + 2] = (float)(0.1 * sin(3 * a));
+    }
+    for (int t = 0; t < N - 2; t++) {
+        fi[3 * t] = 0;
+        fi[3 * t + 1] = (uint32_t)t + 1;
+        fi[3 * t + 2] = (uint32_t)t + 2;
+    }
+    ref = NULL;
+    const int counts[] = {1, 2, 3, 8};
+    for (int c = 0; c < 4; c++) {
+        o.threads = counts[c];
+        uint8_t *img = render(fp, N, fi, N - 2, &o);
+        if (!ref)
+            ref = img;
+        else {
+            assert_memory_equal(ref, img, 320 * 240 * 4);
+            free(img);
+        }
+    }
+    free(ref);
+    free(fp);
+    free(fi);
 }
 
 /* A point cloud: splats around the projected points, z-tested. */
