@@ -1278,10 +1278,7 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
     g->triangles = o->target_triangles;
     g->limit = INFINITY;
     if (o->max_error > 0) {
-        /* normalised by the referenced vertices' diagonal; relative
-         * errors are relative to the whole input's */
-        const double rel = (o->error_absolute ? o->max_error : o->max_error * s->error_base) /
-                           s->diagonal;
+        const double rel = mr_simplifier_normalised(s, o, o->max_error);
         g->limit = rel * rel;
     }
     /* Progress: the share of the collapses the vertex target needs. */
@@ -1432,12 +1429,9 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
     s->stop = stop_reason(s, &g);
     s->pruned = 0;
     if (o->prune) {
-        /* the error bound, or the largest error the collapses made,
-         * normalised */
+        /* the error bound, or the largest error the collapses made */
         const double e = o->max_error > 0 ? o->max_error : *max_error;
-        const double bound =
-            (o->error_absolute ? e : e * s->error_base) / s->diagonal;
-        s->pruned = prune(s, bound);
+        s->pruned = prune(s, mr_simplifier_normalised(s, o, e));
     }
     return done;
 }

@@ -80,6 +80,15 @@ static inline double mr_simplifier_error(const mr_simplifier *s, const mr_simpli
     return o->error_absolute ? e * s->diagonal : e * s->diagonal / s->error_base;
 }
 
+/* The inverse: an error in the options' terms as a normalised distance
+ * (normalised by the referenced vertices' diagonal; relative errors are
+ * relative to the whole input's). */
+static inline double mr_simplifier_normalised(const mr_simplifier *s,
+                                              const mr_simplify_options *o, double e)
+{
+    return (o->error_absolute ? e : e * s->error_base) / s->diagonal;
+}
+
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
                                     size_t input_triangles, mr_error *err);
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
