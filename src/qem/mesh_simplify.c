@@ -66,7 +66,7 @@ static bool seam_edge(const mr_simplifier *s, uint32_t a, uint32_t b, const uint
            wedge_at(s, et[0], b) != wedge_at(s, et[1], b);
 }
 
-static bool attr_valid(mr_simplifier *s, uint32_t r, uint32_t k)
+static bool attr_valid(const mr_simplifier *s, uint32_t r, uint32_t k)
 {
     uint32_t et[2];
     uint32_t n = edge_tris(s, r, k, et);
@@ -92,7 +92,7 @@ static void lerp_attr(float *a, const float *b, int n, double t, bool normalise)
     }
 }
 
-static void attr_apply(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
+static void attr_apply(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
 {
     attr_ctx *a = s->attr;
     const mr_collapse_mesh *m = &s->m;

@@ -1,16 +1,24 @@
 /*
- * The sequential simplifier's state and phases, shared by mr_simplify and
- * mr_mesh_simplify (attributes). Internal.
+ * The simplifier core's state and phases, shared by the strategies
+ * (greedy.c, batched.c), the dispatcher that picks one (simplify.c:
+ * mr_simplify) and mr_mesh_simplify (attributes). Internal.
+ *
+ * A run: mr_simplifier_init (setup.c; mr_mesh_simplify then adds its seams
+ * and hooks), mr_simplifier_fill_queue (the strategy's queue or candidate
+ * arrays), mr_simplifier_run (the strategy, then why it stopped and the
+ * pruning: output.c), the output, mr_simplifier_free.
  */
 #ifndef MR_SIMPLIFY_INTERNAL_H
 #define MR_SIMPLIFY_INTERNAL_H
 
 #include "../mesh/adjacency.h"
 #include "collapse.h"
-#include "heap.h"
 #include "quadric.h"
 
 typedef struct mr_simplifier mr_simplifier;
+/* greedy.c's state (its heap), from mr_simplifier_greedy_init to the end
+ * of mr_simplifier_run_greedy. */
+typedef struct mr_greedy mr_greedy;
 
 /* batched.c: an edge (a, b) of a pass and the bits of its (float) cost. */
 typedef struct mr_candidate {
@@ -20,12 +28,10 @@ typedef struct mr_candidate {
 struct mr_simplifier {
     mr_collapse_mesh m;
     mr_quadricf *q;          /* per vertex, relative to its position */
-    uint32_t *best;          /* per vertex: other end of its queued collapse */
-    uint8_t *stale;          /* per vertex: key is only a lower bound */
-    mr_heap heap;
     mr_collapse_limits limits;
     int half;
     int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
+    mr_greedy *greedy;       /* else greedy.c's, while it runs */
     struct mr_candidate *cand; /* batched: a pass's edges */
     size_t cand_cap;
     uint8_t *mark;           /* batched: per vertex, changed in this pass */
@@ -43,9 +49,9 @@ struct mr_simplifier {
     size_t pruned;           /* parts dropped by options.prune */
     /* Attribute hooks (mr_mesh_simplify): extra validity, and an action
      * before a collapse r -> k to target is applied. */
-    bool (*attr_valid)(mr_simplifier *s, uint32_t r, uint32_t k);
-    void (*attr_apply)(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
-    void *attr;
+    bool (*attr_valid)(const mr_simplifier *s, uint32_t r, uint32_t k);
+    void (*attr_apply)(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
+    void *attr;              /* the hooks' own state: they write only through it */
 };
 
 /* What the run aims at, from the options. */
@@ -89,16 +95,29 @@ static inline double mr_simplifier_normalised(const mr_simplifier *s,
     return (o->error_absolute ? e : e * s->error_base) / s->diagonal;
 }
 
+/* ---- setup.c: the set-up, the targets, the release */
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
                                     size_t input_triangles, mr_error *err);
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
                              size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const mr_simplify_options *o,
                              const uint8_t *extra_flags, mr_error *err);
-mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
-size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
 void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
                            mr_simplify_goal *g);
+void mr_simplifier_free(mr_simplifier *s);
+
+/* ---- cost.c: costs, plans, validity, the collapse */
+/* The full collapse of edge (u, w): the target relative to w's position
+ * (x) and the cost, by the collapse rules (INFINITY when neither end may
+ * go onto the other). */
+double mr_simplifier_full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x[3]);
+/* The half-edge collapse u -> w (u moves onto w): its cost. */
+double mr_simplifier_half_cost(const mr_simplifier *s, uint32_t u, uint32_t w);
+/* The collapse behind u's queue entry (u, w) -- half: u goes onto w;
+ * full: to the optimum, a pinned end stays, else u goes -- as r removed,
+ * k kept, target; returns its cost. */
+double mr_simplifier_plan(const mr_simplifier *s, uint32_t u, uint32_t w, uint32_t *r,
+                          uint32_t *k, double target[3]);
 /* The collapse of edge (a, b) this simplifier makes -- full: to the
  * optimum, a pinned end stays, else the larger id goes; half: the cheaper
  * direction -- as r removed, k kept, target; returns its cost (INFINITY
@@ -111,14 +130,34 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
 void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *a,
                               const uint32_t *b, double *cost, uint32_t *r, uint32_t *k,
                               double *target);
+/* May the planned collapse r -> k (to target, at cost) happen now: its
+ * cost finite and within limit, the mesh's tests (mr_collapse_valid) and
+ * the attribute hook's? The one test every strategy makes. */
+bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
+                           double cost, double limit);
+/* Is u's queue entry (u, w) allowed (mr_simplifier_plan, then
+ * mr_simplifier_allowed with no limit)? Its cost in *cost when not NULL. */
+bool mr_simplifier_valid(const mr_simplifier *s, uint32_t u, uint32_t w, double *cost);
 /* Apply a valid planned collapse: attribute hook, quadrics, mesh. */
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
+
+/* ---- output.c: the end of a run */
+/* After the strategy: why it stopped (s->stop) and options.prune
+ * (s->pruned); max_error is the run's. */
+void mr_simplifier_finish(mr_simplifier *s, const mr_simplify_options *o, double max_error);
+mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
+                               mr_simplified *out, mr_error *err);
+
+/* ---- simplify.c: the dispatcher, which alone picks the strategy */
+mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
+size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
+
+/* ---- the strategies: start (fill the queue), run */
+mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err);
+size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o,
+                                double *max_error);
 mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
 size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                                  double *max_error);
-bool mr_simplifier_valid(mr_simplifier *s, uint32_t u, uint32_t w, double *cost);
-mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
-                               mr_simplified *out, mr_error *err);
-void mr_simplifier_free(mr_simplifier *s);
 
 #endif

@@ -1,0 +1,519 @@
+/*
+ * The simplifier core's costs and collapse plans, shared by every strategy:
+ * what a collapse costs, which end goes and where the survivor goes, and
+ * whether it may happen; then the collapse itself (quadrics and mesh).
+ *
+ * The collapse rules are one table (may_go_onto) for both kinds of
+ * collapse. A free edge (no pinned end) has a branch-free cost kernel
+ * (free_cost) that the scalar path and the vector loop over a batch of
+ * edges (mr_simplifier_plan_edges, the batched strategy's) share, so both
+ * give the same bits. The strategies only choose which collapses run when:
+ * every one of them is tested by mr_simplifier_allowed and applied by
+ * mr_simplifier_collapse.
+ */
+#include "simplify_internal.h"
+
+#include <math.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+/* ---- costs ---------------------------------------------------------------- */
+
+static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *q)
+{
+    mr_quadric_load(q, &s->q[v]);
+}
+
+/*
+ * The full collapse of an edge (u, w) with no pinned end: u's quadric moved
+ * to w's origin and added to w's, the target x (relative to w) at the
+ * optimum of the sum or, where the system is ill-conditioned or its optimum
+ * lies far from the edge, at the best point of the edge; returns the cost.
+ * Input k of the edge (FREE_*) is in[k * st], x[k] is x[k * xst]. Written
+ * without branches (every quotient is computed, then selected), so that a
+ * loop over edges vectorises (mr_simplifier_plan_edges); the scalar path
+ * calls the same code, so both give the same bits.
+ */
+enum { FREE_QU = 0, FREE_QW = 11, FREE_PU = 22, FREE_PW = 25, FREE_INPUTS = 28 };
+
+static inline __attribute__((always_inline)) double free_cost(const float *in, size_t st,
+                                                              double *x, size_t xst,
+                                                              const double box[3])
+{
+#define IN(k) ((double)in[(size_t)(k) * st])
+    const double d0 = IN(FREE_PU) - IN(FREE_PW);
+    const double d1 = IN(FREE_PU + 1) - IN(FREE_PW + 1);
+    const double d2 = IN(FREE_PU + 2) - IN(FREE_PW + 2);
+    const double k0 = -d0, k1 = -d1, k2 = -d2; /* u's origin seen from w */
+    double a00 = IN(0), a01 = IN(1), a02 = IN(2), a11 = IN(3), a12 = IN(4), a22 = IN(5);
+    double b0 = IN(6), b1 = IN(7), b2 = IN(8), c = IN(9), w = IN(10);
+    /* shift u's quadric by k (mr_quadric_shift) */
+    const double ad0 = a00 * k0 + a01 * k1 + a02 * k2;
+    const double ad1 = a01 * k0 + a11 * k1 + a12 * k2;
+    const double ad2 = a02 * k0 + a12 * k1 + a22 * k2;
+    c += k0 * ad0 + k1 * ad1 + k2 * ad2 + 2 * (b0 * k0 + b1 * k1 + b2 * k2);
+    b0 += ad0;
+    b1 += ad1;
+    b2 += ad2;
+    /* add w's (mr_quadric_add) */
+    a00 += IN(FREE_QW + 0); a01 += IN(FREE_QW + 1); a02 += IN(FREE_QW + 2);
+    a11 += IN(FREE_QW + 3); a12 += IN(FREE_QW + 4); a22 += IN(FREE_QW + 5);
+    b0 += IN(FREE_QW + 6); b1 += IN(FREE_QW + 7); b2 += IN(FREE_QW + 8);
+    c += IN(FREE_QW + 9);
+    w += IN(FREE_QW + 10);
+#undef IN
+    /* the optimum (mr_quadric_optimum) */
+    const double c00 = a11 * a22 - a12 * a12;
+    const double c01 = a02 * a12 - a01 * a22;
+    const double c02 = a01 * a12 - a02 * a11;
+    const double det = a00 * c00 + a01 * c01 + a02 * c02;
+    const double diag = a00 * a11 * a22;
+    const double c11 = a00 * a22 - a02 * a02;
+    const double c12 = a01 * a02 - a00 * a12;
+    const double c22 = a00 * a11 - a01 * a01;
+    const double inv = -1.0 / det;
+    const double o0 = inv * (c00 * b0 + c01 * b1 + c02 * b2);
+    const double o1 = inv * (c01 * b0 + c11 * b1 + c12 * b2);
+    const double o2 = inv * (c02 * b0 + c12 * b1 + c22 * b2);
+    /* an optimum far from the edge comes from a barely conditioned system;
+     * one outside the mesh's bounding box (box: its half extents, w at
+     * IN(FREE_PW)) is no place for a vertex, and might leave the float
+     * range of the input */
+    const double len2 = d0 * d0 + d1 * d1 + d2 * d2;
+    const double e0 = o0 - 0.5 * d0, e1 = o1 - 0.5 * d1, e2 = o2 - 0.5 * d2;
+    const bool inside = (fabs(o0 + (double)in[(size_t)FREE_PW * st]) <= box[0]) &
+                        (fabs(o1 + (double)in[(size_t)(FREE_PW + 1) * st]) <= box[1]) &
+                        (fabs(o2 + (double)in[(size_t)(FREE_PW + 2) * st]) <= box[2]);
+    const bool ok = (fabs(det) > MR_QUADRIC_DET_EPS * diag) & (diag > 0) &
+                    (e0 * e0 + e1 * e1 + e2 * e2 <= 4 * len2) & inside;
+    /* the best point of the edge from w (0) to u (d):
+     * mr_quadric_segment_optimum */
+    const double z = 0;
+    const double sd0 = d0 - z, sd1 = d1 - z, sd2 = d2 - z;
+    const double sa0 = a00 * sd0 + a01 * sd1 + a02 * sd2;
+    const double sa1 = a01 * sd0 + a11 * sd1 + a12 * sd2;
+    const double sa2 = a02 * sd0 + a12 * sd1 + a22 * sd2;
+    const double dad = sd0 * sa0 + sd1 * sa1 + sd2 * sa2;
+    const double g = z * sa0 + z * sa1 + z * sa2 + b0 * sd0 + b1 * sd1 + b2 * sd2;
+    const double sq = -g / dad;
+    const double s0 = sq < 0 ? 0 : sq;
+    const double sc = s0 > 1 ? 1 : s0;
+    const double sg0 = g < 0 ? 1 : 0.5;
+    const double sg = g > 0 ? 0 : sg0;
+    const double s = dad > 0 ? sc : sg;
+    const double x0 = ok ? o0 : z + s * sd0;
+    const double x1 = ok ? o1 : z + s * sd1;
+    const double x2 = ok ? o2 : z + s * sd2;
+    x[0] = x0;
+    x[xst] = x1;
+    x[2 * xst] = x2;
+    /* its cost (mr_quadric_eval) */
+    const double ax = a00 * x0 + a01 * x1 + a02 * x2;
+    const double ay = a01 * x0 + a11 * x1 + a12 * x2;
+    const double az = a02 * x0 + a12 * x1 + a22 * x2;
+    const double q = x0 * ax + x1 * ay + x2 * az + 2 * (b0 * x0 + b1 * x1 + b2 * x2) + c;
+    const double qn = q / w;
+    const double err = w > 0 ? qn : 0;
+    return err > 0 ? err : 0;
+}
+
+/* Gathers free_cost's inputs for edge (u, w) into in[k * st]. */
+static inline void free_cost_inputs(const mr_simplifier *s, uint32_t u, uint32_t w, float *in,
+                                    size_t st)
+{
+    const float *qu = &s->q[u].a00, *qw = &s->q[w].a00;
+    for (int k = 0; k < 11; k++) {
+        in[(size_t)(FREE_QU + k) * st] = qu[k];
+        in[(size_t)(FREE_QW + k) * st] = qw[k];
+    }
+    const float *pu = s->m.pos + 3 * (size_t)u, *pw = s->m.pos + 3 * (size_t)w;
+    for (int k = 0; k < 3; k++) {
+        in[(size_t)(FREE_PU + k) * st] = pu[k];
+        in[(size_t)(FREE_PW + k) * st] = pw[k];
+    }
+}
+
+/*
+ * The collapse rules, one table for both kinds of collapse (as
+ * meshoptimizer's kCanCollapse): may vertex u (flags fu) go to where w
+ * (flags fw) is -- the half-edge collapse u -> w, or a full collapse that
+ * keeps w in place?
+ *   locked:           never;
+ *   on a boundary:    only onto the boundary (a boundary vertex, locked or
+ *                     not, or a non-manifold one, where boundaries may
+ *                     meet; an inner edge between two boundary vertices is
+ *                     refused by mr_collapse_valid), so it stays on its
+ *                     polyline;
+ *   on a seam (mr_mesh_simplify's attribute seams): only onto the seam;
+ *   any other:        anywhere.
+ * A full collapse moves both ends to the optimum when both may go onto
+ * each other and neither is on a boundary or seam; to the best point of
+ * the edge when both may and they share a boundary or seam (they stay on
+ * it); onto the end that may not go when only one may; not at all when
+ * neither may.
+ */
+static inline bool may_go_onto(uint8_t fu, uint8_t fw)
+{
+    if (fu & MR_VF_LOCKED)
+        return false;
+    if (fu & MR_VF_BOUNDARY) /* a non-manifold end may be where boundaries meet */
+        return (fw & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD)) != 0;
+    if (fu & MR_VF_SEAM)
+        return (fw & MR_VF_SEAM) != 0;
+    return true;
+}
+
+/* Flags that keep a full collapse off the free optimum. */
+#define PINNING (MR_VF_LOCKED | MR_VF_BOUNDARY | MR_VF_SEAM)
+
+/*
+ * The full collapse of edge (u, w): the target relative to w's position
+ * (x) and the cost, by the rules above.
+ */
+static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint8_t fu = m->flags[u], fw = m->flags[w];
+    if (!((fu | fw) & PINNING)) {
+        float in[FREE_INPUTS];
+        free_cost_inputs(s, u, w, in, 1);
+        return free_cost(in, 1, x, 1, s->box);
+    }
+    const bool gu = may_go_onto(fu, fw), gw = may_go_onto(fw, fu);
+    if (!gu && !gw) {
+        x[0] = x[1] = x[2] = 0; /* no collapse: w stays where it is */
+        return INFINITY;
+    }
+    mr_quadric qu, qw;
+    load_quadric(s, u, &qu);
+    load_quadric(s, w, &qw);
+    double pu[3], pw[3];
+    mr_collapse_load(m, u, pu);
+    mr_collapse_load(m, w, pw);
+    const double d[3] = {pu[0] - pw[0], pu[1] - pw[1], pu[2] - pw[2]};
+    /* qu measured from pw: qu(x'') = old qu(x'' + pw - pu) */
+    const double back[3] = {-d[0], -d[1], -d[2]};
+    mr_quadric_shift(&qu, back);
+    mr_quadric_add(&qu, &qw);
+    if (!gu) { /* w goes onto u */
+        x[0] = d[0];
+        x[1] = d[1];
+        x[2] = d[2];
+    } else if (!gw) { /* u goes onto w */
+        x[0] = x[1] = x[2] = 0;
+    } else {
+        /* two ends on one boundary or seam: stay on its edge */
+        const double zero[3] = {0, 0, 0};
+        mr_quadric_segment_optimum(&qu, zero, d, x);
+    }
+    double err = mr_quadric_eval(&qu, x);
+    err = qu.w > 0 ? err / qu.w : 0;
+    return err > 0 ? err : 0;
+}
+
+/* The half-edge collapse u -> w: u moves onto w. */
+static double half_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
+{
+    const mr_collapse_mesh *m = &s->m;
+    if (!may_go_onto(m->flags[u], m->flags[w]))
+        return INFINITY;
+    mr_quadric qu, qw;
+    load_quadric(s, u, &qu);
+    load_quadric(s, w, &qw);
+    const double d[3] = {(double)m->pos[3 * w] - m->pos[3 * u],
+                         (double)m->pos[3 * w + 1] - m->pos[3 * u + 1],
+                         (double)m->pos[3 * w + 2] - m->pos[3 * u + 2]};
+    const double wsum = qu.w + qw.w;
+    double err = mr_quadric_eval(&qu, d) + qw.c;
+    err = wsum > 0 ? err / wsum : 0;
+    return err > 0 ? err : 0;
+}
+
+/* The two kernels for the strategies' own loops (greedy.c); calls within
+ * this file stay static, to be inlined. */
+double mr_simplifier_full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x[3])
+{
+    return full_cost(s, u, w, x);
+}
+
+double mr_simplifier_half_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
+{
+    return half_cost(s, u, w);
+}
+
+/* ---- one collapse ---------------------------------------------------------- */
+
+/*
+ * The collapse behind u's queue entry (u, w): which end goes (*r), which
+ * stays (*k) and where it goes (target, normalised). For full collapses a
+ * pinned end stays; else u goes.
+ */
+double mr_simplifier_plan(const mr_simplifier *s, uint32_t u, uint32_t w, uint32_t *r,
+                          uint32_t *k, double target[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    if (s->half) {
+        *r = u;
+        *k = w;
+        mr_collapse_load(m, w, target);
+        return half_cost(s, u, w);
+    }
+    double x[3];
+    double c = full_cost(s, u, w, x);
+    double pw[3];
+    mr_collapse_load(m, w, pw);
+    target[0] = pw[0] + x[0];
+    target[1] = pw[1] + x[1];
+    target[2] = pw[2] + x[2];
+    if (!may_go_onto(m->flags[u], m->flags[w]) && may_go_onto(m->flags[w], m->flags[u])) {
+        *r = w;
+        *k = u;
+        mr_collapse_load(m, u, target); /* exactly u's position */
+    } else {
+        *r = u;
+        *k = w;
+    }
+    return c;
+}
+
+/* The full collapse of edge (a, b): a pinned end stays, else the end with
+ * the larger id goes. Symmetric in a and b. */
+static double plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
+                        uint32_t *k, double target[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    /* the end that may not go stays; else the larger id goes */
+    const bool ga = may_go_onto(m->flags[a], m->flags[b]),
+               gb = may_go_onto(m->flags[b], m->flags[a]);
+    uint32_t rr, kk;
+    if (ga != gb) {
+        kk = ga ? b : a;
+        rr = ga ? a : b;
+    } else {
+        kk = a < b ? a : b;
+        rr = a < b ? b : a;
+    }
+    double x[3];
+    const double c = full_cost(s, rr, kk, x);
+    target[0] = (double)m->pos[3 * kk] + x[0];
+    target[1] = (double)m->pos[3 * kk + 1] + x[1];
+    target[2] = (double)m->pos[3 * kk + 2] + x[2];
+    *r = rr;
+    *k = kk;
+    return c;
+}
+
+double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, uint32_t *r,
+                               uint32_t *k, double target[3])
+{
+    if (!s->half)
+        return plan_edge(s, a, b, r, k, target);
+    const double ca = half_cost(s, a, b), cb = half_cost(s, b, a);
+    const bool a_goes = ca < cb || (ca == cb && a > b); /* ties: the larger id goes */
+    *r = a_goes ? a : b;
+    *k = a_goes ? b : a;
+    mr_collapse_load(&s->m, *k, target);
+    return a_goes ? ca : cb;
+}
+
+/* ---- many edges at once --------------------------------------------------- */
+
+/* Edges per batch of mr_simplifier_plan_edges' vector loop. */
+#define COST_BATCH 64
+
+/* The vector loop: costs of n <= COST_BATCH free edges whose inputs are in
+ * in[k * COST_BATCH + i]. */
+MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost, double *x,
+                                        const double box[3])
+{
+    const double bx[3] = {box[0], box[1], box[2]};
+#pragma omp simd
+    for (size_t i = 0; i < n; i++)
+        cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH, bx);
+}
+
+/*
+ * free_cost's inputs of the edges (u[l], w[l]), l < n, into the batch's
+ * rows in[k * COST_BATCH + l]: four edges at a time, each quadric (11
+ * floats, read as 12) and position (3, read as 4) loaded as vectors and
+ * transposed into four lanes of each row. The same floats as
+ * free_cost_inputs, a third of the instructions.
+ */
+static void pack_inputs(const mr_simplifier *s, const uint32_t *u, const uint32_t *w, size_t n,
+                        float *in)
+{
+    size_t l = 0;
+#if defined(__SSE2__)
+    const float *q = &s->q[0].a00, *pos = s->m.pos;
+    const size_t qs = sizeof *s->q / sizeof(float);
+    for (; l + 4 <= n; l += 4) {
+        for (int end = 0; end < 2; end++) {
+            const uint32_t *id = end ? w + l : u + l;
+            float *row = in + (size_t)(end ? FREE_QW : FREE_QU) * COST_BATCH + l;
+            const float *r0 = q + qs * id[0], *r1 = q + qs * id[1], *r2 = q + qs * id[2],
+                        *r3 = q + qs * id[3];
+            for (int part = 0; part < 3; part++) {
+                __m128 x0 = _mm_loadu_ps(r0 + 4 * part), x1 = _mm_loadu_ps(r1 + 4 * part),
+                       x2 = _mm_loadu_ps(r2 + 4 * part), x3 = _mm_loadu_ps(r3 + 4 * part);
+                _MM_TRANSPOSE4_PS(x0, x1, x2, x3);
+                float *o = row + (size_t)(4 * part) * COST_BATCH;
+                _mm_storeu_ps(o, x0);
+                _mm_storeu_ps(o + COST_BATCH, x1);
+                _mm_storeu_ps(o + 2 * COST_BATCH, x2);
+                if (part < 2) /* the 12th float is the next record's */
+                    _mm_storeu_ps(o + 3 * COST_BATCH, x3);
+            }
+            const float *p0 = pos + 3 * (size_t)id[0], *p1 = pos + 3 * (size_t)id[1],
+                        *p2 = pos + 3 * (size_t)id[2], *p3 = pos + 3 * (size_t)id[3];
+            __m128 x0 = _mm_loadu_ps(p0), x1 = _mm_loadu_ps(p1), x2 = _mm_loadu_ps(p2),
+                   x3 = _mm_loadu_ps(p3);
+            _MM_TRANSPOSE4_PS(x0, x1, x2, x3);
+            (void)x3;
+            float *o = in + (size_t)(end ? FREE_PW : FREE_PU) * COST_BATCH + l;
+            _mm_storeu_ps(o, x0);
+            _mm_storeu_ps(o + COST_BATCH, x1);
+            _mm_storeu_ps(o + 2 * COST_BATCH, x2);
+        }
+    }
+#endif
+    for (; l < n; l++)
+        free_cost_inputs(s, u[l], w[l], in + l, COST_BATCH);
+}
+
+/* Edge i of mr_simplifier_plan_edges through the one-edge path. */
+static void plan_one(const mr_simplifier *s, uint32_t a, uint32_t b, size_t i, double *cost,
+                     uint32_t *r, uint32_t *k, double *target)
+{
+    uint32_t rr, kk;
+    double t[3];
+    cost[i] = mr_simplifier_plan_edge(s, a, b, &rr, &kk, t);
+    if (r) {
+        r[i] = rr;
+        k[i] = kk;
+        memcpy(target + 3 * i, t, sizeof t);
+    }
+}
+
+void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *a,
+                              const uint32_t *b, double *cost, uint32_t *r, uint32_t *k,
+                              double *target)
+{
+    const mr_collapse_mesh *m = &s->m;
+    if (s->half) {
+        for (size_t i = 0; i < n; i++)
+            plan_one(s, a[i], b[i], i, cost, r, k, target);
+        return;
+    }
+    const uint8_t pin = PINNING;
+    float in[FREE_INPUTS * COST_BATCH];
+    double out[COST_BATCH], x[3 * COST_BATCH];
+    uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];
+    for (size_t i0 = 0; i0 < n; i0 += COST_BATCH) {
+        const size_t i1 = n - i0 < COST_BATCH ? n : i0 + COST_BATCH;
+        uint8_t any = 0;
+        for (size_t i = i0; i < i1; i++)
+            any |= m->flags[a[i]] | m->flags[b[i]];
+        if (!(any & pin)) {
+            /* the usual batch: no pinned end, every edge in its own lane */
+            const size_t nl = i1 - i0;
+            for (size_t l = 0; l < nl; l++) {
+                const uint32_t ea = a[i0 + l], eb = b[i0 + l];
+                lr[l] = ea < eb ? eb : ea;
+                lk[l] = ea < eb ? ea : eb;
+            }
+            pack_inputs(s, lr, lk, nl, in);
+            free_costs(in, nl, cost + i0, x, s->box);
+            if (r) {
+                for (size_t l = 0; l < nl; l++) {
+                    const size_t i = i0 + l;
+                    const uint32_t kk = lk[l];
+                    r[i] = lr[l];
+                    k[i] = kk;
+                    target[3 * i] = (double)m->pos[3 * (size_t)kk] + x[l];
+                    target[3 * i + 1] = (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l];
+                    target[3 * i + 2] =
+                        (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l];
+                }
+            }
+            continue;
+        }
+        size_t nl = 0;
+        for (size_t i = i0; i < i1; i++) {
+            const uint32_t ea = a[i], eb = b[i];
+            if ((m->flags[ea] | m->flags[eb]) & pin) {
+                plan_one(s, ea, eb, i, cost, r, k, target);
+                continue;
+            }
+            /* plan_edge: the larger id goes */
+            lr[nl] = ea < eb ? eb : ea;
+            lk[nl] = ea < eb ? ea : eb;
+            lane[nl++] = (uint32_t)(i - i0);
+        }
+        pack_inputs(s, lr, lk, nl, in);
+        free_costs(in, nl, out, x, s->box);
+        for (size_t l = 0; l < nl; l++) {
+            const size_t i = i0 + lane[l];
+            cost[i] = out[l];
+            if (r) {
+                /* as plan_edge: the kept end's position plus x */
+                const uint32_t kk = lk[l];
+                r[i] = lr[l];
+                k[i] = kk;
+                target[3 * i] = (double)m->pos[3 * (size_t)kk] + x[l];
+                target[3 * i + 1] = (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l];
+                target[3 * i + 2] = (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l];
+            }
+        }
+    }
+}
+
+/* ---- validity and the collapse -------------------------------------------- */
+
+bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
+                           double cost, double limit)
+{
+    if (!(cost <= limit && cost < INFINITY))
+        return false;
+    if (!mr_collapse_valid(&s->m, r, k, target, &s->limits))
+        return false;
+    return !s->attr_valid || s->attr_valid(s, r, k);
+}
+
+bool mr_simplifier_valid(const mr_simplifier *s, uint32_t u, uint32_t w, double *cost)
+{
+    uint32_t r, k;
+    double target[3];
+    double c = mr_simplifier_plan(s, u, w, &r, &k, target);
+    if (cost)
+        *cost = c;
+    return mr_simplifier_allowed(s, r, k, target, c, INFINITY);
+}
+
+/* Merge r's quadric into k's, both moved to the target's origin. */
+static void merge_quadrics(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
+{
+    const mr_collapse_mesh *m = &s->m;
+    mr_quadric qr, qk;
+    load_quadric(s, r, &qr);
+    load_quadric(s, k, &qk);
+    /* Stored positions are floats: measure from the target as stored. */
+    const double t[3] = {(float)target[0], (float)target[1], (float)target[2]};
+    const double dr[3] = {t[0] - m->pos[3 * r], t[1] - m->pos[3 * r + 1],
+                          t[2] - m->pos[3 * r + 2]};
+    const double dk[3] = {t[0] - m->pos[3 * k], t[1] - m->pos[3 * k + 1],
+                          t[2] - m->pos[3 * k + 2]};
+    mr_quadric_shift(&qr, dr);
+    mr_quadric_shift(&qk, dk);
+    mr_quadric_add(&qk, &qr);
+    mr_quadric_store(&s->q[k], &qk);
+}
+
+void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
+{
+    if (s->attr_apply)
+        s->attr_apply(s, r, k, target);
+    merge_quadrics(s, r, k, target);
+    mr_collapse_reserve(&s->m, r, k);
+    mr_collapse_apply(&s->m, r, k, target);
+}

@@ -1,0 +1,184 @@
+/*
+ * The end of a run, shared by every strategy: why it stopped, the pruning
+ * of small parts (options.prune), and the output arrays of mr_simplify
+ * (mr_mesh_simplify writes its own, wedge by wedge).
+ */
+#include "simplify_internal.h"
+
+#include <math.h>
+
+#define NONE MR_COLLAPSE_NONE
+
+/*
+ * Why the run stopped, when no count target was met, from the costs of
+ * the edges left (no validity test: the strategies stop only once every
+ * collapse within the bound has been found invalid): one within reach but
+ * for the error bound means the bound stopped it; else one that may happen
+ * at all means the validity tests refused the rest; else every edge has
+ * locked (or two pinned) ends. One pass over the triangles, O(E), only
+ * when a target is missed.
+ */
+static mr_simplify_stop stop_reason(const mr_simplifier *s, const mr_simplify_goal *g)
+{
+    if (mr_simplifier_reached(s, g))
+        return MR_STOP_TARGET;
+    const mr_collapse_mesh *m = &s->m;
+    bool movable = false;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] == NONE)
+            continue;
+        for (int j = 0; j < 3; j++) {
+            uint32_t r, k;
+            double target[3];
+            const double cost = mr_simplifier_plan_edge(s, tri[j], tri[(j + 1) % 3], &r, &k,
+                                                        target);
+            if (cost < INFINITY && cost > g->limit)
+                return MR_STOP_MAX_ERROR;
+            movable |= cost < INFINITY;
+        }
+    }
+    return movable ? MR_STOP_REFUSED : MR_STOP_LOCKED;
+}
+
+/*
+ * Drop the connected parts whose bounding-box diagonal (normalised) is at
+ * most `bound` -- removing them moves the surface by no more -- but never
+ * the part with the most triangles. Returns the number of parts dropped.
+ * A part is a set of live triangles joined through shared vertices.
+ */
+static size_t prune(mr_simplifier *s, double bound)
+{
+    mr_collapse_mesh *m = &s->m;
+    const size_t vc = m->vertex_count, tc = m->triangle_count;
+    uint32_t *parent = mr_alloc_array(vc, sizeof *parent);
+    float *box = mr_alloc_array(vc, 6 * sizeof *box);
+    uint32_t *tris = mr_calloc_array(vc, sizeof *tris);
+    size_t dropped = 0;
+    if (!parent || !box || !tris)
+        goto done; /* out of memory: nothing pruned */
+    mr_uf_init(parent, vc);
+    for (size_t t = 0; t < tc; t++) {
+        const uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] != NONE) {
+            mr_uf_union(parent, tri[0], tri[1]);
+            mr_uf_union(parent, tri[0], tri[2]);
+        }
+    }
+    for (size_t v = 0; v < vc; v++) {
+        float *b = box + 6 * v;
+        b[0] = b[1] = b[2] = INFINITY;
+        b[3] = b[4] = b[5] = -INFINITY;
+    }
+    for (size_t v = 0; v < vc; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        float *b = box + 6 * (size_t)mr_uf_find(parent, (uint32_t)v);
+        const float *p = m->pos + 3 * v;
+        for (int k = 0; k < 3; k++) {
+            b[k] = p[k] < b[k] ? p[k] : b[k];
+            b[3 + k] = p[k] > b[3 + k] ? p[k] : b[3 + k];
+        }
+    }
+    uint32_t largest = NONE;
+    for (size_t t = 0; t < tc; t++)
+        if (m->tris[3 * t] != NONE) {
+            const uint32_t r = mr_uf_find(parent, m->tris[3 * t]);
+            tris[r]++;
+            largest = largest == NONE || tris[r] > tris[largest] ||
+                              (tris[r] == tris[largest] && r < largest)
+                          ? r
+                          : largest;
+        }
+    /* tris[r] becomes the verdict: 1 = drop part r */
+    for (size_t v = 0; v < vc; v++) {
+        if (!tris[v])
+            continue;
+        const float *b = box + 6 * v;
+        const double dx = (double)b[3] - b[0], dy = (double)b[4] - b[1], dz = (double)b[5] - b[2];
+        tris[v] = v != largest && sqrt(dx * dx + dy * dy + dz * dz) <= bound;
+        dropped += tris[v];
+    }
+    if (!dropped)
+        goto done;
+    for (size_t t = 0; t < tc; t++) {
+        uint32_t *tri = m->tris + 3 * t;
+        if (tri[0] != NONE && tris[mr_uf_find(parent, tri[0])]) {
+            tri[0] = tri[1] = tri[2] = NONE;
+            m->live_triangles--;
+        }
+    }
+    for (size_t v = 0; v < vc; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED) && tris[mr_uf_find(parent, (uint32_t)v)]) {
+            m->flags[v] = (uint8_t)((m->flags[v] & ~MR_VF_DIRTY) | MR_VF_REMOVED);
+            if (m->dead)
+                m->dead[v] = 0;
+            m->count[v] = 0;
+            m->live_vertices--;
+        }
+done:
+    free(parent);
+    free(box);
+    free(tris);
+    return dropped;
+}
+
+void mr_simplifier_finish(mr_simplifier *s, const mr_simplify_options *o, double max_error)
+{
+    mr_simplify_goal g;
+    mr_simplifier_targets(s, o, &g);
+    s->stop = stop_reason(s, &g);
+    s->pruned = 0;
+    if (o->prune) {
+        /* the error bound, or the largest error the collapses made */
+        const double e = o->max_error > 0 ? o->max_error : max_error;
+        s->pruned = prune(s, mr_simplifier_normalised(s, o, e));
+    }
+}
+
+/* ---- output ---------------------------------------------------------------- */
+
+mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
+                               mr_simplified *out, mr_error *err)
+{
+    const mr_collapse_mesh *m = &s->m;
+    if (stride == 0)
+        stride = 3 * sizeof(float);
+    const size_t vc = m->vertex_count, nv = m->live_vertices, nt = m->live_triangles;
+    uint32_t *remap = mr_alloc_array(vc, sizeof *remap);
+    out->positions = mr_alloc_array(3 * nv, sizeof *out->positions);
+    out->indices = mr_alloc_array(3 * nt, sizeof *out->indices);
+    out->origin = mr_alloc_array(nv, sizeof *out->origin);
+    if (!remap || !out->positions || !out->indices || !out->origin) {
+        free(remap);
+        mr_simplified_free(out);
+        return mr_fail_nomem(err, NULL, nv * 16 + nt * 12);
+    }
+    size_t n = 0;
+    for (size_t v = 0; v < vc; v++) {
+        remap[v] = NONE;
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        remap[v] = (uint32_t)n;
+        out->origin[n] = (uint32_t)v;
+        float *p = out->positions + 3 * n;
+        if (m->flags[v] & MR_VF_MOVED)
+            mr_simplifier_position(s, (uint32_t)v, p);
+        else
+            memcpy(p, (const char *)positions + v * stride, 3 * sizeof(float));
+        n++;
+    }
+    size_t t = 0;
+    for (size_t i = 0; i < m->triangle_count; i++) {
+        const uint32_t *tri = m->tris + 3 * i;
+        if (tri[0] == NONE)
+            continue;
+        for (int k = 0; k < 3; k++)
+            out->indices[3 * t + k] = remap[tri[k]];
+        t++;
+    }
+    free(remap);
+    out->vertex_count = n;
+    out->triangle_count = t;
+    return MR_OK;
+}

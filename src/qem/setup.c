@@ -1,0 +1,356 @@
+/*
+ * The simplifier core's set-up, shared by every strategy: the options'
+ * checks, the working mesh (collapse.h) and its per-vertex quadrics, the
+ * targets a run aims at, and the release of it all.
+ *
+ * Geometry is normalised (centre of the referenced vertices' bounding box
+ * at the origin, diagonal 1), so a cost is the squared RMS distance to the
+ * planes the merged vertex stands for (quadric.h), relative to that
+ * diagonal; max_error and stats.max_error are its square root, in world
+ * units when error_absolute is set, else relative to the diagonal of the
+ * bounding box of all the input's vertices (error_base, the one that
+ * `meshreduce info` prints: unreferenced vertices may widen it).
+ */
+#include "simplify_internal.h"
+
+#include <math.h>
+
+/* ---- setup ----------------------------------------------------------------- */
+
+/* Triangles of one vertex that inner_quadric takes at once, and the
+ * length of its rows (room for three lanes of padding). */
+#define INNER_FAN 32
+#define INNER_ROW (INNER_FAN + 4)
+
+/* Each triangle's area-weighted plane term c c^T / (2 |c|) (6 entries)
+ * and area |c| / 2 for the cross products c of the edges (u, w) in
+ * in[k * INNER_ROW + i] (u: k = 0..2, w: 3..5); zero for a triangle
+ * without area. The same expressions as initial_quadric's scalar loop,
+ * so the same bits. */
+MR_VECTOR_CLONES static void plane_terms(double *in, size_t n, double *out)
+{
+#pragma omp simd
+    for (size_t i = 0; i < n; i++) {
+        const double u0 = in[i], u1 = in[INNER_ROW + i], u2 = in[2 * INNER_ROW + i];
+        const double w0 = in[3 * INNER_ROW + i], w1 = in[4 * INNER_ROW + i],
+                     w2 = in[5 * INNER_ROW + i];
+        const double c0 = u1 * w2 - u2 * w1, c1 = u2 * w0 - u0 * w2, c2 = u0 * w1 - u1 * w0;
+        const double len = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+        const bool area = len > 0;
+        const double f = 0.5 / (area ? len : 1.0);
+        out[i] = area ? f * c0 * c0 : 0;
+        out[INNER_ROW + i] = area ? f * c0 * c1 : 0;
+        out[2 * INNER_ROW + i] = area ? f * c0 * c2 : 0;
+        out[3 * INNER_ROW + i] = area ? f * c1 * c1 : 0;
+        out[4 * INNER_ROW + i] = area ? f * c1 * c2 : 0;
+        out[5 * INNER_ROW + i] = area ? f * c2 * c2 : 0;
+        out[6 * INNER_ROW + i] = area ? 0.5 * len : 0;
+    }
+}
+
+/* initial_quadric of a vertex with no constraint planes and at most
+ * INNER_FAN triangles: the plane terms computed in one vector loop, then
+ * summed in list order as the scalar loop does (adding a zero for a
+ * triangle without area changes no bit: the sums start at +0). */
+static void inner_quadric(mr_simplifier *s, uint32_t v)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    const uint32_t n = m->count[v];
+    double in[6 * INNER_ROW], t[7 * INNER_ROW];
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        const float *p0 = m->pos + 3 * (size_t)tri[0], *p1 = m->pos + 3 * (size_t)tri[1],
+                    *p2 = m->pos + 3 * (size_t)tri[2];
+        for (int k = 0; k < 3; k++) {
+            const double o = p0[k];
+            in[k * INNER_ROW + i] = (double)p1[k] - o;
+            in[(3 + k) * INNER_ROW + i] = (double)p2[k] - o;
+        }
+    }
+    /* whole vectors only: padding lanes have no area */
+    for (int k = 0; k < 6; k++) {
+        double *row = in + k * INNER_ROW + n;
+        row[0] = row[1] = row[2] = 0;
+    }
+    plane_terms(in, (n + 3) & ~3u, t);
+    mr_quadric q;
+    mr_quadric_zero(&q);
+    for (uint32_t i = 0; i < n; i++) {
+        q.a00 += t[i];
+        q.a01 += t[INNER_ROW + i];
+        q.a02 += t[2 * INNER_ROW + i];
+        q.a11 += t[3 * INNER_ROW + i];
+        q.a12 += t[4 * INNER_ROW + i];
+        q.a22 += t[5 * INNER_ROW + i];
+        q.w += t[6 * INNER_ROW + i];
+    }
+    mr_quadric_store(&s->q[v], &q);
+}
+
+/* Initial quadric of v, relative to v's position: the planes of its
+ * triangles (all through v) and the constraint planes of its boundary
+ * edges. */
+static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const bool border = (m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0;
+    if (!border && m->count[v] <= INNER_FAN) {
+        inner_quadric(s, v);
+        return;
+    }
+    mr_quadric q;
+    mr_quadric_zero(&q);
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    double pv[3];
+    mr_collapse_load(m, v, pv);
+    for (uint32_t i = 0; i < m->count[v]; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        double p[3][3];
+        for (int k = 0; k < 3; k++)
+            mr_collapse_load(m, tri[k], p[k]);
+        /* area * n n^T for the unit normal n = c / |c| and area |c| / 2 of
+         * the cross product c: c c^T / (2 |c|), one division */
+        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                             u[0] * w[1] - u[1] * w[0]};
+        const double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (!(len > 0))
+            continue; /* no area, no normal: nothing to add */
+        const double f = 0.5 / len;
+        q.a00 += f * c[0] * c[0];
+        q.a01 += f * c[0] * c[1];
+        q.a02 += f * c[0] * c[2];
+        q.a11 += f * c[1] * c[1];
+        q.a12 += f * c[1] * c[2];
+        q.a22 += f * c[2] * c[2];
+        q.w += 0.5 * len;
+        if (!border)
+            continue;
+        const double n[3] = {c[0] / len, c[1] / len, c[2] / len};
+        const uint32_t k = list[i] % 3;
+        const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
+        for (int e = 0; e < 2; e++) {
+            if (mr_collapse_edge_triangles(m, v, ends[e]) != 1)
+                continue;
+            const double o[3] = {0, 0, 0};
+            double b[3];
+            mr_collapse_load(m, ends[e], b);
+            b[0] -= pv[0];
+            b[1] -= pv[1];
+            b[2] -= pv[2];
+            mr_quadric_add_edge_constraint(&q, o, b, n, boundary_weight);
+        }
+    }
+    mr_quadric_store(&s->q[v], &q);
+}
+
+void mr_simplifier_free(mr_simplifier *s)
+{
+    mr_collapse_mesh_free(&s->m);
+    free(s->q);
+    free(s->cand);
+    free(s->mark);
+    free(s->hist);
+    free(s->best64);
+    memset(s, 0, sizeof *s);
+}
+
+static bool is_finite(double x) { return x == x && x - x == 0; }
+
+mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
+                                    size_t input_triangles, mr_error *err)
+{
+    if (!o)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: options are required (a target must be set)");
+    if (!is_finite(o->target_ratio) || o->target_ratio < 0 || o->target_ratio > 1)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target ratio %g is not in (0, 1]", o->target_ratio);
+    if (!is_finite(o->max_error) || o->max_error < 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: max error %g must be a finite distance >= 0",
+                             o->max_error);
+    if (!is_finite(o->boundary_weight) || o->boundary_weight < 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: boundary weight %g must be finite and >= 0",
+                             o->boundary_weight);
+    if (!is_finite(o->max_normal_turn) || o->max_normal_turn <= 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: max normal turn %g must be a positive angle (radians)",
+                             o->max_normal_turn);
+    if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: unknown collapse kind %d", (int)o->collapse);
+    if (o->strategy != MR_STRATEGY_GREEDY && o->strategy != MR_STRATEGY_BATCHED)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: unknown strategy %d", (int)o->strategy);
+    if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
+        o->max_error == 0 && !o->until_error)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: no target: set a target ratio, vertex or triangle "
+                             "count, a max error, or until_error");
+    if (o->target_triangles > input_triangles)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target of %zu triangles exceeds the input's %zu",
+                             o->target_triangles, input_triangles);
+    if (o->target_vertices > input_vertices)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target of %zu vertices exceeds the input's %zu "
+                             "referenced vertices",
+                             o->target_vertices, input_vertices);
+    return MR_OK;
+}
+
+mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
+                             size_t vertex_count, const uint32_t *indices,
+                             size_t triangle_count, const mr_simplify_options *o,
+                             const uint8_t *extra_flags, mr_error *err)
+{
+    memset(s, 0, sizeof *s);
+    if (!positions && vertex_count)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: positions are NULL");
+    if (!indices && triangle_count)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: indices are NULL");
+    if (stride == 0)
+        stride = 3 * sizeof(float);
+    if (stride < 3 * sizeof(float))
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: stride %zu is below 12 bytes", stride);
+    if (triangle_count == 0)
+        return mr_fail_plain(err, MR_ERR_EMPTY, NULL, "simplify: the mesh has no triangles");
+    mr_status st = mr_check_indices(indices, triangle_count, vertex_count, err);
+    if (st != MR_OK)
+        return st;
+
+    /* Bounding box of the referenced vertices: each vertex once. */
+    uint8_t *used = mr_calloc_array(vertex_count, 1);
+    if (!used)
+        return mr_fail_nomem(err, NULL, vertex_count);
+    for (size_t i = 0; i < 3 * triangle_count; i++)
+        used[indices[i]] = 1;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    /* every finite vertex's box too: the base of relative errors, as
+     * `meshreduce info` and mr_stats give it */
+    double alo[3] = {INFINITY, INFINITY, INFINITY}, ahi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < vertex_count; v++) {
+        float p[3];
+        memcpy(p, (const char *)positions + v * stride, sizeof p);
+        for (int k = 0; k < 3 && is_finite(p[0]) && is_finite(p[1]) && is_finite(p[2]); k++) {
+            alo[k] = p[k] < alo[k] ? p[k] : alo[k];
+            ahi[k] = p[k] > ahi[k] ? p[k] : ahi[k];
+        }
+        if (!used[v])
+            continue;
+        if (!is_finite(p[0]) || !is_finite(p[1]) || !is_finite(p[2])) {
+            free(used);
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                                 "simplify: vertex %zu has a non-finite coordinate", v);
+        }
+        for (int k = 0; k < 3; k++) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
+    }
+    free(used);
+    double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                       (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!(diag > 0))
+        diag = 1; /* every vertex at one point */
+    for (int k = 0; k < 3; k++)
+        s->centre[k] = 0.5 * (lo[k] + hi[k]);
+    s->diagonal = diag;
+    s->scale = 1.0 / diag;
+    const double ad = sqrt((ahi[0] - alo[0]) * (ahi[0] - alo[0]) +
+                           (ahi[1] - alo[1]) * (ahi[1] - alo[1]) +
+                           (ahi[2] - alo[2]) * (ahi[2] - alo[2]));
+    s->error_base = ad > 0 ? ad : diag;
+    for (int k = 0; k < 3; k++) {
+        s->lo[k] = (float)lo[k];
+        s->hi[k] = (float)hi[k];
+        /* a millionth of the diagonal of slack: a flat mesh's optimum
+         * may round off its plane */
+        s->box[k] = 0.5 * (hi[k] - lo[k]) * s->scale + 1e-6;
+    }
+
+    st = mr_collapse_mesh_init(&s->m, positions, stride, vertex_count, indices, triangle_count,
+                               s->centre, s->scale, err);
+    if (st != MR_OK)
+        return st;
+    mr_collapse_mesh *m = &s->m;
+    s->input_vertices = m->live_vertices;
+    if (m->live_triangles == 0) {
+        mr_simplifier_free(s);
+        return mr_fail_plain(err, MR_ERR_EMPTY, NULL,
+                             "every one of its %zu triangles uses a vertex twice: no surface "
+                             "to simplify",
+                             triangle_count);
+    }
+    st = mr_simplify_check_options(o, m->live_vertices, triangle_count, err);
+    if (st != MR_OK) {
+        mr_simplifier_free(s);
+        return st;
+    }
+    s->half = o->collapse == MR_COLLAPSE_HALF;
+    s->batched = o->strategy == MR_STRATEGY_BATCHED;
+    s->limits.half_edge = s->half;
+    double c = cos(o->max_normal_turn);
+    s->limits.min_cos_turn = c > 0 ? c : 0;
+    for (size_t v = 0; v < vertex_count; v++) {
+        s->blocked_vertices += (m->flags[v] & MR_VF_NONMANIFOLD) != 0;
+        if (o->lock_border && (m->flags[v] & MR_VF_BOUNDARY))
+            m->flags[v] |= MR_VF_LOCKED;
+        if (o->vertex_lock && o->vertex_lock[v])
+            m->flags[v] |= MR_VF_LOCKED;
+        if (extra_flags)
+            m->flags[v] |= extra_flags[v];
+    }
+
+    /* one record of padding: the batch planner reads 12 floats of each */
+    s->q = mr_alloc_array(vertex_count + 1, sizeof *s->q);
+    if (!s->q) {
+        mr_simplifier_free(s);
+        return mr_fail_nomem(err, NULL, vertex_count * sizeof *s->q);
+    }
+    /* A gather over each vertex's own triangles, writing only its own
+     * quadric: the same result on any number of threads. */
+    const int nthreads = mr_thread_count(o->threads);
+    const ptrdiff_t nv = (ptrdiff_t)vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED))
+            initial_quadric(s, (uint32_t)v, o->boundary_weight);
+    return MR_OK;
+}
+
+/* ---- targets -------------------------------------------------------------- */
+
+void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
+                           mr_simplify_goal *g)
+{
+    const mr_collapse_mesh *m = &s->m;
+    size_t target_v = 0;
+    if (o->target_ratio > 0)
+        target_v = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
+    if (o->target_vertices > target_v)
+        target_v = o->target_vertices;
+    if (o->target_vertices && o->target_vertices < target_v)
+        target_v = o->target_vertices;
+    if (o->target_ratio > 0 && o->target_vertices) {
+        size_t a = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
+        target_v = a > o->target_vertices ? a : o->target_vertices; /* first reached */
+    }
+    g->vertices = target_v;
+    g->triangles = o->target_triangles;
+    g->limit = INFINITY;
+    if (o->max_error > 0) {
+        const double rel = mr_simplifier_normalised(s, o, o->max_error);
+        g->limit = rel * rel;
+    }
+    /* Progress: the share of the collapses the vertex target needs. */
+    size_t planned = m->live_vertices > target_v ? m->live_vertices - target_v : 0;
+    if (g->triangles && (m->live_triangles - g->triangles) / 2 < planned)
+        planned = (m->live_triangles - g->triangles) / 2;
+    g->planned = planned;
+}
