@@ -3,9 +3,7 @@
 
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../src/core/omp_compat.h"
 
 static const char usage[] =
     "usage: meshreduce compare REF TEST [--samples N] [--seed S] [--json] [-q]\n"
@@ -93,11 +91,7 @@ static int compare_failed(const compare_args *a, const mr_error *err)
 
 static int threads_used(void)
 {
-#ifdef _OPENMP
     return omp_get_max_threads();
-#else
-    return 1;
-#endif
 }
 
 static void print_row(const char *name, double v, double diagonal)

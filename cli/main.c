@@ -5,9 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../src/core/omp_compat.h"
 
 static const cli_command *const commands[] = {
     &cli_cmd_info, &cli_cmd_convert, &cli_cmd_clean, &cli_cmd_generate, &cli_cmd_demo,
@@ -83,10 +81,8 @@ static int take_threads(int *argc, char **argv)
                                 "to 4096\n");
                 return -1;
             }
-#ifdef _OPENMP
             if (n > 0)
                 omp_set_num_threads((int)n);
-#endif
             i = j;
             continue;
         }

@@ -29,12 +29,7 @@
 
 #include "../mesh/adjacency.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#else
-static inline int omp_get_thread_num(void) { return 0; }
-static inline int omp_get_num_threads(void) { return 1; }
-#endif
+#include "../core/omp_compat.h"
 
 #define NONE UINT32_MAX
 #define TRI_CHUNK 16384u  /* triangles per retriangulation work item */

@@ -4,9 +4,7 @@
 #include <stdio.h>
 #include <time.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "omp_compat.h"
 
 const char *mr_version(void) { return MR_VERSION_STRING; }
 
@@ -104,12 +102,8 @@ int mr_thread_count(int requested)
 {
     if (requested > 0)
         return requested;
-#ifdef _OPENMP
     int n = omp_get_max_threads();
     return n > 0 ? n : 1;
-#else
-    return 1;
-#endif
 }
 
 double mr_now_seconds(void)

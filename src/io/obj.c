@@ -22,9 +22,7 @@
 
 #include <errno.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 /* Chunks smaller than this are not worth a thread of their own. (Can be
  * set on the command line to test chunk boundaries on small inputs.) */

@@ -1,9 +1,7 @@
 /* Connectivity building blocks: radix sort, edge table, vertex -> triangles. */
 #include "adjacency.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 /* Below this many elements a loop runs on one thread: starting a team costs
  * more than the work. The result never depends on it. */
@@ -139,12 +137,7 @@ void mr_uf_init(uint32_t *parent, size_t n)
  */
 static bool parallel_fill(size_t triangles)
 {
-#ifdef _OPENMP
     return triangles > MR_PARALLEL_MIN && omp_get_max_threads() > 1;
-#else
-    (void)triangles;
-    return false;
-#endif
 }
 
 typedef struct owned_range {
@@ -154,11 +147,7 @@ typedef struct owned_range {
 /* The vertices owned by the calling thread of the current team. */
 static owned_range owned_vertices(size_t vertex_count)
 {
-    size_t nt = 1, me = 0;
-#ifdef _OPENMP
-    nt = (size_t)omp_get_num_threads();
-    me = (size_t)omp_get_thread_num();
-#endif
+    const size_t nt = (size_t)omp_get_num_threads(), me = (size_t)omp_get_thread_num();
     size_t lo = vertex_count * me / nt, hi = vertex_count * (me + 1) / nt;
     owned_range r = {(uint32_t)lo, (uint32_t)(hi - lo)};
     return r;

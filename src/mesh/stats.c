@@ -36,9 +36,7 @@
 
 #include <math.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 #define PARALLEL_MIN 65536
 #define AREA_BLOCK 8192
@@ -406,9 +404,7 @@ static mr_status compute_topology(const uint32_t *indices, size_t tc, size_t vc,
     tp.indices = indices;
     tp.tc = tc;
     tp.vc = vc;
-#ifdef _OPENMP
     tp.par = tc > PARALLEL_MIN && omp_get_max_threads() > 1;
-#endif
     mr_status st = mr_edge_table_build(&tp.et, indices, tc, vc, err);
     if (st != MR_OK)
         goto done;

@@ -30,9 +30,7 @@
 
 #include <math.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 #define BLOCK 4096              /* queries per unit of work */
 #define AREA_BLOCK 8192         /* triangles per block of the prefix sums */

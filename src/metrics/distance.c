@@ -30,9 +30,7 @@
 #include <float.h>
 #include <math.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 #define BINS 16
 #define MAX_LEAF 4           /* primitives per leaf at most */

@@ -5,9 +5,7 @@
  */
 #include "../metrics/distance.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 /* Control points of the colour map, evenly spaced over [0, 1]: dark blue,
  * blue, cyan, green, yellow, red. */

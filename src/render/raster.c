@@ -35,9 +35,7 @@
 
 #include <float.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "../core/omp_compat.h"
 
 #define SUB_BITS 8                 /* fraction bits of sample coordinates */
 #define SUB_ONE (1 << SUB_BITS)
@@ -968,10 +966,7 @@ mr_status mr_render_framed(const float *positions, size_t vertex_count, const ui
     const size_t band_samples = (size_t)c.band_rows * (size_t)c.sw;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads)
     for (int b = 0; b < c.nbands; b++) {
-        int tid = 0;
-#ifdef _OPENMP
-        tid = omp_get_thread_num();
-#endif
+        const int tid = omp_get_thread_num();
         float *bd = depth + (size_t)tid * band_samples;
         uint32_t *bi = ids + (size_t)tid * band_samples;
         int r0 = b * c.band_rows, r1 = r0 + c.band_rows - 1;
