@@ -11,7 +11,7 @@ BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
 FUZZ_PKGS  = clang libclang-rt-14-dev
 
-.PHONY: all build demo check asan fuzz bench report clean deps-build deps-test deps-fuzz
+.PHONY: all build demo check asan serial fuzz bench report clean deps-build deps-test deps-fuzz
 
 all: build
 
@@ -43,6 +43,14 @@ asan: deps-test
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	    ctest --test-dir build-asan --output-on-failure -j $(JOBS)
 
+# The serial build (no OpenMP: -DMR_OPENMP=OFF) gives the OpenMP build's
+# bytes: generate and simplify outputs compared by cmp (--threads 1 and 2).
+serial: build
+	$(CMAKE) -S . -B build-serial -DCMAKE_BUILD_TYPE=Release -DMR_OPENMP=OFF \
+	    -DMR_BUILD_TESTS=OFF -DMR_BUILD_BENCH=OFF
+	$(CMAKE) --build build-serial -j $(JOBS) --target meshreduce
+	scripts/check-serial.sh $(BUILD)/meshreduce build-serial/meshreduce
+
 # Each reader's libFuzzer target for FUZZ_SECONDS under ASan + UBSan.
 fuzz: deps-build deps-fuzz
 	CC=clang $(CMAKE) -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DMR_FUZZ=ON \
@@ -72,4 +80,4 @@ report: build
 	./$(BUILD)/bench/report bench/report/sweep.csv --out bench
 
 clean:
-	rm -rf build build-asan build-fuzz out
+	rm -rf build build-asan build-serial build-fuzz out
