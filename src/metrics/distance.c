@@ -446,7 +446,7 @@ static void build_node(build_ctx *bc, size_t slot, size_t first, size_t count, i
     node->a = (uint32_t)lslot;
     node->b = (uint32_t)rslot;
     if (count >= TASK_MIN) {
-#pragma omp task default(shared) firstprivate(lslot, first, nl, depth, left)
+#pragma omp task default(shared) firstprivate(bc, lslot, first, nl, depth, left)
         build_node(bc, lslot, first, nl, depth + 1, &left);
     } else {
         build_node(bc, lslot, first, nl, depth + 1, &left);
@@ -835,7 +835,7 @@ static void thin_node(thin_ctx *tc, size_t slot, size_t first, size_t count, int
     node->a = (uint32_t)lslot;
     node->b = (uint32_t)rslot;
     if (count >= TASK_MIN) {
-#pragma omp task default(shared) firstprivate(lslot, first, nl, depth)
+#pragma omp task default(shared) firstprivate(tc, lslot, first, nl, depth)
         thin_node(tc, lslot, first, nl, depth + 1);
     } else {
         thin_node(tc, lslot, first, nl, depth + 1);
