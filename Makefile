@@ -10,8 +10,13 @@ FUZZ_SECONDS ?= 60
 BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
 FUZZ_PKGS  = clang libclang-rt-14-dev
+# ThreadSanitizer: clang's TSan runtime, LLVM's OpenMP runtime with its
+# Archer tool (libomp-14-dev: libomp.so, omp.h, libarcher.so) and
+# llvm-symbolizer (llvm) for the reports' stacks.
+TSAN_PKGS  = clang libclang-rt-14-dev libomp-14-dev llvm
 
-.PHONY: all build demo check asan serial fuzz bench report clean deps-build deps-test deps-fuzz
+.PHONY: all build demo check asan tsan serial fuzz bench report clean deps-build deps-test deps-fuzz \
+        deps-tsan
 
 all: build
 
@@ -21,6 +26,8 @@ deps-test:
 	@scripts/need-packages.sh $(TEST_PKGS)
 deps-fuzz:
 	@scripts/need-packages.sh $(FUZZ_PKGS)
+deps-tsan:
+	@scripts/need-packages.sh $(TSAN_PKGS)
 
 $(BUILD)/CMakeCache.txt:
 	$(CMAKE) -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
@@ -42,6 +49,22 @@ asan: deps-test
 	$(CMAKE) --build build-asan -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	    ctest --test-dir build-asan --output-on-failure -j $(JOBS)
+
+# The tests of the parallel parts (CTest label "parallel") under
+# ThreadSanitizer: clang, its OpenMP runtime libomp and LLVM's Archer
+# (OMP_TOOL_LIBRARIES, set by CTest), which tells TSan about OpenMP's
+# barriers, reductions, locks and tasks; GCC's libgomp is not instrumented
+# and would read as races. The tests shrink their largest cases
+# (MR_TEST_QUICK, set by CTest). Any report fails the test (halt_on_error).
+# ignore_noninstrumented_modules=1, as Archer asks: accesses made inside
+# the uninstrumented libraries (libomp itself, libpng, cmocka) are not
+# checked; all of ours is instrumented. No suppression file.
+TSAN_RUN_OPTIONS = halt_on_error=1 second_deadlock_stack=1 ignore_noninstrumented_modules=1
+tsan: deps-test deps-tsan
+	CC=clang $(CMAKE) -S . -B build-tsan -DCMAKE_BUILD_TYPE=Debug -DMR_TSAN=ON -DMR_BUILD_BENCH=OFF
+	$(CMAKE) --build build-tsan -j $(JOBS) --target parallel_tests
+	TSAN_OPTIONS="$(TSAN_RUN_OPTIONS)" ctest --test-dir build-tsan -L parallel --output-on-failure \
+	    -j $(JOBS)
 
 # The serial build (no OpenMP: -DMR_OPENMP=OFF) gives the OpenMP build's
 # bytes: generate and simplify outputs compared by cmp (--threads 1 and 2).
@@ -80,4 +103,4 @@ report: build
 	./$(BUILD)/bench/report bench/report/sweep.csv --out bench
 
 clean:
-	rm -rf build build-asan build-serial build-fuzz out
+	rm -rf build build-asan build-tsan build-serial build-fuzz out
