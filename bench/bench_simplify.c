@@ -1,32 +1,51 @@
 /*
- * Sequential simplification benchmark: greedy quadric-error edge collapse
- * (mr_simplify, 1 thread, both collapse kinds) on generated scan-like meshes
- * of 1M and 4M triangles and on the shared test meshes (../shared/data, those
- * present; skipped cleanly when the folder is absent), each reduced to 25 %,
- * 10 % and 1 % of its referenced vertices. In the same run, the peers that
- * were found when the benchmark was configured:
+ * Simplification benchmark: the default simplifier (mr_simplify with the
+ * default options: batched strategy, full collapse) at 1 and 2 threads, or
+ * at the thread counts of --threads, on generated scan-like meshes of 1M and
+ * 4M triangles and on the shared test meshes (../shared/data, those present;
+ * skipped cleanly when the folder is absent), each reduced to 25 %, 10 % and
+ * 1 % of its referenced vertices. In the same run, the peers that were found
+ * when the benchmark was configured:
  *   meshopt         meshopt_simplify (options 0: nothing locked; target_error
  *                   FLT_MAX: error limit off), asked for the triangle count
- *                   our full-collapse run reached;
+ *                   our 1-thread run reached;
  *   meshopt-sloppy  meshopt_simplifySloppy, same target;
  *   openmesh        OpenMesh's DecimaterT + ModQuadricT (no error limit, no
  *                   other module) via the driver openmesh_decimate, asked for
- *                   the vertex count our full-collapse run reached; its
- *                   repeated runs stop after 20 s in all (at least one run;
- *                   the table then names the run count: "openmesh (1)").
+ *                   the vertex count our 1-thread run reached; its repeated
+ *                   runs stop after 20 s in all (at least one run; the table
+ *                   then names the run count: "openmesh (1)").
+ * Without --quick (or with --others), also our other simplifiers on one
+ * thread: meshreduce-half (batched, half collapse), mr-greedy-full and
+ * mr-greedy-half (the sequential greedy reference).
  *
- *   bench_simplify [--runs R] [--quick] [--csv FILE] [--samples N]
- *                  [--data DIR] [--dir DIR] [--mesh NAME]... [--keep]
+ *   bench_simplify [--runs R] [--quick] [--threads 1,2,...] [--csv FILE]
+ *                  [--md FILE] [--samples N] [--data DIR] [--dir DIR]
+ *                  [--mesh NAME]... [--others | --no-others] [--keep]
  *
- * --runs R     timed runs per (mesh, target, algorithm), default 3; the table
- *              gives their median, min and max
- * --quick      only scan-1M, bunny and armadillo at 10 % and 1 % (the meshes
- *              and targets the bars below use), 1 run unless --runs is given
- * --csv FILE   also write one row per (mesh, target, algorithm)
- * --samples N  surface samples per mesh for mr_compare (default 200,000)
- * --data DIR   the test meshes (default: ../shared/data beside the checkout)
- * --dir DIR    temporary files for the OpenMesh driver (default out/bench)
- * --mesh NAME  only this mesh (repeatable): scan-1M, scan-4M, bunny, ...
+ * --runs R       timed runs per (mesh, target, algorithm, threads), default
+ *                3; the table gives their median, min and max
+ * --quick        only scan-1M to 10 % and scan-4M to 1 % (the speed bars)
+ *                and bunny and armadillo to 10 % and 1 % (the quality
+ *                lines); 1 run unless --runs is given; no other simplifiers
+ *                unless --others
+ * --threads L    the default simplifier's thread counts (default 1,2; e.g.
+ *                1,2,4,8,16 on a bigger machine; 1 is always run, first:
+ *                the speedups are over it); counts above the CPUs this
+ *                process may use are run but flagged as oversubscribed
+ * --csv FILE     also write one row per (mesh, target, algorithm, threads)
+ * --md FILE      also write the tables and the bars as Markdown
+ * --samples N    surface samples per mesh for mr_compare (default 200,000)
+ * --data DIR     the test meshes (default: ../shared/data beside the checkout)
+ * --dir DIR      temporary files: the input for the memory measurement and
+ *                the OpenMesh driver (default out/bench)
+ * --mesh NAME    only this mesh (repeatable): scan-1M, scan-4M, bunny, ...
+ * --others       our other simplifiers too (the default without --quick);
+ *                --no-others: only the default simplifier and the peers
+ * --keep         keep the temporary files
+ *
+ * Exit status 3 when an N-thread output differed from the 1-thread output
+ * (or a 1-thread run from the first one): a bug, also printed loudly.
  *
  * Method.
  *   Input: each mesh is loaded (mr_mesh_read) or generated (mr_generate
@@ -37,17 +56,36 @@
  *   including its output compaction; meshopt: the simplify call, its output
  *   index buffer preallocated; OpenMesh: decimater setup, decimate_to and
  *   garbage_collection, measured inside the driver). Ours runs with
- *   options.threads = 1 and omp_set_num_threads(1); the peers are
- *   single-threaded.
- *   Memory: one more simplification per configuration in a forked child (so
- *   peaks do not accumulate), after malloc_trim: the child resets its peak
- *   resident set through /proc/self/clear_refs ("5"), notes VmRSS (the loaded
- *   mesh and the rest of the process: the baseline), runs, and reports VmHWM
- *   minus that baseline; without clear_refs, the child's own ru_maxrss
- *   (getrusage, which starts at its resident set at the fork) minus the
- *   parent's VmRSS at the fork. The OpenMesh driver does the same
- *   in its own process around the first decimation of a copy of the loaded
- *   mesh. Reported as bytes per input triangle; it includes the output.
+ *   options.threads = N and omp_set_num_threads(N); the peers are
+ *   single-threaded. The runs alternate so that the machine's drifts hit
+ *   every configuration alike: for each of the R rounds, the default
+ *   simplifier at each thread count in the list's order, then
+ *   meshopt_simplify, then meshopt_simplifySloppy (1, 2, meshopt, sloppy,
+ *   1, 2, meshopt, sloppy, ...). The other simplifiers and OpenMesh run
+ *   after that, their runs back to back. Before the rounds, one untimed
+ *   1-thread run of the default simplifier (a warm-up: the first run after
+ *   loading or after other work faults its heap in).
+ *   Speedup: the median 1-thread time over the median N-thread time of the
+ *   same run; meshopt/ours: meshopt_simplify's median over our median at
+ *   that thread count (> 1: ours is faster).
+ *   Same: every run's output (positions, indices and origin, bytewise, and
+ *   the counts) is compared with the first 1-thread output; "yes" when all
+ *   runs at that thread count matched it (for the 1-thread row: its
+ *   repeated runs). A "no" is a bug: the simplifier promises the same
+ *   output at every thread count. Quality is then measured on the
+ *   differing output too.
+ *   Memory: ours: one more simplification per (configuration, thread count)
+ *   in a fresh process (the benchmark executes itself with --peak-child:
+ *   benchpeers.h, bench_exec_peak; a forked child cannot start OpenMP
+ *   threads), which reads the input, trims malloc, resets its peak resident
+ *   set through /proc/self/clear_refs ("5"), notes VmRSS (the input and the
+ *   process: the baseline), runs, and reports VmHWM minus that baseline;
+ *   thread stacks and per-thread malloc arenas count. meshopt: the same in a
+ *   forked child of this process (bench_child_peak; without clear_refs, the
+ *   child's ru_maxrss minus the parent's VmRSS at the fork). The OpenMesh
+ *   driver does the same in its own process around the first decimation of
+ *   a copy of the loaded mesh. Reported as bytes per input triangle; it
+ *   includes the output.
  *   Quality: mr_compare of the input (reference) and the output, with
  *   options.samples = N (200,000 by default) area-uniform samples per mesh
  *   besides the vertices; symmetric Hausdorff distance and RMS relative to
@@ -55,19 +93,27 @@
  *   index buffer refers to the input vertex array; mr_compare samples every
  *   vertex it is given).
  *
- * CSV format (stable: later sweeps and reports read it). Header line, then
- * one row per (mesh, target, algorithm):
+ * CSV format (stable: columns are only ever added at the end). Header line,
+ * then one row per (mesh, target, algorithm, threads):
  *   mesh,algorithm,threads,target,input_triangles,output_triangles,
  *   time_median,time_min,time_max,triangles_per_second,
- *   peak_bytes_per_triangle,hausdorff_rel,rms_rel
- * mesh: scan-1M, scan-4M, bunny, armadillo, ...; algorithm: meshreduce-full,
- * meshreduce-half, meshopt, meshopt-sloppy, openmesh; target: the fraction of
- * referenced input vertices asked for (0.25, 0.1, 0.01); times in seconds;
- * time_min, time_max: over the runs made (--runs; openmesh's may be fewer,
- * see above); triangles_per_second: input triangles / time_median;
- * peak_bytes_per_triangle: see Memory above; hausdorff_rel and
- * rms_rel: fractions of the input's bounding-box diagonal. A value that was
- * not measured is an empty field.
+ *   peak_bytes_per_triangle,hausdorff_rel,rms_rel,
+ *   runs,speedup_vs_1_thread,meshopt_over_ours,same_as_1_thread,
+ *   cpu_model,physical_cores,nproc
+ * mesh: scan-1M, scan-4M, bunny, armadillo, ...; algorithm: meshreduce-full
+ * (the default simplifier: one row per thread count), meshreduce-half,
+ * mr-greedy-full, mr-greedy-half, meshopt, meshopt-sloppy, openmesh (those
+ * at threads 1); target: the fraction of referenced input vertices asked
+ * for (0.25, 0.1, 0.01); times in seconds; time_min, time_max: over the
+ * runs made (runs; openmesh's may be fewer, see above);
+ * triangles_per_second: input triangles / time_median;
+ * peak_bytes_per_triangle: see Memory above; hausdorff_rel and rms_rel:
+ * fractions of the input's bounding-box diagonal; speedup_vs_1_thread,
+ * meshopt_over_ours, same_as_1_thread (yes/no): meshreduce-full rows only,
+ * see above; cpu_model (commas replaced by spaces), physical_cores (distinct
+ * physical/core id pairs of /proc/cpuinfo; empty when it lists none), nproc
+ * (the CPUs this process may use, as nproc counts them): the machine, on
+ * every row. A value that was not measured is an empty field.
  */
 #include "benchpeers.h"
 
@@ -78,39 +124,47 @@
 #include <string.h>
 #include <unistd.h>
 
-/* Ours first: ALG_FULL (the default options) is the row the others are
- * compared with; ALG_FULL..ALG_GREEDY_HALF are all meshreduce's. */
+/* ALG_FULL (the default options) is the row the others are compared with
+ * and the only one run at every thread count; ALG_FULL..ALG_GREEDY_HALF are
+ * all meshreduce's. The order is the tables' row order. */
 enum {
     ALG_FULL,
+    ALG_MESHOPT,
+    ALG_SLOPPY,
     ALG_HALF,
     ALG_GREEDY_FULL,
     ALG_GREEDY_HALF,
-    ALG_MESHOPT,
-    ALG_SLOPPY,
     ALG_OPENMESH,
     ALG_COUNT
 };
 static const char *const alg_name[ALG_COUNT] = {
-    "meshreduce-full",  "meshreduce-half", "mr-greedy-full", "mr-greedy-half",
-    "meshopt",          "meshopt-sloppy",  "openmesh"};
+    "meshreduce-full", "meshopt",        "meshopt-sloppy", "meshreduce-half",
+    "mr-greedy-full",  "mr-greedy-half", "openmesh"};
 
 #define TARGET_COUNT 3
 static const double target_ratio[TARGET_COUNT] = {0.25, 0.10, 0.01};
 
-/* One measured (mesh, target, algorithm). Negative values: not measured. */
+#define MAX_THREADS 16 /* entries of --threads */
+
+/* One measured (mesh, target, algorithm, threads). Negative values: not
+ * measured. */
 typedef struct row {
     int done;
     int runs;           /* timed runs behind time */
+    int threads;
     bench_summary time;
     size_t out_vertices, out_triangles;
     double peak_bytes;
     double hausdorff_rel, rms_rel;
+    int same;           /* meshreduce-full: 1 yes, 0 no; else -1 */
 } row;
 
 typedef struct mesh_result {
     char name[32];
+    char desc[160];     /* "501762 vertices, 1003520 triangles (...)" */
     size_t input_triangles;
-    row rows[TARGET_COUNT][ALG_COUNT];
+    /* [target][algorithm][thread index]; only ALG_FULL uses index > 0 */
+    row rows[TARGET_COUNT][ALG_COUNT][MAX_THREADS];
 } mesh_result;
 
 typedef struct config {
@@ -121,7 +175,15 @@ typedef struct config {
     const char *data;
     const char *dir;
     int keep;
+    int others;
+    int threads[MAX_THREADS]; /* threads[0] == 1 */
+    int n_threads;
+    char self[4096];          /* this executable, for --peak-child */
+    bench_cpu cpu;
 } config;
+
+/* Configurations whose output differed from the 1-thread output. */
+static int mismatches;
 
 /* ------------------------------------------------------------------------ */
 /* Quality                                                                  */
@@ -154,51 +216,234 @@ static void measure_quality(const config *cfg, const mr_mesh *in, const float *p
 /* meshreduce                                                               */
 /* ------------------------------------------------------------------------ */
 
-static void run_ours(const config *cfg, const mr_mesh *in, double ratio, int alg, row *r)
+static void options_for(int alg, double ratio, int threads, mr_simplify_options *opt)
+{
+    mr_simplify_options_default(opt);
+    opt->target_ratio = ratio;
+    if (alg == ALG_HALF || alg == ALG_GREEDY_HALF)
+        opt->collapse = MR_COLLAPSE_HALF;
+    if (alg == ALG_GREEDY_FULL || alg == ALG_GREEDY_HALF)
+        opt->strategy = MR_STRATEGY_GREEDY;
+    opt->threads = threads;
+}
+
+/* One timed mr_simplify at opt->threads threads. */
+static double simplify_once(const mr_mesh *in, const mr_simplify_options *opt,
+                            mr_simplified *out)
+{
+    mr_error err;
+    omp_set_num_threads(opt->threads);
+    double t0 = bench_now();
+    bench_check(mr_simplify(in->positions, 0, in->vertex_count, in->indices, in->triangle_count,
+                            opt, out, &err),
+                &err);
+    double t = bench_now() - t0;
+    omp_set_num_threads(1);
+    return t;
+}
+
+/* NULL when a and b are byte-identical, else where they first differ. */
+static const char *difference(const mr_simplified *a, const mr_simplified *b, char *buf,
+                              size_t size)
+{
+    if (a->vertex_count != b->vertex_count || a->triangle_count != b->triangle_count) {
+        snprintf(buf, size, "%zu vertices, %zu triangles against %zu, %zu", b->vertex_count,
+                 b->triangle_count, a->vertex_count, a->triangle_count);
+        return buf;
+    }
+    for (size_t v = 0; v < a->vertex_count; v++)
+        if (memcmp(a->positions + 3 * v, b->positions + 3 * v, 3 * sizeof(float)) != 0) {
+            snprintf(buf, size, "position of output vertex %zu", v);
+            return buf;
+        }
+    for (size_t t = 0; t < a->triangle_count; t++)
+        if (memcmp(a->indices + 3 * t, b->indices + 3 * t, 3 * sizeof(uint32_t)) != 0) {
+            snprintf(buf, size, "indices of output triangle %zu", t);
+            return buf;
+        }
+    if ((a->origin == NULL) != (b->origin == NULL)) {
+        snprintf(buf, size, "one has no origin array");
+        return buf;
+    }
+    if (a->origin)
+        for (size_t v = 0; v < a->vertex_count; v++)
+            if (a->origin[v] != b->origin[v]) {
+                snprintf(buf, size, "origin of output vertex %zu", v);
+                return buf;
+            }
+    return NULL;
+}
+
+static void report_mismatch(const char *mesh, double ratio, int threads, int run,
+                            const char *what)
+{
+    char msg[512];
+    if (threads == 1)
+        snprintf(msg, sizeof msg,
+                 "*** BUG: meshreduce-full on 1 thread, %s to %g %%: run %d differs from run 1 "
+                 "(%s): not deterministic ***",
+                 mesh, 100 * ratio, run + 1, what);
+    else
+        snprintf(msg, sizeof msg,
+                 "*** BUG: meshreduce-full on %d threads, %s to %g %%: run %d is not "
+                 "byte-identical to the 1-thread output (first difference: %s) ***",
+                 threads, mesh, 100 * ratio, run + 1, what);
+    fprintf(stderr, "%s\n", msg);
+    printf("%s\n", msg);
+    fflush(stdout);
+}
+
+/* Our peak memory for (alg, ratio, threads) in a fresh process. */
+static double peak_of(const config *cfg, const char *raw, int alg, double ratio, int threads)
 {
     mr_simplify_options opt;
-    mr_simplify_options_default(&opt);
-    opt.target_ratio = ratio;
-    opt.collapse = alg == ALG_HALF || alg == ALG_GREEDY_HALF ? MR_COLLAPSE_HALF
-                                                             : MR_COLLAPSE_FULL;
-    if (alg == ALG_GREEDY_FULL || alg == ALG_GREEDY_HALF)
-        opt.strategy = MR_STRATEGY_GREEDY;
-    opt.threads = 1;
+    options_for(alg, ratio, threads, &opt);
+    double p = bench_exec_peak(cfg->self, raw, &opt);
+    if (p < 0)
+        fprintf(stderr, "bench: the peak-memory child failed (%s --peak-child %s ...)\n",
+                cfg->self, raw);
+    return p;
+}
+
+/* The default simplifier at every thread count and the meshopt peers, their
+ * runs alternating (see Method). */
+static void run_block(const config *cfg, const mr_mesh *in, const char *raw, mesh_result *m,
+                      int ti)
+{
+    const double ratio = target_ratio[ti];
+    const int nt = cfg->n_threads, runs = cfg->runs;
+    row *ours = m->rows[ti][ALG_FULL];
+    row *mo = &m->rows[ti][ALG_MESHOPT][0], *sl = &m->rows[ti][ALG_SLOPPY][0];
+    double *times = malloc(sizeof(double) * (size_t)runs * (size_t)(nt + 2));
+    double *mo_t = times + (size_t)runs * (size_t)nt, *sl_t = mo_t + runs;
+    mr_simplified ref, diff[MAX_THREADS];
+    int have_diff[MAX_THREADS] = {0};
+    memset(&ref, 0, sizeof ref);
+    const int have_mo = bench_have_meshopt();
+    uint32_t *mo_dst = NULL, *sl_dst = NULL;
+    size_t mo_n = 0, sl_n = 0;
+    if (have_mo) {
+        mo_dst = malloc(sizeof(uint32_t) * 3 * (in->triangle_count + 1));
+        sl_dst = malloc(sizeof(uint32_t) * 3 * (in->triangle_count + 1));
+    }
+    for (int j = 0; j < nt; j++) {
+        ours[j].threads = cfg->threads[j];
+        ours[j].same = 1;
+    }
+    {
+        /* Untimed warm-up: the first run after loading (or after the other
+         * algorithms and mr_compare) faults its heap in and would
+         * otherwise be charged to the 1-thread figure alone. */
+        mr_simplify_options opt;
+        options_for(ALG_FULL, ratio, cfg->threads[0], &opt);
+        mr_simplified out;
+        simplify_once(in, &opt, &out);
+        mr_simplified_free(&out);
+    }
+    for (int k = 0; k < runs; k++) {
+        for (int j = 0; j < nt; j++) {
+            mr_simplify_options opt;
+            options_for(ALG_FULL, ratio, cfg->threads[j], &opt);
+            mr_simplified out;
+            times[(size_t)j * (size_t)runs + (size_t)k] = simplify_once(in, &opt, &out);
+            if (k == 0 && j == 0) {
+                ref = out;
+                continue;
+            }
+            char buf[160];
+            const char *what = difference(&ref, &out, buf, sizeof buf);
+            if (what) {
+                if (ours[j].same)
+                    mismatches++;
+                report_mismatch(m->name, ratio, cfg->threads[j], k, what);
+                ours[j].same = 0;
+                if (!have_diff[j]) {
+                    diff[j] = out;
+                    have_diff[j] = 1;
+                    continue;
+                }
+            }
+            mr_simplified_free(&out);
+        }
+        if (have_mo) {
+            bench_meshopt_call(in, ref.triangle_count, 0, mo_dst, &mo_n, &mo_t[k]);
+            bench_meshopt_call(in, ref.triangle_count, 1, sl_dst, &sl_n, &sl_t[k]);
+        }
+    }
+    for (int j = 0; j < nt; j++) {
+        row *r = &ours[j];
+        const mr_simplified *o = have_diff[j] ? &diff[j] : &ref;
+        r->runs = runs;
+        r->time = bench_summarize(times + (size_t)j * (size_t)runs, runs);
+        r->out_vertices = o->vertex_count;
+        r->out_triangles = o->triangle_count;
+        r->peak_bytes = peak_of(cfg, raw, ALG_FULL, ratio, cfg->threads[j]);
+        if (j == 0 || have_diff[j]) {
+            measure_quality(cfg, in, o->positions, o->vertex_count, o->indices,
+                            o->triangle_count, r);
+        } else {
+            r->hausdorff_rel = ours[0].hausdorff_rel;
+            r->rms_rel = ours[0].rms_rel;
+        }
+        r->done = 1;
+        if (have_diff[j])
+            mr_simplified_free(&diff[j]);
+    }
+    if (have_mo) {
+        row *pr[2] = {mo, sl};
+        const double *pt[2] = {mo_t, sl_t};
+        const uint32_t *pd[2] = {mo_dst, sl_dst};
+        const size_t pn[2] = {mo_n, sl_n};
+        for (int p = 0; p < 2; p++) {
+            pr[p]->runs = runs;
+            pr[p]->threads = 1;
+            pr[p]->time = bench_summarize((double *)pt[p], runs);
+            pr[p]->peak_bytes = bench_meshopt_peak(in, ref.triangle_count, p);
+            bench_output out = {0};
+            bench_compact(in, pd[p], pn[p], &out);
+            pr[p]->out_vertices = out.vertex_count;
+            pr[p]->out_triangles = out.triangle_count;
+            measure_quality(cfg, in, out.positions, out.vertex_count, out.indices,
+                            out.triangle_count, pr[p]);
+            bench_output_free(&out);
+            pr[p]->done = 1;
+        }
+    }
+    mr_simplified_free(&ref);
+    free(mo_dst);
+    free(sl_dst);
+    free(times);
+}
+
+/* One of our other simplifiers on 1 thread, its runs back to back. */
+static void run_other(const config *cfg, const mr_mesh *in, const char *raw, double ratio,
+                      int alg, row *r)
+{
+    mr_simplify_options opt;
+    options_for(alg, ratio, 1, &opt);
+    double *times = malloc(sizeof(double) * (size_t)cfg->runs);
     mr_simplified out;
+    memset(&out, 0, sizeof out);
+    for (int k = 0; k < cfg->runs; k++) {
+        if (k > 0)
+            mr_simplified_free(&out);
+        times[k] = simplify_once(in, &opt, &out);
+    }
     r->runs = cfg->runs;
-    bench_run_ours(in, &opt, r->runs, &r->time, &r->peak_bytes, &out);
+    r->threads = 1;
+    r->time = bench_summarize(times, cfg->runs);
+    free(times);
     r->out_vertices = out.vertex_count;
     r->out_triangles = out.triangle_count;
+    r->peak_bytes = peak_of(cfg, raw, alg, ratio, 1);
     measure_quality(cfg, in, out.positions, out.vertex_count, out.indices, out.triangle_count, r);
     mr_simplified_free(&out);
     r->done = 1;
 }
 
 /* ------------------------------------------------------------------------ */
-/* Peers (benchpeers.h)                                                     */
+/* OpenMesh (benchpeers.h)                                                  */
 /* ------------------------------------------------------------------------ */
-
-/* A peer's output (ok: it ran) into r, with its quality; frees out. */
-static void finish_peer(const config *cfg, const mr_mesh *in, int ok, bench_output *out, row *r)
-{
-    if (ok) {
-        r->out_vertices = out->vertex_count;
-        r->out_triangles = out->triangle_count;
-        measure_quality(cfg, in, out->positions, out->vertex_count, out->indices,
-                        out->triangle_count, r);
-        r->done = 1;
-    }
-    bench_output_free(out);
-}
-
-static void run_meshopt(const config *cfg, const mr_mesh *in, size_t target_triangles,
-                        int sloppy, row *r)
-{
-    bench_output out = {0};
-    int ok = bench_run_meshopt(in, target_triangles, sloppy, cfg->runs, &r->time, &r->runs,
-                               &r->peak_bytes, &out);
-    finish_peer(cfg, in, ok, &out, r);
-}
 
 /* OpenMesh is an order of magnitude slower: its repeated runs stop once they
  * add up to this many seconds (at least one run). */
@@ -208,68 +453,112 @@ static void run_openmesh(const config *cfg, const mr_mesh *in, const char *in_pa
                          const char *out_path, size_t target_vertices, row *r)
 {
     bench_output out = {0};
+    r->threads = 1;
     int ok = bench_run_openmesh(in, in_path, out_path, target_vertices, cfg->runs,
                                 OPENMESH_BUDGET, cfg->keep, &r->time, &r->runs, &r->peak_bytes,
                                 &out);
-    finish_peer(cfg, in, ok, &out, r);
+    if (ok) {
+        r->out_vertices = out.vertex_count;
+        r->out_triangles = out.triangle_count;
+        measure_quality(cfg, in, out.positions, out.vertex_count, out.indices,
+                        out.triangle_count, r);
+        r->done = 1;
+    }
+    bench_output_free(&out);
 }
 
 /* ------------------------------------------------------------------------ */
 /* Output                                                                   */
 /* ------------------------------------------------------------------------ */
 
-static void fmt_ratio(char *buf, size_t size, double peer, double ours)
+/* The rows of one (mesh, target) in table order: (algorithm, thread index). */
+static int row_order(const config *cfg, int *alg, int *ti)
 {
-    if (peer >= 0 && ours > 0)
-        snprintf(buf, size, "%.2f", peer / ours);
+    int n = 0;
+    for (int a = 0; a < ALG_COUNT; a++)
+        for (int j = 0; j < (a == ALG_FULL ? cfg->n_threads : 1); j++) {
+            alg[n] = a;
+            ti[n] = j;
+            n++;
+        }
+    return n;
+}
+
+static void fmt_ratio(char *buf, size_t size, double num, double den)
+{
+    if (num >= 0 && den > 0)
+        snprintf(buf, size, "%.2f", num / den);
     else
         snprintf(buf, size, "-");
 }
 
-static void print_header(void)
-{
-    printf("%-6s %-19s %10s %9s %9s %9s %9s %7s %6s %10s %10s %6s %6s %6s\n", "target",
-           "algorithm", "out tris", "out verts", "median s", "min s", "max s", "Mtri/s", "B/tri",
-           "Hausdorff", "RMS", "t/ours", "H/ours", "R/ours");
-}
+/* The derived figures of a row, as text ("" when they do not apply). */
+typedef struct row_text {
+    char name[32], peak[16], h[16], rms[16];
+    char speedup[16], mo[16], same[8];
+    char rt[16], rh[16], rr[16];
+} row_text;
 
 /* Rows timed over fewer runs than asked name their run count. */
 static int runs_asked = 1;
 
-static void print_row(const mesh_result *m, int ti, int a)
+static void row_texts(const mesh_result *m, int ti, int a, int j, row_text *t)
 {
-    const row *r = &m->rows[ti][a];
-    const row *ours = &m->rows[ti][ALG_FULL];
+    const row *r = &m->rows[ti][a][j];
+    const row *ours = &m->rows[ti][ALG_FULL][0];
+    const row *mo = &m->rows[ti][ALG_MESHOPT][0];
+    memset(t, 0, sizeof *t);
+    if (r->peak_bytes >= 0)
+        snprintf(t->peak, sizeof t->peak, "%.0f", r->peak_bytes / (double)m->input_triangles);
+    else
+        snprintf(t->peak, sizeof t->peak, "-");
+    if (r->hausdorff_rel >= 0) {
+        snprintf(t->h, sizeof t->h, "%.5f%%", 100 * r->hausdorff_rel);
+        snprintf(t->rms, sizeof t->rms, "%.5f%%", 100 * r->rms_rel);
+    } else {
+        snprintf(t->h, sizeof t->h, "-");
+        snprintf(t->rms, sizeof t->rms, "-");
+    }
+    if (a == ALG_FULL) {
+        if (ours->done)
+            fmt_ratio(t->speedup, sizeof t->speedup, ours->time.median, r->time.median);
+        if (mo->done)
+            fmt_ratio(t->mo, sizeof t->mo, mo->time.median, r->time.median);
+        snprintf(t->same, sizeof t->same, "%s", r->same ? "yes" : "no");
+    } else if (ours->done) {
+        fmt_ratio(t->rt, sizeof t->rt, r->time.median, ours->time.median);
+        fmt_ratio(t->rh, sizeof t->rh, r->hausdorff_rel, ours->hausdorff_rel);
+        fmt_ratio(t->rr, sizeof t->rr, r->rms_rel, ours->rms_rel);
+    }
+    if (r->runs < runs_asked)
+        snprintf(t->name, sizeof t->name, "%s (%d)", alg_name[a], r->runs);
+    else
+        snprintf(t->name, sizeof t->name, "%s", alg_name[a]);
+}
+
+static void print_header(void)
+{
+    printf("%-6s %-19s %3s %10s %9s %9s %9s %9s %7s %6s %10s %10s %7s %7s %4s %6s %6s %6s\n",
+           "target", "algorithm", "thr", "out tris", "out verts", "median s", "min s", "max s",
+           "Mtri/s", "B/tri", "Hausdorff", "RMS", "speedup", "mopt/us", "same", "t/ours",
+           "H/ours", "R/ours");
+}
+
+static void print_row(const mesh_result *m, int ti, int a, int j)
+{
+    const row *r = &m->rows[ti][a][j];
     if (!r->done)
         return;
-    char peak[16], h[16], rms[16], rt[16] = "", rh[16] = "", rr[16] = "";
-    if (r->peak_bytes >= 0)
-        snprintf(peak, sizeof peak, "%.0f", r->peak_bytes / (double)m->input_triangles);
-    else
-        snprintf(peak, sizeof peak, "-");
-    if (r->hausdorff_rel >= 0) {
-        snprintf(h, sizeof h, "%.5f%%", 100 * r->hausdorff_rel);
-        snprintf(rms, sizeof rms, "%.5f%%", 100 * r->rms_rel);
-    } else {
-        snprintf(h, sizeof h, "-");
-        snprintf(rms, sizeof rms, "-");
-    }
-    if (a != ALG_FULL && ours->done) {
-        fmt_ratio(rt, sizeof rt, r->time.median, ours->time.median);
-        fmt_ratio(rh, sizeof rh, r->hausdorff_rel, ours->hausdorff_rel);
-        fmt_ratio(rr, sizeof rr, r->rms_rel, ours->rms_rel);
-    }
-    char target[16], name[32];
+    row_text t;
+    row_texts(m, ti, a, j, &t);
+    char target[16];
     snprintf(target, sizeof target, "%g%%", 100 * target_ratio[ti]);
-    if (r->runs < runs_asked)
-        snprintf(name, sizeof name, "%s (%d)", alg_name[a], r->runs);
-    else
-        snprintf(name, sizeof name, "%s", alg_name[a]);
-    printf("%-6s %-19s %10zu %9zu %9.4f %9.4f %9.4f %7.2f %6s %10s %10s %6s %6s %6s\n", target,
-           name, r->out_triangles, r->out_vertices, r->time.median, r->time.min, r->time.max,
-           r->time.median > 0 ? (double)m->input_triangles / r->time.median / 1e6 : 0, peak, h,
-           rms, rt, rh, rr);
-    fflush(stdout);
+    printf("%-6s %-19s %3d %10zu %9zu %9.4f %9.4f %9.4f %7.2f %6s %10s %10s %7s %7s %4s %6s %6s "
+           "%6s\n",
+           target, t.name, r->threads, r->out_triangles, r->out_vertices, r->time.median,
+           r->time.min, r->time.max,
+           r->time.median > 0 ? (double)m->input_triangles / r->time.median / 1e6 : 0, t.peak,
+           t.h, t.rms, t.speedup, t.mo, t.same, t.rt, t.rh, t.rr);
 }
 
 static void csv_num(FILE *f, double v, int measured)
@@ -280,15 +569,31 @@ static void csv_num(FILE *f, double v, int measured)
         fputc(',', f);
 }
 
-static void write_csv_rows(FILE *f, const mesh_result *m)
+/* The CPU model with the characters a CSV field cannot hold replaced. */
+static void csv_model(const config *cfg, char *buf, size_t size)
 {
+    snprintf(buf, size, "%s", cfg->cpu.model);
+    for (char *p = buf; *p; p++)
+        if (*p == ',' || *p == '"' || *p == '\n' || *p == '\r')
+            *p = ' ';
+}
+
+static void write_csv_rows(FILE *f, const config *cfg, const mesh_result *m)
+{
+    int alg[ALG_COUNT + MAX_THREADS], thr[ALG_COUNT + MAX_THREADS];
+    int n = row_order(cfg, alg, thr);
+    char model[256];
+    csv_model(cfg, model, sizeof model);
     for (int ti = 0; ti < TARGET_COUNT; ti++)
-        for (int a = 0; a < ALG_COUNT; a++) {
-            const row *r = &m->rows[ti][a];
+        for (int i = 0; i < n; i++) {
+            const int a = alg[i], j = thr[i];
+            const row *r = &m->rows[ti][a][j];
             if (!r->done)
                 continue;
-            fprintf(f, "%s,%s,1,%g,%zu,%zu", m->name, alg_name[a], target_ratio[ti],
-                    m->input_triangles, r->out_triangles);
+            const row *ours = &m->rows[ti][ALG_FULL][0];
+            const row *mo = &m->rows[ti][ALG_MESHOPT][0];
+            fprintf(f, "%s,%s,%d,%g,%zu,%zu", m->name, alg_name[a], r->threads,
+                    target_ratio[ti], m->input_triangles, r->out_triangles);
             csv_num(f, r->time.median, 1);
             csv_num(f, r->time.min, 1);
             csv_num(f, r->time.max, 1);
@@ -297,9 +602,47 @@ static void write_csv_rows(FILE *f, const mesh_result *m)
             csv_num(f, r->peak_bytes / (double)m->input_triangles, r->peak_bytes >= 0);
             csv_num(f, r->hausdorff_rel, r->hausdorff_rel >= 0);
             csv_num(f, r->rms_rel, r->rms_rel >= 0);
-            fputc('\n', f);
+            /* added columns */
+            fprintf(f, ",%d", r->runs);
+            int full = a == ALG_FULL;
+            csv_num(f, r->time.median > 0 ? ours->time.median / r->time.median : 0,
+                    full && ours->done && r->time.median > 0);
+            csv_num(f, r->time.median > 0 ? mo->time.median / r->time.median : 0,
+                    full && mo->done && r->time.median > 0);
+            fprintf(f, ",%s", full ? (r->same ? "yes" : "no") : "");
+            fprintf(f, ",%s,", model);
+            if (cfg->cpu.physical > 0)
+                fprintf(f, "%d", cfg->cpu.physical);
+            fprintf(f, ",%d\n", cfg->cpu.nproc);
         }
     fflush(f);
+}
+
+static void md_rows(FILE *f, const config *cfg, const mesh_result *m)
+{
+    int alg[ALG_COUNT + MAX_THREADS], thr[ALG_COUNT + MAX_THREADS];
+    int n = row_order(cfg, alg, thr);
+    fprintf(f, "\n### %s: %s\n\n", m->name, m->desc);
+    fprintf(f, "| target | algorithm | threads | out tris | median s | min s | max s | Mtri/s | "
+               "B/tri | Hausdorff | RMS | speedup vs 1 thread | meshopt / ours | same | "
+               "t / ours 1 thread |\n");
+    fprintf(f, "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | "
+               "---: | ---: | --- | ---: |\n");
+    for (int ti = 0; ti < TARGET_COUNT; ti++)
+        for (int i = 0; i < n; i++) {
+            const row *r = &m->rows[ti][alg[i]][thr[i]];
+            if (!r->done)
+                continue;
+            row_text t;
+            row_texts(m, ti, alg[i], thr[i], &t);
+            fprintf(f,
+                    "| %g %% | %s | %d | %zu | %.4f | %.4f | %.4f | %.2f | %s | %s | %s | %s | "
+                    "%s | %s | %s |\n",
+                    100 * target_ratio[ti], t.name, r->threads, r->out_triangles, r->time.median,
+                    r->time.min, r->time.max,
+                    r->time.median > 0 ? (double)m->input_triangles / r->time.median / 1e6 : 0,
+                    t.peak, t.h, t.rms, t.speedup, t.mo, t.same, t.rt);
+        }
 }
 
 /* ------------------------------------------------------------------------ */
@@ -310,14 +653,16 @@ typedef struct mesh_spec {
     const char *name;
     const char *file;       /* in the data folder, or NULL: generated */
     size_t triangles;       /* generated */
-    int quick;              /* part of --quick */
+    unsigned quick;         /* the targets (bit ti) of --quick */
 } mesh_spec;
 
+#define Q10 (1u << 1)
+#define Q1 (1u << 2)
 static const mesh_spec specs[] = {
-    {"scan-1M", NULL, 1000000, 1},
-    {"scan-4M", NULL, 4000000, 0},
-    {"bunny", "stanford-bunny.obj", 0, 1},
-    {"armadillo", "armadillo.obj", 0, 1},
+    {"scan-1M", NULL, 1000000, Q10},
+    {"scan-4M", NULL, 4000000, Q1},
+    {"bunny", "stanford-bunny.obj", 0, Q10 | Q1},
+    {"armadillo", "armadillo.obj", 0, Q10 | Q1},
     {"nefertiti", "nefertiti.obj", 0, 0},
     {"ogre", "ogre.obj", 0, 0},
     {"fandisk", "fandisk.obj", 0, 0},
@@ -327,7 +672,7 @@ static const mesh_spec specs[] = {
 
 /* Load or generate, then keep positions and non-degenerate triangles over
  * referenced vertices only. Returns 0 when a file is absent. */
-static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh)
+static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh, mesh_result *m)
 {
     mr_error err;
     mr_mesh_init(mesh);
@@ -341,7 +686,9 @@ static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh)
         mr_read_options ro;
         mr_read_options_default(&ro);
         ro.threads = cfg->all_threads;
+        omp_set_num_threads(cfg->all_threads);
         bench_check(mr_mesh_read(path, &ro, mesh, &err), &err);
+        omp_set_num_threads(1);
     }
     free(mesh->normals);
     free(mesh->texcoords);
@@ -351,16 +698,17 @@ static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh)
     size_t degenerate = 0, unreferenced = 0;
     bench_check(mr_mesh_remove_degenerate(mesh, 0, &degenerate, &err), &err);
     bench_check(mr_mesh_remove_unreferenced(mesh, &unreferenced, &err), &err);
-    printf("\nmesh %s: %zu vertices, %zu triangles", s->name, mesh->vertex_count,
-           mesh->triangle_count);
+    int len = snprintf(m->desc, sizeof m->desc, "%zu vertices, %zu triangles", mesh->vertex_count,
+                       mesh->triangle_count);
     if (!s->file)
-        printf(" (mr_generate scan, seed 1)");
+        snprintf(m->desc + len, sizeof m->desc - (size_t)len, " (mr_generate scan, seed 1)");
+    else if (degenerate || unreferenced)
+        snprintf(m->desc + len, sizeof m->desc - (size_t)len,
+                 " (%s; removed %zu degenerate triangles, %zu unreferenced vertices)", s->file,
+                 degenerate, unreferenced);
     else
-        printf(" (%s", s->file);
-    if (s->file && (degenerate || unreferenced))
-        printf("; removed %zu degenerate triangles, %zu unreferenced vertices", degenerate,
-               unreferenced);
-    printf("%s\n", s->file ? ")" : "");
+        snprintf(m->desc + len, sizeof m->desc - (size_t)len, " (%s)", s->file);
+    printf("\nmesh %s: %s\n", s->name, m->desc);
     return 1;
 }
 
@@ -375,6 +723,14 @@ static int wanted(const char *name, char **only, int n_only)
 /* ------------------------------------------------------------------------ */
 /* Bars                                                                     */
 /* ------------------------------------------------------------------------ */
+
+typedef struct bar {
+    char name[128];
+    char measured[160];
+    int met;            /* 1 yes, 0 no, -1 not measured */
+} bar;
+
+#define MAX_BARS 24
 
 static const mesh_result *find_mesh(const mesh_result *res, int n, const char *name)
 {
@@ -392,92 +748,256 @@ static int target_index(double ratio)
     return 0;
 }
 
-static void print_bars(const mesh_result *res, int n)
+static int thread_index(const config *cfg, int threads)
 {
-    printf("\nbars (information only):\n");
-    const mesh_result *m1 = find_mesh(res, n, "scan-1M");
-    int t10 = target_index(0.10), t1 = target_index(0.01);
-    const row *full = m1 ? &m1->rows[t10][ALG_FULL] : NULL;
-    const row *mo = m1 ? &m1->rows[t10][ALG_MESHOPT] : NULL;
+    for (int j = 0; j < cfg->n_threads; j++)
+        if (cfg->threads[j] == threads)
+            return j;
+    return -1;
+}
 
-    if (full && full->done && mo->done)
-        printf("  %-4s speed: meshreduce-full %.4f s <= meshopt_simplify %.4f s on scan-1M to 10 %% "
-               "(1 thread)\n",
-               full->time.median <= mo->time.median ? "PASS" : "MISS", full->time.median,
-               mo->time.median);
-    else
-        printf("  n/a  speed vs meshopt_simplify on scan-1M to 10 %% (not measured)\n");
+/* The row of the default simplifier at `threads` on mesh to ratio, or NULL
+ * when not measured. */
+static const row *full_row(const config *cfg, const mesh_result *res, int n, const char *mesh,
+                           double ratio, int threads)
+{
+    const mesh_result *m = find_mesh(res, n, mesh);
+    int j = thread_index(cfg, threads);
+    if (!m || j < 0)
+        return NULL;
+    const row *r = &m->rows[target_index(ratio)][ALG_FULL][j];
+    return r->done ? r : NULL;
+}
 
-    if (full && full->done) {
-        double tps = (double)m1->input_triangles / full->time.median;
-        printf("  %-4s throughput: %.2f M input triangles/s >= 1.5 on scan-1M to 10 %% "
-               "(meshreduce-full, default options, 1 thread)\n",
-               tps >= 1.5e6 ? "PASS" : "MISS", tps / 1e6);
-    } else {
-        printf("  n/a  throughput on scan-1M to 10 %% (not measured)\n");
+static const row *peer_row(const mesh_result *res, int n, const char *mesh, double ratio,
+                           int alg)
+{
+    const mesh_result *m = find_mesh(res, n, mesh);
+    if (!m)
+        return NULL;
+    const row *r = &m->rows[target_index(ratio)][alg][0];
+    return r->done ? r : NULL;
+}
+
+static int collect_bars(const config *cfg, const mesh_result *res, int n, bar *bars)
+{
+    int nb = 0;
+    struct {
+        const char *mesh;
+        double ratio;
+    } speed[2] = {{"scan-1M", 0.10}, {"scan-4M", 0.01}};
+
+    /* 2 threads against 1 */
+    for (int i = 0; i < 2; i++) {
+        bar *b = &bars[nb++];
+        snprintf(b->name, sizeof b->name, "2 threads >= 1.7x faster than 1 thread, %s to %g %%",
+                 speed[i].mesh, 100 * speed[i].ratio);
+        const row *r1 = full_row(cfg, res, n, speed[i].mesh, speed[i].ratio, 1);
+        const row *r2 = full_row(cfg, res, n, speed[i].mesh, speed[i].ratio, 2);
+        if (r1 && r2 && r2->time.median > 0) {
+            double s = r1->time.median / r2->time.median;
+            snprintf(b->measured, sizeof b->measured, "%.2fx (%.4f s / %.4f s)", s,
+                     r1->time.median, r2->time.median);
+            b->met = s >= 1.7;
+        } else {
+            snprintf(b->measured, sizeof b->measured, "not measured");
+            b->met = -1;
+        }
     }
-
-    /* Memory: the worst meshreduce row of the generated meshes (large
-     * enough for per-triangle figures to mean something). */
-    double worst = -1;
-    char where[96] = "";
-    for (int i = 0; i < n; i++) {
-        if (strncmp(res[i].name, "scan-", 5) != 0)
-            continue;
-        for (int ti = 0; ti < TARGET_COUNT; ti++)
-            for (int a = ALG_FULL; a <= ALG_GREEDY_HALF; a++) {
-                const row *r = &res[i].rows[ti][a];
-                if (!r->done || r->peak_bytes < 0)
-                    continue;
-                double b = r->peak_bytes / (double)res[i].input_triangles;
-                if (b > worst) {
-                    worst = b;
-                    snprintf(where, sizeof where, "%s to %g %%, %s", res[i].name,
-                             100 * target_ratio[ti], alg_name[a]);
+    /* 2 threads against meshopt_simplify */
+    for (int i = 0; i < 2; i++) {
+        bar *b = &bars[nb++];
+        snprintf(b->name, sizeof b->name,
+                 "2 threads >= 2x faster than meshopt_simplify, %s to %g %%", speed[i].mesh,
+                 100 * speed[i].ratio);
+        const row *r2 = full_row(cfg, res, n, speed[i].mesh, speed[i].ratio, 2);
+        const row *p = peer_row(res, n, speed[i].mesh, speed[i].ratio, ALG_MESHOPT);
+        if (r2 && p && r2->time.median > 0) {
+            double s = p->time.median / r2->time.median;
+            snprintf(b->measured, sizeof b->measured, "%.2fx (%.4f s / %.4f s)", s,
+                     p->time.median, r2->time.median);
+            b->met = s >= 2.0;
+        } else {
+            snprintf(b->measured, sizeof b->measured, "not measured");
+            b->met = -1;
+        }
+    }
+    /* 16 threads against 1, when asked for */
+    if (thread_index(cfg, 16) >= 0) {
+        bar *b = &bars[nb++];
+        snprintf(b->name, sizeof b->name, "16 threads >= 10x faster than 1 thread, scan-4M to "
+                                          "1 %%");
+        const row *r1 = full_row(cfg, res, n, "scan-4M", 0.01, 1);
+        const row *r16 = full_row(cfg, res, n, "scan-4M", 0.01, 16);
+        if (r1 && r16 && r16->time.median > 0) {
+            double s = r1->time.median / r16->time.median;
+            snprintf(b->measured, sizeof b->measured, "%.2fx (%.4f s / %.4f s)%s", s,
+                     r1->time.median, r16->time.median,
+                     cfg->cpu.nproc < 16 ? "; oversubscribed" : "");
+            b->met = s >= 10.0;
+        } else {
+            snprintf(b->measured, sizeof b->measured, "not measured");
+            b->met = -1;
+        }
+    }
+    /* Memory: the worst default-simplifier row of the generated meshes (large
+     * enough for per-triangle figures to mean something), any thread count. */
+    {
+        bar *b = &bars[nb++];
+        snprintf(b->name, sizeof b->name,
+                 "peak <= 100 B per input triangle (default, every thread count, scans)");
+        double worst = -1;
+        char where[96] = "";
+        for (int i = 0; i < n; i++) {
+            if (strncmp(res[i].name, "scan-", 5) != 0)
+                continue;
+            for (int ti = 0; ti < TARGET_COUNT; ti++)
+                for (int j = 0; j < cfg->n_threads; j++) {
+                    const row *r = &res[i].rows[ti][ALG_FULL][j];
+                    if (!r->done || r->peak_bytes < 0)
+                        continue;
+                    double v = r->peak_bytes / (double)res[i].input_triangles;
+                    if (v > worst) {
+                        worst = v;
+                        snprintf(where, sizeof where, "%s to %g %%, %d thread%s", res[i].name,
+                                 100 * target_ratio[ti], r->threads, r->threads == 1 ? "" : "s");
+                    }
                 }
-            }
+        }
+        if (worst >= 0) {
+            snprintf(b->measured, sizeof b->measured, "worst %.0f (%s)", worst, where);
+            b->met = worst <= 100;
+        } else {
+            snprintf(b->measured, sizeof b->measured, "not measured");
+            b->met = -1;
+        }
     }
-    if (worst >= 0)
-        printf("  %-4s memory: peak %.0f bytes per input triangle <= 100 (worst over the scan "
-               "meshes: %s)\n",
-               worst <= 100 ? "PASS" : "MISS", worst, where);
-    else
-        printf("  n/a  memory (not measured)\n");
-
+    /* Same output at every thread count: every configuration measured. */
+    {
+        bar *b = &bars[nb++];
+        snprintf(b->name, sizeof b->name,
+                 "output byte-identical at every thread count (all meshes and targets)");
+        int total = 0, same = 0;
+        for (int i = 0; i < n; i++)
+            for (int ti = 0; ti < TARGET_COUNT; ti++)
+                for (int j = 0; j < cfg->n_threads; j++) {
+                    const row *r = &res[i].rows[ti][ALG_FULL][j];
+                    if (!r->done)
+                        continue;
+                    total++;
+                    same += r->same == 1;
+                }
+        if (total) {
+            snprintf(b->measured, sizeof b->measured, "%d of %d rows yes", same, total);
+            b->met = same == total;
+        } else {
+            snprintf(b->measured, sizeof b->measured, "not measured");
+            b->met = -1;
+        }
+    }
+    /* Quality against meshopt_simplify on the data meshes (1 thread; the
+     * other thread counts give the same output). */
     const char *qm[2] = {"bunny", "armadillo"};
-    int qt[2] = {t10, t1};
+    const double qt[2] = {0.10, 0.01};
     for (int i = 0; i < 2; i++)
         for (int k = 0; k < 2; k++) {
-            const mesh_result *m = find_mesh(res, n, qm[i]);
-            const row *o = m ? &m->rows[qt[k]][ALG_FULL] : NULL;
-            const row *p = m ? &m->rows[qt[k]][ALG_MESHOPT] : NULL;
-            if (!o || !o->done || !p->done || o->hausdorff_rel < 0 || p->hausdorff_rel < 0) {
-                printf("  n/a  quality on %s to %g %% (not measured)\n", qm[i],
-                       100 * target_ratio[qt[k]]);
+            bar *b = &bars[nb++];
+            snprintf(b->name, sizeof b->name,
+                     "quality: Hausdorff and RMS <= meshopt_simplify's, %s to %g %%", qm[i],
+                     100 * qt[k]);
+            const row *o = full_row(cfg, res, n, qm[i], qt[k], 1);
+            const row *p = peer_row(res, n, qm[i], qt[k], ALG_MESHOPT);
+            if (!o || !p || o->hausdorff_rel < 0 || p->hausdorff_rel < 0) {
+                snprintf(b->measured, sizeof b->measured, "not measured");
+                b->met = -1;
                 continue;
             }
-            int pass = o->hausdorff_rel <= p->hausdorff_rel && o->rms_rel <= p->rms_rel;
-            printf("  %-4s quality on %s to %g %%: Hausdorff %.5f%% vs meshopt %.5f%%, RMS "
-                   "%.5f%% vs %.5f%% (of the diagonal)\n",
-                   pass ? "PASS" : "MISS", qm[i], 100 * target_ratio[qt[k]],
-                   100 * o->hausdorff_rel, 100 * p->hausdorff_rel, 100 * o->rms_rel,
-                   100 * p->rms_rel);
+            snprintf(b->measured, sizeof b->measured, "H %.5f%% vs %.5f%%, RMS %.5f%% vs %.5f%%",
+                     100 * o->hausdorff_rel, 100 * p->hausdorff_rel, 100 * o->rms_rel,
+                     100 * p->rms_rel);
+            b->met = o->hausdorff_rel <= p->hausdorff_rel && o->rms_rel <= p->rms_rel;
         }
+    return nb;
+}
+
+static const char *met_text(int met)
+{
+    return met > 0 ? "yes" : met == 0 ? "NO" : "n/a";
+}
+
+static void print_bars(const config *cfg, const bar *bars, int nb)
+{
+    printf("\nbars:\n");
+    printf("  %-72s  %-44s  %s\n", "bar", "measured", "met?");
+    for (int i = 0; i < nb; i++)
+        printf("  %-72s  %-44s  %s\n", bars[i].name, bars[i].measured, met_text(bars[i].met));
+    if (thread_index(cfg, 16) < 0)
+        printf("  (16 threads >= 10x over 1 thread on scan-4M: checked only with 16 in "
+               "--threads)\n");
 }
 
 /* ------------------------------------------------------------------------ */
 
 static void usage(void)
 {
-    fprintf(stderr, "usage: bench_simplify [--runs R] [--quick] [--csv FILE] [--samples N] "
-                    "[--data DIR] [--dir DIR] [--mesh NAME]... [--keep]\n");
+    fprintf(stderr, "usage: bench_simplify [--runs R] [--quick] [--threads 1,2,...] [--csv FILE] "
+                    "[--md FILE] [--samples N] [--data DIR] [--dir DIR] [--mesh NAME]... "
+                    "[--others | --no-others] [--keep]\n");
     exit(2);
+}
+
+/* "1,2,4": the list, 1 first, without repeats; -1 on a bad list. */
+static int parse_threads(const char *s, config *cfg)
+{
+    cfg->threads[0] = 1;
+    cfg->n_threads = 1;
+    while (*s) {
+        char *end;
+        long v = strtol(s, &end, 10);
+        if (end == s || v < 1 || v > 4096 || (*end && *end != ','))
+            return -1;
+        int seen = 0;
+        for (int j = 0; j < cfg->n_threads; j++)
+            seen |= cfg->threads[j] == (int)v;
+        if (!seen) {
+            if (cfg->n_threads == MAX_THREADS)
+                return -1;
+            cfg->threads[cfg->n_threads++] = (int)v;
+        }
+        s = *end ? end + 1 : end;
+    }
+    return 0;
+}
+
+static void print_machine_lines(FILE *f, const config *cfg, const char *prefix)
+{
+    fprintf(f, "%s", prefix);
+    bench_print_machine(f);
+    fprintf(f, "%scpu: %s; /proc/cpuinfo: %d logical processors", prefix, cfg->cpu.model,
+            cfg->cpu.logical);
+    if (cfg->cpu.physical > 0)
+        fprintf(f, ", %d physical cores", cfg->cpu.physical);
+    fprintf(f, "; nproc: %d; OpenMP max threads: %d\n", cfg->cpu.nproc, cfg->all_threads);
 }
 
 int main(int argc, char **argv)
 {
-    config cfg = {3, 0, 200000, 1, MR_SHARED_DATA, "out/bench", 0};
-    const char *csv_path = NULL;
+    if (argc > 1 && !strcmp(argv[1], "--peak-child"))
+        return bench_peak_child_main(argc, argv);
+
+    double start = bench_now();
+    config cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.runs = 3;
+    cfg.samples = 200000;
+    cfg.all_threads = 1;
+    cfg.data = MR_SHARED_DATA;
+    cfg.dir = "out/bench";
+    cfg.others = -1;
+    cfg.threads[0] = 1;
+    cfg.threads[1] = 2;
+    cfg.n_threads = 2;
+    const char *csv_path = NULL, *md_path = NULL;
     int runs_given = 0;
     char **only = calloc((size_t)argc, sizeof *only);
     int n_only = 0;
@@ -487,8 +1007,13 @@ int main(int argc, char **argv)
             runs_given = 1;
         } else if (!strcmp(argv[i], "--quick")) {
             cfg.quick = 1;
+        } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+            if (parse_threads(argv[++i], &cfg) != 0)
+                usage();
         } else if (!strcmp(argv[i], "--csv") && i + 1 < argc) {
             csv_path = argv[++i];
+        } else if (!strcmp(argv[i], "--md") && i + 1 < argc) {
+            md_path = argv[++i];
         } else if (!strcmp(argv[i], "--samples") && i + 1 < argc) {
             cfg.samples = (size_t)strtod(argv[++i], NULL);
         } else if (!strcmp(argv[i], "--data") && i + 1 < argc) {
@@ -497,6 +1022,10 @@ int main(int argc, char **argv)
             cfg.dir = argv[++i];
         } else if (!strcmp(argv[i], "--mesh") && i + 1 < argc) {
             only[n_only++] = argv[++i];
+        } else if (!strcmp(argv[i], "--others")) {
+            cfg.others = 1;
+        } else if (!strcmp(argv[i], "--no-others")) {
+            cfg.others = 0;
         } else if (!strcmp(argv[i], "--keep")) {
             cfg.keep = 1;
         } else {
@@ -507,9 +1036,17 @@ int main(int argc, char **argv)
         cfg.runs = 1;
     if (cfg.runs < 1)
         cfg.runs = 1;
+    if (cfg.others < 0)
+        cfg.others = !cfg.quick;
     runs_asked = cfg.runs;
     cfg.all_threads = omp_get_max_threads();
     omp_set_num_threads(1);
+    bench_cpu_info(&cfg.cpu);
+    ssize_t sl = readlink("/proc/self/exe", cfg.self, sizeof cfg.self - 1);
+    if (sl > 0)
+        cfg.self[sl] = '\0';
+    else
+        snprintf(cfg.self, sizeof cfg.self, "%s", argv[0]);
 
     FILE *csv = NULL;
     if (csv_path) {
@@ -520,9 +1057,11 @@ int main(int argc, char **argv)
         }
         fprintf(csv, "mesh,algorithm,threads,target,input_triangles,output_triangles,"
                      "time_median,time_min,time_max,triangles_per_second,"
-                     "peak_bytes_per_triangle,hausdorff_rel,rms_rel\n");
+                     "peak_bytes_per_triangle,hausdorff_rel,rms_rel,"
+                     "runs,speedup_vs_1_thread,meshopt_over_ours,same_as_1_thread,"
+                     "cpu_model,physical_cores,nproc\n");
     }
-    if (bench_have_openmesh()) {
+    {
         char cmd[4200];
         snprintf(cmd, sizeof cmd, "mkdir -p '%s'", cfg.dir);
         if (system(cmd) != 0) {
@@ -531,12 +1070,26 @@ int main(int argc, char **argv)
         }
     }
 
-    bench_print_machine(stdout);
-    printf("simplification to 25/10/1 %% of the referenced vertices; 1 thread; time: median "
-           "(min, max) of %d run%s; peak memory: growth of the peak resident set in a forked "
-           "child, per input triangle; Hausdorff, RMS: mr_compare with %zu samples per mesh, "
-           "%% of the input's bounding-box diagonal; ratios: peer / meshreduce-full "
-           "(> 1: meshreduce is faster / closer)\n",
+    print_machine_lines(stdout, &cfg, "");
+    printf("threads:");
+    for (int j = 0; j < cfg.n_threads; j++)
+        printf("%s%d", j ? "," : " ", cfg.threads[j]);
+    printf(" (the default simplifier; its runs alternate with the meshopt peers': ");
+    for (int j = 0; j < cfg.n_threads; j++)
+        printf("%d, ", cfg.threads[j]);
+    printf("meshopt, meshopt-sloppy, then again)\n");
+    for (int j = 0; j < cfg.n_threads; j++)
+        if (cfg.threads[j] > cfg.cpu.nproc)
+            printf("note: %d threads > %d CPUs available: oversubscribed, its times say "
+                   "nothing about scaling\n",
+                   cfg.threads[j], cfg.cpu.nproc);
+    printf("simplification to 25/10/1 %% of the referenced vertices; time: median (min, max) "
+           "of %d run%s; speedup: our 1-thread median / this median; mopt/us: meshopt_simplify's "
+           "median / this median (> 1: ours is faster); same: output byte-identical to the "
+           "1-thread output in every run; peak memory: growth of the peak resident set in a "
+           "fresh process (ours) or forked child (peers), per input triangle; Hausdorff, RMS: "
+           "mr_compare with %zu samples per mesh, %% of the input's bounding-box diagonal; "
+           "t/H/R/ours: this row / meshreduce-full on 1 thread\n",
            cfg.runs, cfg.runs == 1 ? "" : "s", cfg.samples);
     printf("peers: meshopt %s; OpenMesh %s\n",
            bench_have_meshopt()
@@ -555,35 +1108,46 @@ int main(int argc, char **argv)
         const mesh_spec *s = &specs[si];
         if ((cfg.quick && !s->quick) || !wanted(s->name, only, n_only))
             continue;
-        mr_mesh mesh;
-        if (!load_mesh(&cfg, s, &mesh))
-            continue;
-        mesh_result *m = &results[n_results++];
+        mesh_result *m = &results[n_results];
         snprintf(m->name, sizeof m->name, "%s", s->name);
+        mr_mesh mesh;
+        if (!load_mesh(&cfg, s, &mesh, m))
+            continue;
+        n_results++;
         m->input_triangles = mesh.triangle_count;
-        char om_in[4200], om_out[4200];
+        char raw[4200], om_in[4200], om_out[4200];
+        snprintf(raw, sizeof raw, "%s/simplify-%s-%d.raw", cfg.dir, s->name, (int)getpid());
+        if (bench_raw_write(&mesh, raw) != 0) {
+            fprintf(stderr, "bench: cannot write %s\n", raw);
+            return 1;
+        }
         snprintf(om_in, sizeof om_in, "%s/simplify-%s.ply", cfg.dir, s->name);
         snprintf(om_out, sizeof om_out, "%s/simplify-%s-openmesh.ply", cfg.dir, s->name);
         int om_ready = 0;
         print_header();
         for (int ti = 0; ti < TARGET_COUNT; ti++) {
             double ratio = target_ratio[ti];
-            if (cfg.quick && ratio > 0.2)
+            if (cfg.quick && !(s->quick & (1u << ti)))
                 continue;
-            row *rows = m->rows[ti];
             for (int a = 0; a < ALG_COUNT; a++)
-                rows[a].peak_bytes = rows[a].hausdorff_rel = rows[a].rms_rel = -1;
-            for (int a = ALG_FULL; a <= ALG_GREEDY_HALF; a++) {
-                run_ours(&cfg, &mesh, ratio, a, &rows[a]);
-                print_row(m, ti, a);
-            }
-            if (bench_have_meshopt()) {
-                run_meshopt(&cfg, &mesh, rows[ALG_FULL].out_triangles, 0, &rows[ALG_MESHOPT]);
-                print_row(m, ti, ALG_MESHOPT);
-                run_meshopt(&cfg, &mesh, rows[ALG_FULL].out_triangles, 1, &rows[ALG_SLOPPY]);
-                print_row(m, ti, ALG_SLOPPY);
-            }
-            if (!bench_have_openmesh())
+                for (int j = 0; j < MAX_THREADS; j++) {
+                    row *r = &m->rows[ti][a][j];
+                    r->peak_bytes = r->hausdorff_rel = r->rms_rel = -1;
+                    r->same = -1;
+                }
+            run_block(&cfg, &mesh, raw, m, ti);
+            for (int j = 0; j < cfg.n_threads; j++)
+                print_row(m, ti, ALG_FULL, j);
+            print_row(m, ti, ALG_MESHOPT, 0);
+            print_row(m, ti, ALG_SLOPPY, 0);
+            fflush(stdout);
+            if (cfg.others)
+                for (int a = ALG_HALF; a <= ALG_GREEDY_HALF; a++) {
+                    run_other(&cfg, &mesh, raw, ratio, a, &m->rows[ti][a][0]);
+                    print_row(m, ti, a, 0);
+                    fflush(stdout);
+                }
+            if (!cfg.others || !bench_have_openmesh())
                 continue;
             if (!om_ready) {
                 mr_write_options wo;
@@ -594,23 +1158,68 @@ int main(int argc, char **argv)
                 bench_check(mr_mesh_write(om_in, &mesh, &wo, &err), &err);
                 om_ready = 1;
             }
-            run_openmesh(&cfg, &mesh, om_in, om_out, rows[ALG_FULL].out_vertices,
-                         &rows[ALG_OPENMESH]);
-            print_row(m, ti, ALG_OPENMESH);
+            run_openmesh(&cfg, &mesh, om_in, om_out, m->rows[ti][ALG_FULL][0].out_vertices,
+                         &m->rows[ti][ALG_OPENMESH][0]);
+            print_row(m, ti, ALG_OPENMESH, 0);
+            fflush(stdout);
         }
         if (om_ready && !cfg.keep)
             unlink(om_in);
+        if (!cfg.keep)
+            unlink(raw);
         if (csv)
-            write_csv_rows(csv, m);
+            write_csv_rows(csv, &cfg, m);
         mr_mesh_free(&mesh);
     }
 
-    print_bars(results, n_results);
+    bar bars[MAX_BARS];
+    int nb = collect_bars(&cfg, results, n_results, bars);
+    print_bars(&cfg, bars, nb);
+    double total = bench_now() - start;
+    if (mismatches)
+        printf("\n*** BUG: %d configuration%s of the default simplifier gave an output that is "
+               "not byte-identical to the 1-thread output (see the lines above) ***\n",
+               mismatches, mismatches == 1 ? "" : "s");
+    printf("\ntotal time: %.1f s\n", total);
     if (csv) {
         fclose(csv);
         printf("csv: %s\n", csv_path);
     }
+    if (md_path) {
+        FILE *md = fopen(md_path, "w");
+        if (!md) {
+            fprintf(stderr, "bench: cannot write %s\n", md_path);
+            return 1;
+        }
+        fprintf(md, "## Simplification: `bench_simplify");
+        for (int i = 1; i < argc; i++)
+            fprintf(md, " %s", argv[i]);
+        fprintf(md, "`\n\n```\n");
+        print_machine_lines(md, &cfg, "");
+        fprintf(md, "```\n\nThreads:");
+        for (int j = 0; j < cfg.n_threads; j++)
+            fprintf(md, "%s%d", j ? "," : " ", cfg.threads[j]);
+        fprintf(md, "; time: median (min, max) of %d run%s, the thread counts' and meshopt's "
+                    "runs alternating; speedup: our 1-thread median / this median; meshopt / "
+                    "ours: meshopt_simplify's median / this median; same: byte-identical to the "
+                    "1-thread output in every run; B/tri: peak memory growth per input "
+                    "triangle; Hausdorff, RMS: mr_compare, %zu samples, %% of the bounding-box "
+                    "diagonal; total time %.1f s.\n",
+                    cfg.runs, cfg.runs == 1 ? "" : "s", cfg.samples, total);
+        for (int i = 0; i < n_results; i++)
+            md_rows(md, &cfg, &results[i]);
+        fprintf(md, "\n### Bars\n\n| bar | measured | met? |\n| --- | --- | --- |\n");
+        for (int i = 0; i < nb; i++)
+            fprintf(md, "| %s | %s | %s |\n", bars[i].name, bars[i].measured,
+                    met_text(bars[i].met));
+        if (mismatches)
+            fprintf(md, "\n**BUG: %d configuration%s not byte-identical to the 1-thread "
+                        "output.**\n",
+                    mismatches, mismatches == 1 ? "" : "s");
+        fclose(md);
+        printf("markdown: %s\n", md_path);
+    }
     free(results);
     free(only);
-    return 0;
+    return mismatches ? 3 : 0;
 }

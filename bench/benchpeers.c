@@ -133,6 +133,136 @@ void bench_run_ours(const mr_mesh *in, const mr_simplify_options *opt, int runs,
     *peak_bytes = bench_child_peak(ours_once, &one, 1);
 }
 
+/* ---- peak memory in a fresh process (bench_exec_peak) ---------------------- */
+
+#define RAW_MAGIC 0x3157415252444d4dULL /* "MMDRRAW1" */
+
+int bench_raw_write(const mr_mesh *m, const char *path)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return -1;
+    uint64_t head[3] = {RAW_MAGIC, m->vertex_count, m->triangle_count};
+    int ok = fwrite(head, sizeof head, 1, f) == 1 &&
+             fwrite(m->positions, sizeof(float) * 3, m->vertex_count, f) == m->vertex_count &&
+             fwrite(m->indices, sizeof(uint32_t) * 3, m->triangle_count, f) ==
+                 m->triangle_count;
+    if (fclose(f) != 0)
+        ok = 0;
+    if (!ok)
+        unlink(path);
+    return ok ? 0 : -1;
+}
+
+double bench_exec_peak(const char *self, const char *raw_path, const mr_simplify_options *opt)
+{
+    char threads[32], ratio[64], collapse[16], strategy[16];
+    snprintf(threads, sizeof threads, "%d", opt->threads);
+    snprintf(ratio, sizeof ratio, "%.17g", opt->target_ratio);
+    snprintf(collapse, sizeof collapse, "%d", (int)opt->collapse);
+    snprintf(strategy, sizeof strategy, "%d", (int)opt->strategy);
+    char *args[] = {(char *)self, "--peak-child", (char *)raw_path, threads, ratio, collapse,
+                    strategy, NULL};
+    int fd[2];
+    if (pipe(fd) != 0)
+        return -1;
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]);
+        close(fd[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        /* Only async-signal-safe calls until the exec. */
+        close(fd[0]);
+        if (fd[1] != STDOUT_FILENO) {
+            dup2(fd[1], STDOUT_FILENO);
+            close(fd[1]);
+        }
+        execv(self, args);
+        _exit(127);
+    }
+    close(fd[1]);
+    char buf[256];
+    size_t len = 0;
+    ssize_t n;
+    while (len < sizeof buf - 1 && (n = read(fd[0], buf + len, sizeof buf - 1 - len)) != 0) {
+        if (n < 0)
+            break;
+        len += (size_t)n;
+    }
+    buf[len] = '\0';
+    close(fd[0]);
+    int status = 0;
+    if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        return -1;
+    double peak = -1;
+    if (sscanf(buf, "peak_bytes %lf", &peak) != 1)
+        return -1;
+    return peak;
+}
+
+int bench_peak_child_main(int argc, char **argv)
+{
+    if (argc != 7 || strcmp(argv[1], "--peak-child") != 0) {
+        fprintf(stderr, "bench: --peak-child RAW THREADS RATIO COLLAPSE STRATEGY\n");
+        return 2;
+    }
+    FILE *f = fopen(argv[2], "rb");
+    uint64_t head[3];
+    if (!f || fread(head, sizeof head, 1, f) != 1 || head[0] != RAW_MAGIC) {
+        fprintf(stderr, "bench: --peak-child: cannot read %s\n", argv[2]);
+        if (f)
+            fclose(f);
+        return 1;
+    }
+    size_t nv = (size_t)head[1], nt = (size_t)head[2];
+    float *positions = malloc(sizeof(float) * 3 * (nv ? nv : 1));
+    uint32_t *indices = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
+    int ok = positions && indices && fread(positions, sizeof(float) * 3, nv, f) == nv &&
+             fread(indices, sizeof(uint32_t) * 3, nt, f) == nt;
+    fclose(f);
+    if (!ok) {
+        fprintf(stderr, "bench: --peak-child: %s is short\n", argv[2]);
+        return 1;
+    }
+    mr_simplify_options opt;
+    mr_simplify_options_default(&opt);
+    opt.threads = atoi(argv[3]);
+    opt.target_ratio = strtod(argv[4], NULL);
+    opt.collapse = (mr_collapse_kind)atoi(argv[5]);
+    opt.strategy = (mr_strategy)atoi(argv[6]);
+    omp_set_num_threads(opt.threads > 0 ? opt.threads : omp_get_max_threads());
+#ifdef __GLIBC__
+    malloc_trim(0);
+#endif
+    int cleared = reset_peak();
+    long long base = status_bytes("VmRSS");
+    mr_simplified out;
+    mr_error err;
+    if (mr_simplify(positions, 0, nv, indices, nt, &opt, &out, &err) != MR_OK) {
+        fprintf(stderr, "bench: --peak-child: %s\n", err.message);
+        return 1;
+    }
+    long long hwm;
+    if (cleared) {
+        hwm = status_bytes("VmHWM");
+    } else {
+        struct rusage ru;
+        getrusage(RUSAGE_SELF, &ru);
+        hwm = (long long)ru.ru_maxrss * 1024;
+    }
+    mr_simplified_free(&out);
+    free(positions);
+    free(indices);
+    if (base < 0 || hwm < base)
+        return 1;
+    printf("peak_bytes %lld\n", hwm - base);
+    return fflush(stdout) == 0 ? 0 : 1;
+}
+
 void bench_output_free(bench_output *o)
 {
     free(o->positions);
@@ -141,7 +271,7 @@ void bench_output_free(bench_output *o)
 }
 
 /* Compact an index buffer that refers to the input's vertex array. */
-static void compact(const mr_mesh *in, const uint32_t *idx, size_t n, bench_output *out)
+void bench_compact(const mr_mesh *in, const uint32_t *idx, size_t n, bench_output *out)
 {
     uint32_t *remap = malloc(sizeof(uint32_t) * (in->vertex_count ? in->vertex_count : 1));
     memset(remap, 0xff, sizeof(uint32_t) * in->vertex_count);
@@ -201,25 +331,49 @@ int bench_have_meshopt(void)
 #endif
 }
 
+int bench_meshopt_call(const mr_mesh *in, size_t target_triangles, int sloppy, uint32_t *dst,
+                       size_t *index_count, double *seconds)
+{
+#ifdef MR_HAVE_MESHOPT
+    meshopt_job j = {in, 3 * target_triangles, sloppy};
+    double t0 = bench_now();
+    *index_count = meshopt_call(&j, dst);
+    *seconds = bench_now() - t0;
+    return 1;
+#else
+    (void)in, (void)target_triangles, (void)sloppy, (void)dst;
+    *index_count = 0;
+    *seconds = 0;
+    return 0;
+#endif
+}
+
+double bench_meshopt_peak(const mr_mesh *in, size_t target_triangles, int sloppy)
+{
+#ifdef MR_HAVE_MESHOPT
+    meshopt_job j = {in, 3 * target_triangles, sloppy};
+    return bench_child_peak(meshopt_once, &j, 1);
+#else
+    (void)in, (void)target_triangles, (void)sloppy;
+    return -1;
+#endif
+}
+
 int bench_run_meshopt(const mr_mesh *in, size_t target_triangles, int sloppy, int runs,
                       bench_summary *timing, int *runs_done, double *peak_bytes,
                       bench_output *out)
 {
 #ifdef MR_HAVE_MESHOPT
-    meshopt_job j = {in, 3 * target_triangles, sloppy};
     unsigned int *dst = malloc(sizeof(unsigned int) * 3 * (in->triangle_count + 1));
     double *times = malloc(sizeof(double) * (size_t)runs);
     size_t n = 0;
-    for (int k = 0; k < runs; k++) {
-        double t0 = bench_now();
-        n = meshopt_call(&j, dst);
-        times[k] = bench_now() - t0;
-    }
+    for (int k = 0; k < runs; k++)
+        bench_meshopt_call(in, target_triangles, sloppy, dst, &n, &times[k]);
     *timing = bench_summarize(times, runs);
     *runs_done = runs;
     free(times);
-    *peak_bytes = bench_child_peak(meshopt_once, &j, 1);
-    compact(in, dst, n, out);
+    *peak_bytes = bench_meshopt_peak(in, target_triangles, sloppy);
+    bench_compact(in, dst, n, out);
     free(dst);
     return 1;
 #else

@@ -33,6 +33,26 @@ double bench_child_peak(bench_job_fn job, void *ctx, int threads);
 void bench_run_ours(const mr_mesh *in, const mr_simplify_options *opt, int runs,
                     bench_summary *timing, double *peak_bytes, mr_simplified *out);
 
+/* Peak memory of our simplifier at any thread count, in a fresh process.
+ * A forked child cannot start an OpenMP thread team (see above), so the
+ * benchmark runs itself again: bench_exec_peak forks and execs `self` (the
+ * benchmark's own executable, /proc/self/exe) as
+ *   self --peak-child RAW THREADS RATIO COLLAPSE STRATEGY
+ * and the benchmark's main hands such a command line to
+ * bench_peak_child_main. That process reads the mesh from RAW (written by
+ * bench_raw_write: the flat arrays as loaded, nothing else), trims malloc,
+ * resets its peak resident set (/proc/self/clear_refs "5"), notes VmRSS
+ * (the mesh and the process: the baseline), runs mr_simplify once with the
+ * default options but those five (threads also given to
+ * omp_set_num_threads), and prints "peak_bytes N": VmHWM minus the
+ * baseline, output included; without clear_refs, ru_maxrss minus the
+ * baseline (loading needs less than simplifying). Thread stacks and
+ * per-thread malloc arenas count: they are the cost of the threads.
+ * bench_exec_peak returns N, or -1 on any failure. */
+int bench_raw_write(const mr_mesh *m, const char *path);
+double bench_exec_peak(const char *self, const char *raw_path, const mr_simplify_options *opt);
+int bench_peak_child_main(int argc, char **argv);
+
 /* A simplification's output as compact arrays (malloc'd). */
 typedef struct bench_output {
     size_t vertex_count, triangle_count;
@@ -51,6 +71,18 @@ int bench_have_meshopt(void);
 int bench_run_meshopt(const mr_mesh *in, size_t target_triangles, int sloppy, int runs,
                       bench_summary *timing, int *runs_done, double *peak_bytes,
                       bench_output *out);
+
+/* The pieces of bench_run_meshopt, for benchmarks that interleave peer
+ * runs with their own: one timed call (dst: 3 * in->triangle_count + 3
+ * indices; *index_count receives the output's index count, *seconds the
+ * call's wall clock; returns 0 when meshopt is not built in); its peak
+ * memory in a forked child (-1: unknown or not built in); and an index
+ * buffer that refers to in's vertices made compact. */
+int bench_meshopt_call(const mr_mesh *in, size_t target_triangles, int sloppy, uint32_t *dst,
+                       size_t *index_count, double *seconds);
+double bench_meshopt_peak(const mr_mesh *in, size_t target_triangles, int sloppy);
+void bench_compact(const mr_mesh *in, const uint32_t *idx, size_t index_count,
+                   bench_output *out);
 
 int bench_have_openmesh(void);
 /* in_path: the input as a PLY file the driver reads (written by the

@@ -1,4 +1,7 @@
+#define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT */
 #include "benchutil.h"
+
+#include <sched.h>
 
 #include <stdlib.h>
 #include <string.h>
@@ -55,6 +58,54 @@ void bench_print_machine(FILE *f)
     strftime(date, sizeof date, "%Y-%m-%d", gmtime(&now));
     fprintf(f, "machine: %s, %ld cores, %.0f GiB, %s, meshreduce %s\n", model, cores, mem, date,
             mr_version());
+}
+
+void bench_cpu_info(bench_cpu *cpu)
+{
+    snprintf(cpu->model, sizeof cpu->model, "unknown CPU");
+    cpu->logical = cpu->physical = cpu->nproc = 0;
+    /* Distinct (physical id, core id) pairs; a few thousand at most. */
+    enum { MAX_CORES = 4096 };
+    static long pairs[MAX_CORES];
+    int n_pairs = 0, have_model = 0;
+    long phys = 0, core = -1;
+    FILE *c = fopen("/proc/cpuinfo", "r");
+    if (c) {
+        char line[512];
+        while (fgets(line, sizeof line, c)) {
+            const char *v = strchr(line, ':');
+            v = v ? v + 1 : line;
+            while (*v == ' ' || *v == '\t')
+                v++;
+            if (!strncmp(line, "processor", 9)) {
+                cpu->logical++;
+                phys = 0;
+                core = -1;
+            } else if (!strncmp(line, "model name", 10) && !have_model) {
+                snprintf(cpu->model, sizeof cpu->model, "%.255s", v);
+                cpu->model[strcspn(cpu->model, "\n")] = '\0';
+                have_model = 1;
+            } else if (!strncmp(line, "physical id", 11)) {
+                phys = atol(v);
+            } else if (!strncmp(line, "core id", 7)) {
+                core = atol(v);
+                long key = phys * 65536 + core;
+                int seen = 0;
+                for (int i = 0; i < n_pairs && !seen; i++)
+                    seen = pairs[i] == key;
+                if (!seen && n_pairs < MAX_CORES)
+                    pairs[n_pairs++] = key;
+            }
+        }
+        fclose(c);
+    }
+    cpu->physical = n_pairs;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof set, &set) == 0)
+        cpu->nproc = CPU_COUNT(&set);
+    if (cpu->nproc <= 0)
+        cpu->nproc = (int)sysconf(_SC_NPROCESSORS_ONLN);
 }
 
 size_t bench_peak_rss(void)

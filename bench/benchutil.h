@@ -19,6 +19,17 @@ bench_summary bench_summarize(double *samples, int n);
 /* Print one line naming the machine: CPU model, cores, memory, date. */
 void bench_print_machine(FILE *f);
 
+/* The CPU as /proc/cpuinfo and nproc see it: the model name ("unknown CPU"
+ * when absent), the logical processors listed, the physical cores (distinct
+ * physical id / core id pairs; 0 when not listed) and the processors this
+ * process may run on (sched_getaffinity, as nproc counts them; else the
+ * online count). */
+typedef struct bench_cpu {
+    char model[256];
+    int logical, physical, nproc;
+} bench_cpu;
+void bench_cpu_info(bench_cpu *cpu);
+
 /* Peak resident set size of this process so far, in bytes. */
 size_t bench_peak_rss(void);
 

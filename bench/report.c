@@ -48,23 +48,39 @@ static void copy(char *dst, size_t cap, const char *src)
     dst[n] = '\0';
 }
 
-static double field(char **p)
+/* The columns, by name: the sweep's CSV and bench_simplify's (whose
+ * columns are in another order, with no vertex_similarity) both read. */
+enum {
+    COL_MESH, COL_ALG, COL_THREADS, COL_TARGET, COL_IN, COL_OUT, COL_RUNS, COL_TMED, COL_TMIN,
+    COL_TMAX, COL_TPS, COL_PEAK, COL_HAUS, COL_RMS, COL_SIMIL, COL_COUNT
+};
+static const char *const col_name[COL_COUNT] = {
+    "mesh", "algorithm", "threads", "target", "input_triangles", "output_triangles", "runs",
+    "time_median", "time_min", "time_max", "triangles_per_second", "peak_bytes_per_triangle",
+    "hausdorff_rel", "rms_rel", "vertex_similarity"};
+
+#define MAX_FIELDS 64
+
+/* Split a line at its commas in place; returns the field count. */
+static int split(char *line, char **fields)
 {
-    char *s = *p, *end = strchr(s, ',');
-    if (end)
+    int n = 0;
+    for (char *p = line; n < MAX_FIELDS;) {
+        fields[n++] = p;
+        char *end = strchr(p, ',');
+        if (!end)
+            break;
         *end = '\0';
-    *p = end ? end + 1 : s + strlen(s);
-    s[strcspn(s, "\r\n")] = '\0';
-    return *s ? strtod(s, NULL) : NAN;
+        p = end + 1;
+    }
+    return n;
 }
 
-static void text_field(char **p, char *dst, size_t cap)
+static double num(char **fields, int n, int col)
 {
-    char *s = *p, *end = strchr(s, ',');
-    if (end)
-        *end = '\0';
-    copy(dst, cap, s);
-    *p = end ? end + 1 : s + strlen(s);
+    if (col < 0 || col >= n || !*fields[col])
+        return NAN;
+    return strtod(fields[col], NULL);
 }
 
 static int read_csv(const char *path, report *r)
@@ -76,6 +92,7 @@ static int read_csv(const char *path, report *r)
     }
     char line[8192];
     int header = 0;
+    int col[COL_COUNT];
     while (fgets(line, sizeof line, f)) {
         line[strcspn(line, "\r\n")] = '\0';
         if (line[0] == '#') {
@@ -96,11 +113,19 @@ static int read_csv(const char *path, report *r)
             }
             continue;
         }
+        char *fields[MAX_FIELDS];
         if (!header) {
             if (strncmp(line, "mesh,algorithm,threads,target,", 30) != 0) {
                 fprintf(stderr, "report: %s: not a sweep CSV (header '%s')\n", path, line);
                 fclose(f);
                 return -1;
+            }
+            int n = split(line, fields);
+            for (int c = 0; c < COL_COUNT; c++) {
+                col[c] = -1;
+                for (int i = 0; i < n; i++)
+                    if (!strcmp(fields[i], col_name[c]))
+                        col[c] = i;
             }
             header = 1;
             continue;
@@ -108,22 +133,22 @@ static int read_csv(const char *path, report *r)
         if (!line[0] || r->n_rows == MAX_ROWS)
             continue;
         row *w = &r->rows[r->n_rows++];
-        char *p = line;
-        text_field(&p, w->mesh, sizeof w->mesh);
-        text_field(&p, w->alg, sizeof w->alg);
-        w->threads = (int)field(&p);
-        w->target = field(&p);
-        w->in_tris = field(&p);
-        w->out_tris = field(&p);
-        w->runs = field(&p);
-        w->t_med = field(&p);
-        w->t_min = field(&p);
-        w->t_max = field(&p);
-        w->tps = field(&p);
-        w->peak = field(&p);
-        w->haus = field(&p);
-        w->rms = field(&p);
-        w->simil = field(&p);
+        int n = split(line, fields);
+        copy(w->mesh, sizeof w->mesh, n > col[COL_MESH] ? fields[col[COL_MESH]] : "");
+        copy(w->alg, sizeof w->alg, n > col[COL_ALG] ? fields[col[COL_ALG]] : "");
+        w->threads = (int)num(fields, n, col[COL_THREADS]);
+        w->target = num(fields, n, col[COL_TARGET]);
+        w->in_tris = num(fields, n, col[COL_IN]);
+        w->out_tris = num(fields, n, col[COL_OUT]);
+        w->runs = num(fields, n, col[COL_RUNS]);
+        w->t_med = num(fields, n, col[COL_TMED]);
+        w->t_min = num(fields, n, col[COL_TMIN]);
+        w->t_max = num(fields, n, col[COL_TMAX]);
+        w->tps = num(fields, n, col[COL_TPS]);
+        w->peak = num(fields, n, col[COL_PEAK]);
+        w->haus = num(fields, n, col[COL_HAUS]);
+        w->rms = num(fields, n, col[COL_RMS]);
+        w->simil = num(fields, n, col[COL_SIMIL]);
     }
     fclose(f);
     if (!header || r->n_rows == 0) {
