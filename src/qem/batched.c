@@ -1,10 +1,12 @@
 /*
- * Batched selection of collapses (MR_STRATEGY_BATCHED): the simplifier
- * works in passes instead of one collapse at a time from a heap.
+ * Batched selection of collapses (MR_STRATEGY_BATCHED, the default): the
+ * simplifier works in passes instead of one collapse at a time from a
+ * heap, and runs every phase on all threads with the same result on any
+ * number of them.
  *
  * A pass gathers every live edge with its cost (the same costs, the same
  * planned collapse and the same validity test as the greedy strategy),
- * sorts the cheapest ones and applies them in order of cost, skipping an
+ * keeps the cheapest ones and applies them in order of cost, skipping an
  * edge when one of its ends was already the survivor of a collapse in this
  * pass: only the survivor's quadric and position change, so every other
  * edge's cost is still exact when its turn comes, and validity is tested
@@ -15,16 +17,27 @@
  * a pass takes edges up to the cost of the `goal`-th cheapest one (a
  * share of the collapses still needed) times a small factor -- edges
  * blocked by a neighbour's collapse would otherwise leave the pass short.
- * Costs and order are deterministic (ties keep gathering order, which is
- * by triangle), so the result is too.
  *
- * Why it is faster: no heap with mutable keys (a sift per neighbour edge
+ * Rounds within a pass: a candidate cheaper than every other candidate at
+ * its two ends wins (find_winners); winners share no end. They are taken
+ * in chunks and slices of fixed sizes (run_chunk): winners whose
+ * neighbourhoods no winner of another slice touches run concurrently,
+ * each slice in order; the rest follow. Every order and tie comes from
+ * the mesh (costs, then vertex ids), never from a thread's timing or the
+ * thread count; the layout of the candidates (blocks of BLOCK_TRIANGLES
+ * triangles) and the chunk and slice sizes are constants. So the output is
+ * byte-identical at every thread count, and in a build without OpenMP.
+ *
+ * Why it is fast: no heap with mutable keys (a sift per neighbour edge
  * after every collapse), no re-evaluation of a neighbourhood that collapses
  * again before its edges reach the top, the gathering sweeps the mesh in
- * memory order, and costs and plans are computed for batches of edges in
- * one vectorised loop (mr_simplifier_plan_edges).
+ * memory order, costs and plans are computed for batches of edges in one
+ * vectorised loop (mr_simplifier_plan_edges), and all of it is spread
+ * over the threads.
  */
 #include "simplify_internal.h"
+
+#include "../core/omp_compat.h"
 
 #include <math.h>
 
@@ -90,28 +103,163 @@ static inline float key_float(uint32_t u)
         }                                                                              \
     } while (0)
 
+/* An edge (a, b) of a pass and the bits of its (float) cost. */
+typedef struct mr_candidate {
+    uint32_t key, a, b;
+} mr_candidate;
+
+/* A round's winner: where its candidate is, its plan and its fate. */
+typedef struct mr_winner {
+    uint32_t at;      /* candidate index */
+    uint32_t r, k;    /* r goes, k stays */
+    uint32_t opp[2];  /* the edge's opposite vertices (NONE past one) */
+    uint8_t state;    /* W_* */
+    uint8_t removes;  /* vertices the collapse removes: 1 + ears */
+    uint8_t deletes;  /* triangles it deletes */
+    size_t slot;      /* where its merged list goes in refs */
+    uint32_t slots;   /* and the room it has there */
+    uint32_t group;   /* its group of blocks at this level, or NONE */
+    double target[3];
+    double cost;
+} mr_winner;
+
+/* A winner is invalid (past the error bound, or refused when its turn
+ * came), valid (planned), then inner or on a slice border (run_chunk). */
+enum { W_INVALID = 0, W_VALID = 1, W_INNER = 2, W_BORDER = 3 };
+
+/* Triangles per gathering block: a pass's candidates lie in blocks, one
+ * per run of this many triangles, each with its own live count, so that
+ * the blocks are gathered, filtered and compacted independently (in
+ * parallel) while the order stays that of one sequential sweep. A
+ * constant: the layout must not depend on the thread count. */
+#define BLOCK_TRIANGLES 4096
+
+struct mr_batched {
+    mr_candidate *cand;  /* cand_cap */
+    size_t cand_cap;
+    size_t nblocks;
+    size_t *boff;        /* per block: its first candidate slot */
+    uint32_t *bn;        /* per block: live candidates (from boff) */
+    uint32_t *bw;        /* per block: winners, then their offset */
+    uint8_t *mark;       /* per vertex: an end of a collapse of this pass */
+    uint64_t *best;      /* per vertex: winner selection; UINT64_MAX
+                            between uses */
+    uint32_t *home_lo, *home_hi; /* per vertex: the range of blocks its
+                                    triangles lie in (run_chunk) */
+    uint32_t *gcount;    /* per group of blocks, and one more */
+    uint32_t *hist;      /* HIST_BUCKETS per thread */
+    uint32_t *wid;       /* a round's winners: candidate indices */
+    size_t wid_cap;
+    mr_winner *win, *win2; /* WIN_CHUNK each */
+    int threads;
+};
+
+/* The sign bit of a key (costs are >= 0) marks a round's winner between
+ * two sweeps; a key of all ones (a NaN, never a cost) a winner found
+ * invalid, which leaves the candidates at the next sweep. */
+#define WIN_BIT 0x80000000u
+#define DEAD_KEY 0xFFFFFFFFu
+
+static inline void min_u64(uint64_t *p, uint64_t v, bool par)
+{
+    if (!par) {
+        *p = v < *p ? v : *p;
+        return;
+    }
+    uint64_t cur = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (v < cur &&
+           !__atomic_compare_exchange_n(p, &cur, v, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+}
+
+static inline uint64_t load_u64(const uint64_t *p, bool par)
+{
+    return par ? __atomic_load_n(p, __ATOMIC_RELAXED) : *p;
+}
+
+static inline uint32_t load_u32(const uint32_t *p, bool par)
+{
+    return par ? __atomic_load_n(p, __ATOMIC_RELAXED) : *p;
+}
+
+static inline void store_u32(uint32_t *p, uint32_t v, bool par)
+{
+    if (par)
+        __atomic_store_n(p, v, __ATOMIC_RELAXED);
+    else
+        *p = v;
+}
+
+static inline void store_u64(uint64_t *p, uint64_t v, bool par)
+{
+    if (par)
+        __atomic_store_n(p, v, __ATOMIC_RELAXED);
+    else
+        *p = v;
+}
+
 mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
 {
     const mr_collapse_mesh *m = &s->m;
+    mr_batched *b = mr_calloc_array(1, sizeof *b);
+    if (!b)
+        return mr_fail_nomem(err, NULL, sizeof *b);
+    s->bt = b;
+    b->threads = s->threads > 0 ? s->threads : 1;
     /* Room for every edge, bounded without visiting them: with B edges
      * of one triangle, 3T >= B + 2 (E - B), so E <= (3T + B) / 2; and a
      * one-triangle edge has both ends flagged BOUNDARY or NONMANIFOLD,
      * each with at most two such edges per triangle. */
     size_t open = 0;
-    for (size_t v = 0; v < m->vertex_count; v++)
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+#pragma omp parallel for schedule(static) reduction(+ : open) num_threads(b->threads) \
+    if (b->threads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
         open += (m->flags[v] & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD)) ? 2 * (size_t)m->count[v] : 0;
     const size_t t3 = 3 * m->live_triangles;
-    s->cand_cap = (t3 + (open < t3 ? open : t3)) / 2 + 1;
+    b->cand_cap = (t3 + (open < t3 ? open : t3)) / 2 + 1;
     s->m.lazy = true; /* only an edge's two ends read lists here */
-    s->cand = mr_alloc_array(s->cand_cap, sizeof *s->cand);
-    s->mark = mr_calloc_array(m->vertex_count, 1);
-    s->hist = mr_alloc_array(HIST_BUCKETS, sizeof *s->hist);
-    s->best64 = mr_alloc_array(m->vertex_count, sizeof *s->best64);
-    if (s->best64) /* the rounds keep every entry at UINT64_MAX between uses */
-        memset(s->best64, 0xFF, m->vertex_count * sizeof *s->best64);
-    if (!s->cand || !s->mark || !s->hist || !s->best64)
-        return mr_fail_nomem(err, NULL, s->cand_cap * sizeof *s->cand + m->vertex_count * 9);
+    mr_collapse_prepare(&s->m);
+    b->nblocks = (m->triangle_count + BLOCK_TRIANGLES - 1) / BLOCK_TRIANGLES;
+    b->cand = mr_alloc_array(b->cand_cap, sizeof *b->cand);
+    b->boff = mr_alloc_array(b->nblocks + 1, sizeof *b->boff);
+    b->bn = mr_alloc_array(b->nblocks + 1, sizeof *b->bn);
+    b->bw = mr_alloc_array(b->nblocks + 1, sizeof *b->bw);
+    b->mark = mr_calloc_array(m->vertex_count, 1);
+    b->hist = mr_alloc_array((size_t)b->threads * HIST_BUCKETS, sizeof *b->hist);
+    b->best = mr_alloc_array(m->vertex_count, sizeof *b->best);
+    b->home_lo = mr_alloc_array(m->vertex_count, sizeof *b->home_lo);
+    b->home_hi = mr_alloc_array(m->vertex_count, sizeof *b->home_hi);
+    b->gcount = mr_alloc_array(b->nblocks + 2, sizeof *b->gcount);
+    if (b->best) /* every entry is UINT64_MAX between uses */
+        memset(b->best, 0xFF, m->vertex_count * sizeof *b->best);
+    if (!b->cand || !b->boff || !b->bn || !b->bw || !b->mark || !b->hist || !b->best ||
+        !b->home_lo || !b->home_hi || !b->gcount ||
+        (s->m.lazy && !s->m.dead))
+        return mr_fail_nomem(err, NULL, b->cand_cap * sizeof *b->cand + m->vertex_count * 17);
     return MR_OK;
+}
+
+void mr_simplifier_batched_free(mr_simplifier *s)
+{
+    mr_batched *b = s->bt;
+    if (!b)
+        return;
+    free(b->cand);
+    free(b->boff);
+    free(b->bn);
+    free(b->bw);
+    free(b->mark);
+    free(b->hist);
+    free(b->best);
+    free(b->home_lo);
+    free(b->home_hi);
+    free(b->gcount);
+    free(b->win);
+    free(b->win2);
+    free(b->wid);
+    free(b);
+    s->bt = NULL;
 }
 
 /* Collapses still needed to reach the targets. */
@@ -128,15 +276,32 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
     return needed;
 }
 
-/* Every live edge whose collapse may happen (cost finite and within the
- * limit), with its ends and cost, in triangle order. Returns how
- * many were written (at most s->cand_cap). */
-static size_t gather(mr_simplifier *s, double limit)
+/* Edges block `blk` takes (FOR_EACH_TRIANGLE_EDGE), without their costs. */
+static uint32_t block_edges(const mr_collapse_mesh *m, size_t blk)
+{
+    const size_t t0 = blk * BLOCK_TRIANGLES;
+    const size_t t1 = m->triangle_count - t0 < BLOCK_TRIANGLES ? m->triangle_count
+                                                                : t0 + BLOCK_TRIANGLES;
+    uint32_t n = 0;
+    for (size_t t = t0; t < t1; t++) {
+        if (m->tris[3 * t] == NONE)
+            continue;
+        FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, { n += take; });
+    }
+    return n;
+}
+
+/* Block blk's edges whose collapse may happen (cost finite and within the
+ * limit), with their ends and cost, in triangle order, from out; returns
+ * how many. */
+static uint32_t gather_block(const mr_simplifier *s, size_t blk, double limit,
+                             mr_candidate *out)
 {
     const mr_collapse_mesh *m = &s->m;
-    mr_candidate *out = s->cand;
-    const size_t cap = s->cand_cap;
-    size_t n = 0;
+    const size_t t0 = blk * BLOCK_TRIANGLES;
+    const size_t t1 = m->triangle_count - t0 < BLOCK_TRIANGLES ? m->triangle_count
+                                                                : t0 + BLOCK_TRIANGLES;
+    uint32_t n = 0;
     /* edges go through the cost kernel in batches, in gathering order */
     enum { B = 256 };
     uint32_t ea[B], eb[B];
@@ -148,10 +313,8 @@ static size_t gather(mr_simplifier *s, double limit)
             break;                                                                    \
         mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
         /* an infinite cost is a collapse that must not happen; every    \
-         * candidate is stored, those allowed are kept (a mesh has no     \
-         * more edges than at the start: cap is never reached) */         \
-        const size_t room = cap - n < nb ? cap - n : nb;                              \
-        for (size_t i = 0; i < room; i++) {                                           \
+         * candidate is stored, those allowed are kept */                 \
+        for (size_t i = 0; i < nb; i++) {                                             \
             out[n] = (mr_candidate){float_key((float)cost[i]), ea[i], eb[i]};         \
             n += (cost[i] <= limit) & (cost[i] < INFINITY);                           \
         }                                                                             \
@@ -160,13 +323,13 @@ static size_t gather(mr_simplifier *s, double limit)
     /* Triangles 64 at a time: which are live is read without a branch
      * (collapses leave live and deleted ones interleaved), the live ones
      * are visited from the mask. */
-    for (size_t t0 = 0; t0 < m->triangle_count; t0 += 64) {
-        const size_t nt = m->triangle_count - t0 < 64 ? m->triangle_count - t0 : 64;
+    for (size_t c0 = t0; c0 < t1; c0 += 64) {
+        const size_t nt = t1 - c0 < 64 ? t1 - c0 : 64;
         uint64_t live = 0;
         for (size_t i = 0; i < nt; i++)
-            live |= (uint64_t)(m->tris[3 * (t0 + i)] != NONE) << i;
+            live |= (uint64_t)(m->tris[3 * (c0 + i)] != NONE) << i;
         for (; live; live &= live - 1) {
-            const size_t t = t0 + (size_t)__builtin_ctzll(live);
+            const size_t t = c0 + (size_t)__builtin_ctzll(live);
             FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
                 /* stored always, kept when taken; the quadrics the
                  * batch's cost loop reads are fetched meanwhile */
@@ -184,14 +347,62 @@ static size_t gather(mr_simplifier *s, double limit)
     return n;
 }
 
+/* Every live edge whose collapse may happen, block by block (bn[], from
+ * boff[]); returns how many. */
+static size_t gather(mr_simplifier *s, double limit)
+{
+    mr_batched *bt = s->bt;
+    const mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
+    const bool par = bt->threads > 1 && m->live_triangles > 65536;
+#pragma omp parallel for schedule(static) num_threads(bt->threads) if (par)
+    for (ptrdiff_t i = 0; i < nb; i++)
+        bt->bn[i] = block_edges(m, (size_t)i);
+    size_t off = 0;
+    for (size_t i = 0; i < bt->nblocks; i++) {
+        bt->boff[i] = off;
+        off += bt->bn[i];
+    }
+    if (off > bt->cand_cap) /* never: a mesh has no more edges than at the start */
+        return 0;
+    size_t total = 0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : total) num_threads(bt->threads) \
+    if (par)
+    for (ptrdiff_t i = 0; i < nb; i++) {
+        bt->bn[i] = gather_block(s, (size_t)i, limit, bt->cand + bt->boff[i]);
+        total += bt->bn[i];
+    }
+    return total;
+}
+
 /* The key below which at least `rank` + 1 of the n candidates lie, to the
  * resolution of the top 16 bits (1/128 relative). */
 static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
 {
-    uint32_t *hist = s->hist;
-    memset(hist, 0, HIST_BUCKETS * sizeof *hist);
-    for (size_t i = 0; i < n; i++)
-        hist[s->cand[i].key >> 16]++;
+    mr_batched *bt = s->bt;
+    const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
+    const int nt = n > 65536 ? bt->threads : 1;
+#pragma omp parallel num_threads(nt) if (nt > 1)
+    {
+        const int me = omp_get_thread_num(), team = omp_get_num_threads();
+        uint32_t *hist = bt->hist + (size_t)me * HIST_BUCKETS;
+        memset(hist, 0, HIST_BUCKETS * sizeof *hist);
+        for (ptrdiff_t i = me; i < nb; i += team) {
+            const mr_candidate *c = bt->cand + bt->boff[i];
+            for (uint32_t j = 0, e = bt->bn[i]; j < e; j++)
+                hist[c[j].key >> 16]++;
+        }
+#pragma omp barrier
+        /* the sum of the threads' histograms, bucket ranges split */
+#pragma omp for schedule(static)
+        for (ptrdiff_t k = 0; k < (ptrdiff_t)HIST_BUCKETS; k++) {
+            uint32_t sum = 0;
+            for (int t = 0; t < team; t++)
+                sum += bt->hist[(size_t)t * HIST_BUCKETS + (size_t)k];
+            bt->hist[k] = sum;
+        }
+    }
+    const uint32_t *hist = bt->hist;
     size_t acc = 0;
     for (uint32_t b = 0; b < HIST_BUCKETS; b++) {
         acc += hist[b];
@@ -201,80 +412,474 @@ static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
     return UINT32_MAX;
 }
 
-/* Candidates in order of cost; ties by their ends (an edge is one
- * candidate, so the order is total). */
-static inline bool cand_less(const mr_candidate *x, const mr_candidate *y)
+/* A winner's priority (lower first): cost, then its smaller end (winners
+ * share no end, so no two have one priority). A tie goes by the mesh, not
+ * by where the edge lies in the candidates: two copies of a part (a
+ * double-sided sheet) reduce alike. */
+static inline uint64_t prio_of(const mr_batched *bt, uint32_t at)
 {
-    if (x->key != y->key)
-        return x->key < y->key;
-    return x->a != y->a ? x->a < y->a : x->b < y->b;
+    const mr_candidate c = bt->cand[at];
+    return (uint64_t)c.key << 32 | (c.a < c.b ? c.a : c.b);
 }
 
-static void sift_down(mr_candidate *a, size_t i, size_t n)
+static void sift_ids(const mr_batched *bt, uint32_t *w, size_t j, size_t n)
 {
-    const mr_candidate x = a[i];
+    const uint32_t x = w[j];
+    const uint64_t px = prio_of(bt, x);
     for (;;) {
-        size_t c = 2 * i + 1;
+        size_t c = 2 * j + 1;
         if (c >= n)
             break;
-        if (c + 1 < n && cand_less(&a[c], &a[c + 1]))
+        if (c + 1 < n && prio_of(bt, w[c]) < prio_of(bt, w[c + 1]))
             c++;
-        if (!cand_less(&x, &a[c]))
+        if (px >= prio_of(bt, w[c]))
             break;
-        a[i] = a[c];
-        i = c;
+        w[j] = w[c];
+        j = c;
     }
-    a[i] = x;
+    w[j] = x;
 }
 
-/* Heap sort of a[0..n) by cand_less, in place: the winners of a round are
- * sorted only when they are more than the target needs, and then no
- * second array of candidates is kept for it. */
-static void sort_candidates(mr_candidate *a, size_t n)
+/* Heap sort of winner ids by priority, in place. */
+static void sort_ids(const mr_batched *bt, uint32_t *w, size_t n)
 {
     if (n < 2)
         return;
     for (size_t i = n / 2; i-- > 0;)
-        sift_down(a, i, n);
+        sift_ids(bt, w, i, n);
     for (size_t e = n - 1; e > 0; e--) {
-        const mr_candidate t = a[0];
-        a[0] = a[e];
-        a[e] = t;
-        sift_down(a, 0, e);
+        const uint32_t t = w[0];
+        w[0] = w[e];
+        w[e] = t;
+        sift_ids(bt, w, 0, e);
     }
 }
 
-/* Apply the planned collapse r -> k (to target, at cost) if it is still
- * valid. */
-static bool try_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
-                         double cost, double limit, double *worst)
+static void sift_winners(const mr_batched *bt, mr_winner *w, size_t j, size_t n)
 {
-    mr_collapse_mesh *m = &s->m;
-    if (!(cost <= limit && cost < INFINITY))
-        return false;
-    mr_collapse_clean(m, r);
-    mr_collapse_clean(m, k);
-    if (!mr_collapse_valid(m, r, k, target, &s->limits) ||
-        (s->attr_valid && !s->attr_valid(s, r, k)))
-        return false;
-    mr_simplifier_collapse(s, r, k, target);
-    s->mark[r] = s->mark[k] = 1;
-    *worst = cost > *worst ? cost : *worst;
-    return true;
+    const mr_winner x = w[j];
+    const uint64_t px = prio_of(bt, x.at);
+    for (;;) {
+        size_t c = 2 * j + 1;
+        if (c >= n)
+            break;
+        if (c + 1 < n && prio_of(bt, w[c].at) < prio_of(bt, w[c + 1].at))
+            c++;
+        if (px >= prio_of(bt, w[c].at))
+            break;
+        w[j] = w[c];
+        j = c;
+    }
+    w[j] = x;
 }
 
-/* How many turns ahead of a winner's validity test the three prefetch
- * stages of mr_collapse_prefetch run (~2 % on a 1M-triangle scan). */
-#define PF0 6
-#define PF1 4
-#define PF2 2
+/* Heap sort of committed winners by priority (a chunk's, only when the
+ * target falls inside it). */
+static void sort_winners(const mr_batched *bt, mr_winner *w, size_t n)
+{
+    if (n < 2)
+        return;
+    for (size_t i = n / 2; i-- > 0;)
+        sift_winners(bt, w, i, n);
+    for (size_t e = n - 1; e > 0; e--) {
+        const mr_winner t = w[0];
+        w[0] = w[e];
+        w[e] = t;
+        sift_winners(bt, w, 0, e);
+    }
+}
 
 /* Winners planned at once (one batch of the vector cost loop). */
 #define PLAN_BATCH 64
 
+/* How many winners ahead the three prefetch stages of
+ * mr_collapse_prefetch run. */
+#define PF0 6
+#define PF1 4
+#define PF2 2
+
+/* Plan winners w[0..n): which end goes, where to, at what cost; those
+ * within the error bound are candidates to commit (tested then). */
+static void plan_winners(const mr_simplifier *s, mr_winner *w, size_t n, double limit)
+{
+    const mr_candidate *cand = s->bt->cand;
+    uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
+    double pc[PLAN_BATCH], pt[3 * PLAN_BATCH];
+    for (size_t i0 = 0; i0 < n; i0 += PLAN_BATCH) {
+        const size_t nc = n - i0 < PLAN_BATCH ? n - i0 : PLAN_BATCH;
+        for (size_t j = 0; j < nc; j++) {
+            pa[j] = cand[w[i0 + j].at].a;
+            pb[j] = cand[w[i0 + j].at].b;
+        }
+        mr_simplifier_plan_edges(s, nc, pa, pb, pc, pr, pk, pt);
+        for (size_t j = 0; j < nc; j++) {
+            mr_winner *x = &w[i0 + j];
+            x->r = pr[j];
+            x->k = pk[j];
+            memcpy(x->target, pt + 3 * j, sizeof x->target);
+            x->cost = pc[j];
+            x->state = pc[j] <= limit && pc[j] < INFINITY ? W_VALID : W_INVALID;
+        }
+    }
+}
+
+/* Levels of grouping in run_chunk: groups of 2^FIRST_SHIFT blocks at
+ * the first, LEVEL_SHIFT bits wider at each next, at most MAX_LEVELS of
+ * them (constants: what runs together must not depend on the thread
+ * count; these keep the error at 1 % on the bunny and the armadillo
+ * within 2 % of the sequential sweep's). */
+#define FIRST_SHIFT 2
+
+/* The block ranges are found anew every this many passes (between, the
+ * collapses keep them a bound: see run_chunk). */
+#define HOME_EVERY 2
+#define LEVEL_SHIFT 3
+#define MAX_LEVELS 6
+
+/* Winners planned and applied together: a round's winners go through
+ * run_chunk in chunks of this many, each on the mesh the chunks before it
+ * left (a constant, as SLICE). */
+#define WIN_CHUNK 8192
+
+/* Apply winner x now if it is still allowed, its merged list at out (room
+ * for the counts of its ends) or, when out is NULL, at the end of refs. */
+static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t *out,
+                         size_t *gone, size_t *deleted)
+{
+    mr_batched *bt = s->bt;
+    mr_collapse_mesh *m = &s->m;
+    mr_collapse_clean(m, x->r); /* its ends: no one else reads their lists */
+    mr_collapse_clean(m, x->k);
+    if (!mr_simplifier_allowed(s, x->r, x->k, x->target, x->cost, limit)) {
+        bt->cand[x->at].key = DEAD_KEY; /* leaves the candidates */
+        x->state = W_INVALID;
+        for (uint32_t j = 0; out && j < x->slots; j++)
+            out[j] = 0; /* its room stays unused: no tag may be found there */
+        return false;
+    }
+    if (out) {
+        const uint32_t slots = x->slots;
+        size_t rm;
+        *deleted += mr_simplifier_collapse_at(s, x->r, x->k, x->target, out, &rm);
+        *gone += rm;
+        for (uint32_t j = m->count[x->k]; j < slots; j++)
+            out[j] = 0; /* no compaction tag may stay behind */
+    } else {
+        const size_t v0 = m->live_vertices, t0 = m->live_triangles;
+        mr_simplifier_collapse(s, x->r, x->k, x->target);
+        *gone += v0 - m->live_vertices;
+        *deleted += t0 - m->live_triangles;
+        m->live_vertices = v0; /* the caller counts */
+        m->live_triangles = t0;
+    }
+    bt->mark[x->r] = bt->mark[x->k] = 1;
+    /* the survivor holds both ends' triangles */
+    bt->home_lo[x->k] = bt->home_lo[x->r] < bt->home_lo[x->k] ? bt->home_lo[x->r] : bt->home_lo[x->k];
+    bt->home_hi[x->k] = bt->home_hi[x->r] > bt->home_hi[x->k] ? bt->home_hi[x->r] : bt->home_hi[x->k];
+    return true;
+}
+
+/*
+ * One chunk of a round's winners, the same on any number of threads.
+ * Winners share no end; each is planned on the mesh as it stands. Every
+ * vertex knows the range of triangle blocks its triangles lie in (home_lo
+ * and home_hi, in blocks of BLOCK_TRIANGLES; a collapse widens the
+ * survivor's range to both ends', and a vertex that loses triangles keeps
+ * its range, which stays a bound). A winner whose ends and opposite
+ * vertices all lie in one group of blocks (at a level: blocks >> shift)
+ * touches nothing outside that group: its ends' triangles, the vertices
+ * of those triangles, and the opposite vertices' lists all belong to
+ * triangles of the group. Two such winners of different groups therefore
+ * commute (mr_collapse_apply_at: no end of one shares a triangle with an
+ * end of the other, and their opposite vertices differ), so the groups
+ * run concurrently, each testing (mr_simplifier_allowed) and applying its
+ * winners in winner order on the mesh as the collapses before them left
+ * it, exactly as the sequential sweep does; refs space is handed out by
+ * prefix sums. Winners that span groups go on to the next level, with
+ * groups LEVEL_SHIFT times as wide, and those left after the last level
+ * follow in winner order on one thread. A chunk that may reach the
+ * target runs on one thread in priority order, up to the target. Returns
+ * the collapses made; *invalid counts the winners found invalid.
+ */
+static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simplify_goal *g,
+                        bool sorted, double *worst, size_t *invalid)
+{
+    mr_batched *bt = s->bt;
+    mr_collapse_mesh *m = &s->m;
+    const int nt = bt->threads;
+    const bool par = nt > 1 && n >= 2048;
+    mr_winner *list = w, *grouped = bt->win2;
+    uint32_t *gcount = bt->gcount;
+    size_t rv = 0, rt = 0, gone = 0, deleted = 0, bad = 0, made = 0, nl = n, nin = 0;
+    size_t ngroups = 0;
+    unsigned shift = FIRST_SHIFT;
+    double wmax = *worst;
+    bool whole = false, stop = false;
+#pragma omp parallel num_threads(nt) if (par)
+    {
+#pragma omp for schedule(dynamic, 1)
+        for (ptrdiff_t i0 = 0; i0 < (ptrdiff_t)n; i0 += PLAN_BATCH) {
+            const size_t c = n - (size_t)i0 < PLAN_BATCH ? n - (size_t)i0 : PLAN_BATCH;
+            plan_winners(s, w + i0, c, g->limit);
+        }
+        for (int level = 0; !stop; level++) {
+            const ptrdiff_t nw = (ptrdiff_t)nl;
+            /* each winner's group at this level, or NONE when it spans
+             * groups (the opposite vertices from the mesh as it stands) */
+#pragma omp for schedule(dynamic, 64) reduction(+ : rv, rt)
+            for (ptrdiff_t i = 0; i < nw; i++) {
+                mr_winner *x = &list[i];
+                static const int ahead[3] = {PF0, PF1, PF2};
+                for (int st = 0; st < 2; st++) {
+                    if (i + ahead[st + 1] < nw)
+                        mr_collapse_prefetch(m, list[i + ahead[st + 1]].r, st);
+                }
+                if (x->state == W_INVALID)
+                    continue;
+                uint32_t ears;
+                x->deletes = (uint8_t)mr_collapse_opposites(m, x->r, x->k, x->opp, &ears);
+                x->removes = (uint8_t)(1 + ears);
+                rv += x->removes;
+                rt += x->deletes;
+                const uint32_t v[4] = {x->r, x->k, x->opp[0], x->opp[1]};
+                const uint32_t grp = bt->home_lo[x->r] >> shift;
+                bool one = true;
+                for (int q = 0; q < 4; q++)
+                    one &= v[q] == NONE || ((bt->home_lo[v[q]] >> shift == grp) &
+                                            (bt->home_hi[v[q]] >> shift == grp));
+                x->group = one ? grp : NONE;
+            }
+#pragma omp single
+            {
+                if (level == 0)
+                    whole = m->live_vertices - rv <= g->vertices ||
+                            (g->triangles && m->live_triangles - rt <= g->triangles);
+                stop = whole || nl == 0 || level >= MAX_LEVELS;
+                /* the grouped winners by group (counting sort: winner
+                 * order within a group), their refs room by prefix sum
+                 * (an upper bound: a collapse only shrinks the lists of
+                 * the vertices it does not own; the edge's triangles are
+                 * in both lists and die; the merge writes one entry past
+                 * its end); the others stay in list, in order */
+                ngroups = stop ? 0 : ((bt->nblocks - 1) >> shift) + 1;
+                memset(gcount, 0, (ngroups + 1) * sizeof *gcount);
+                size_t need = 0;
+                for (size_t i = 0; i < nl && !stop; i++) {
+                    const mr_winner *x = &list[i];
+                    if (x->state != W_INVALID && x->group != NONE) {
+                        gcount[x->group + 1]++;
+                        need += (size_t)m->count[x->r] + m->count[x->k] + 1 - 2u * x->deletes;
+                    }
+                }
+                if (!stop && m->refs_size + need > m->refs_capacity) {
+                    mr_collapse_compact(m);
+                    stop = m->refs_size + need > m->refs_capacity;
+                }
+                nin = 0;
+                if (!stop) {
+                    for (size_t q = 0; q < ngroups; q++)
+                        gcount[q + 1] += gcount[q];
+                    size_t at = m->refs_size, left = 0;
+                    for (size_t i = 0; i < nl; i++) {
+                        mr_winner *x = &list[i];
+                        if (x->state == W_INVALID)
+                            continue;
+                        if (x->group == NONE) {
+                            list[left++] = *x;
+                            continue;
+                        }
+                        x->slot = at;
+                        x->slots = m->count[x->r] + m->count[x->k] + 1 - 2u * x->deletes;
+                        at += x->slots;
+                        grouped[gcount[x->group]++] = *x;
+                        nin++;
+                    }
+                    /* gcount[q] is now the end of group q */
+                    m->refs_size = at;
+                    nl = left;
+                }
+                gone = deleted = 0;
+                rv = rt = 0;
+            }
+            if (stop)
+                break;
+#pragma omp for schedule(dynamic, 1) reduction(+ : gone, deleted, bad, made) \
+    reduction(max : wmax)
+            for (ptrdiff_t q = 0; q < (ptrdiff_t)ngroups; q++) {
+                const size_t i1 = gcount[q], i0 = q ? gcount[q - 1] : 0;
+                for (size_t i = i0; i < i1; i++) {
+                    mr_winner *x = &grouped[i];
+                    static const int ahead[3] = {PF0, PF1, PF2};
+                    for (int st = 0; st < 3; st++) {
+                        if (i + (size_t)ahead[st] < i1) {
+                            mr_collapse_prefetch(m, grouped[i + ahead[st]].r, st);
+                            mr_collapse_prefetch(m, grouped[i + ahead[st]].k, st);
+                        }
+                    }
+                    if (i + PF1 < i1) { /* and the quadrics the collapse merges */
+                        __builtin_prefetch(s->q + grouped[i + PF1].r);
+                        __builtin_prefetch(s->q + grouped[i + PF1].k);
+                    }
+                    if (apply_winner(s, x, g->limit, m->refs + x->slot, &gone, &deleted)) {
+                        made++;
+                        wmax = x->cost > wmax ? x->cost : wmax;
+                    } else {
+                        bad++;
+                    }
+                }
+            }
+#pragma omp single
+            {
+                m->live_vertices -= gone;
+                m->live_triangles -= deleted;
+                shift += LEVEL_SHIFT;
+                stop = nl == 0 || (bt->nblocks - 1) >> shift == 0;
+            }
+        }
+    }
+    /* the rest, on one thread: the winners left, in winner order; or, when
+     * the target may be reached here, every winner in priority order */
+    if (whole) {
+        list = w;
+        nl = n;
+        if (!sorted)
+            sort_winners(bt, w, n);
+    }
+    for (size_t i = 0; i < nl && !mr_simplifier_reached(s, g); i++) {
+        mr_winner *x = &list[i];
+        if (x->state == W_INVALID)
+            continue;
+        size_t rm = 0, dt = 0;
+        if (apply_winner(s, x, g->limit, NULL, &rm, &dt)) {
+            m->live_vertices -= rm;
+            m->live_triangles -= dt;
+            made++;
+            wmax = x->cost > wmax ? x->cost : wmax;
+        } else {
+            bad++;
+        }
+    }
+    *worst = wmax;
+    *invalid = bad;
+    return made;
+}
+
+/* Each vertex's range of triangle blocks, from its list (deleted entries
+ * count too: the range is a bound). */
+static void home_ranges(mr_simplifier *s)
+{
+    mr_batched *bt = s->bt;
+    const mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+#pragma omp parallel for schedule(static) num_threads(bt->threads) \
+    if (bt->threads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++) {
+        const uint32_t *l = mr_collapse_vertex_tris(m, (uint32_t)v);
+        uint32_t lo = UINT32_MAX, hi = 0;
+        for (uint32_t i = 0, c = m->count[v]; i < c; i++) {
+            const uint32_t b = l[i] / (3 * BLOCK_TRIANGLES);
+            lo = b < lo ? b : lo;
+            hi = b > hi ? b : hi;
+        }
+        bt->home_lo[v] = lo;
+        bt->home_hi[v] = hi;
+    }
+}
+
+/*
+ * The sweeps of a round over the candidates, block by block: retire those
+ * at a marked end (and the winners found invalid) and note at each vertex
+ * the least of its candidates, by cost and then by the other end's id;
+ * then mark the winners (the least at both ends) and count them per
+ * block; then list them in block order and clear the per-vertex minima.
+ * Every order here comes from the mesh, none from the candidates' places:
+ * two copies of a part (a double-sided sheet) reduce alike. The cheapest
+ * candidate, ties to the smallest (smaller end, larger end), always wins.
+ * Returns the winner count.
+ */
+static size_t find_winners(mr_simplifier *s)
+{
+    mr_batched *bt = s->bt;
+    const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
+    size_t live_total = 0;
+    for (size_t i = 0; i < bt->nblocks; i++)
+        live_total += bt->bn[i];
+    const bool par = bt->threads > 1 && live_total > 65536;
+    uint64_t *best = bt->best;
+    const uint8_t *mark = bt->mark;
+#pragma omp parallel num_threads(bt->threads) if (par)
+    {
+#pragma omp for schedule(dynamic, 8)
+        for (ptrdiff_t i = 0; i < nb; i++) {
+            mr_candidate *cand = bt->cand + bt->boff[i];
+            uint32_t live = 0;
+            for (uint32_t j = 0, n = bt->bn[i]; j < n; j++) {
+                const mr_candidate c = cand[j];
+                const bool retired = (mark[c.a] | mark[c.b]) || c.key == DEAD_KEY;
+                cand[live] = c;
+                if (!retired) {
+                    min_u64(&best[c.a], (uint64_t)c.key << 32 | c.b, par);
+                    min_u64(&best[c.b], (uint64_t)c.key << 32 | c.a, par);
+                }
+                live += !retired;
+            }
+            bt->bn[i] = live;
+        }
+#pragma omp for schedule(dynamic, 8)
+        for (ptrdiff_t i = 0; i < nb; i++) {
+            mr_candidate *cand = bt->cand + bt->boff[i];
+            uint32_t wins = 0;
+            for (uint32_t j = 0, n = bt->bn[i]; j < n; j++) {
+                const mr_candidate c = cand[j];
+                const uint64_t k = (uint64_t)c.key << 32;
+                const bool win = (load_u64(&best[c.a], par) == (k | c.b)) &
+                                 (load_u64(&best[c.b], par) == (k | c.a));
+                cand[j].key = c.key | (win ? WIN_BIT : 0);
+                wins += win;
+            }
+            bt->bw[i] = wins;
+        }
+#pragma omp single
+        {
+            size_t off = 0;
+            for (size_t i = 0; i < bt->nblocks; i++) {
+                const size_t w = bt->bw[i];
+                bt->bw[i] = (uint32_t)off;
+                off += w;
+            }
+            bt->bw[bt->nblocks] = (uint32_t)off;
+            if (off > bt->wid_cap) {
+                free(bt->wid);
+                bt->wid_cap = off + off / 4;
+                bt->wid = mr_alloc_array(bt->wid_cap, sizeof *bt->wid);
+                if (!bt->wid)
+                    bt->wid_cap = 0;
+            }
+        }
+#pragma omp for schedule(dynamic, 8)
+        for (ptrdiff_t i = 0; i < nb; i++) {
+            mr_candidate *cand = bt->cand + bt->boff[i];
+            const uint32_t base = (uint32_t)bt->boff[i];
+            uint32_t at = bt->bw[i];
+            for (uint32_t j = 0, n = bt->bn[i]; j < n; j++) {
+                const mr_candidate c = cand[j];
+                if (c.key & WIN_BIT) {
+                    cand[j].key = c.key & ~WIN_BIT;
+                    if (bt->wid)
+                        bt->wid[at++] = base + j;
+                }
+                store_u64(&best[c.a], UINT64_MAX, par);
+                store_u64(&best[c.b], UINT64_MAX, par);
+            }
+        }
+    }
+    return bt->wid ? bt->bw[bt->nblocks] : 0; /* no memory: stop here */
+}
+
 size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                                  double *max_error)
 {
+    mr_batched *bt = s->bt;
     mr_collapse_mesh *m = &s->m;
     mr_simplify_goal g;
     mr_simplifier_targets(s, o, &g);
@@ -282,129 +887,93 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
     double worst = 0;
     double share = PASS_SHARE;
     bool finished = false;
-    uint64_t *best = s->best64;
+    if (!bt->win)
+        bt->win = mr_alloc_array(WIN_CHUNK, sizeof *bt->win);
+    if (!bt->win2)
+        bt->win2 = mr_alloc_array(WIN_CHUNK, sizeof *bt->win2);
+    if (!bt->win || !bt->win2)
+        finished = true; /* no memory: nothing collapses */
 
-    while (!finished) {
+    for (unsigned pass = 0; !finished;) {
         if (mr_simplifier_reached(s, &g))
             break;
-        size_t n = gather(s, g.limit);
+        const size_t n = gather(s, g.limit);
         if (n == 0)
             break;
 
         /* This pass's candidates: up to the goal-th cheapest cost, with
          * slack, in gathering order. */
-        mr_candidate *cand = s->cand;
         const double goal = ceil(share * (double)needed_collapses(s, &g));
-        size_t nsel = n;
+        bool partial = false;
         if (goal < (double)n) {
             const uint32_t kth = rank_key(s, n, (size_t)goal);
             const uint32_t lim = float_key(key_float(kth) * PASS_SLACK);
-            nsel = 0;
-            for (size_t i = 0; i < n; i++) {
-                cand[nsel] = cand[i];
-                nsel += cand[i].key <= lim;
+            const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
+            size_t kept = 0;
+#pragma omp parallel for schedule(static) reduction(+ : kept) num_threads(bt->threads) \
+    if (bt->threads > 1 && n > 65536)
+            for (ptrdiff_t i = 0; i < nb; i++) {
+                mr_candidate *cand = bt->cand + bt->boff[i];
+                uint32_t k = 0;
+                for (uint32_t j = 0, e = bt->bn[i]; j < e; j++) {
+                    cand[k] = cand[j];
+                    k += cand[j].key <= lim;
+                }
+                bt->bn[i] = k;
+                kept += k;
             }
+            partial = kept < n;
         }
-        const bool partial = nsel < n;
 
-        /* Rounds: a candidate cheaper (ties: earlier) than every other
-         * candidate at its two ends collapses; its ends are then marked,
-         * which retires the candidates around them, and the next round
-         * looks again among the rest. Iterated, this takes the same edges
-         * as taking them in order of cost, skipping those at a marked end;
-         * but the collapses of a round run in gathering (triangle) order,
-         * so they walk the mesh in memory order. A candidate whose ends
-         * are both unmarked is still an edge of the mesh with its cost:
-         * only the ends of a collapse move, and the triangles it deletes
-         * hold both of them. */
-        memset(s->mark, 0, m->vertex_count);
+        /* Rounds: a candidate cheaper (ties: by the other end's id) than
+         * every other candidate at its two ends wins; a collapse marks its
+         * ends, which retires the candidates around them, and the next
+         * round looks again among the rest. A candidate whose ends are
+         * both unmarked is still an edge of the mesh with its cost: only
+         * the ends of a collapse move, and the triangles it deletes hold
+         * both of them. */
+        memset(bt->mark, 0, m->vertex_count);
+        if (pass % HOME_EVERY == 0)
+            home_ranges(s);
+        pass++;
         size_t pass_done = 0;
         for (int round = 0, productive = 0;
-             round < MAX_ROUNDS_TOTAL && productive < MAX_ROUNDS && nsel && !finished;
-             round++) {
-            /* best[v]: the least (key, index) among v's candidates; every
-             * entry is UINT64_MAX between rounds */
-            size_t live = 0;
-            for (size_t i = 0; i < nsel; i++) {
-                const mr_candidate c = cand[i];
-                const bool retired = s->mark[c.a] | s->mark[c.b];
-                const uint64_t id = ((uint64_t)c.key << 32 | live) | -(uint64_t)retired;
-                best[c.a] = id < best[c.a] ? id : best[c.a];
-                best[c.b] = id < best[c.b] ? id : best[c.b];
-                cand[live] = c;
-                live += !retired;
-            }
-            nsel = live;
-            /* The winners, moved to the front (the rest keep their order
-             * behind them). Winners share no end, and a collapse changes
-             * only its own ends and the triangles on its edge, so each
-             * winner's cost is still exact when it is applied. */
-            size_t wins = 0;
-            for (size_t i = 0; i < nsel; i++) {
-                const mr_candidate c = cand[i], w = cand[wins];
-                const uint64_t id = (uint64_t)c.key << 32 | i;
-                const bool win = (best[c.a] == id) & (best[c.b] == id);
-                /* select by mask: a conditional move of the records */
-                const uint32_t mk = -(uint32_t)win;
-                cand[i] = (mr_candidate){(w.key & mk) | (c.key & ~mk), (w.a & mk) | (c.a & ~mk),
-                                         (w.b & mk) | (c.b & ~mk)};
-                cand[wins] = (mr_candidate){(c.key & mk) | (w.key & ~mk),
-                                            (c.a & mk) | (w.a & ~mk), (c.b & mk) | (w.b & ~mk)};
-                wins += win;
-            }
-            for (size_t i = 0; i < nsel; i++)
-                best[cand[i].a] = best[cand[i].b] = UINT64_MAX;
+             round < MAX_ROUNDS_TOTAL && productive < MAX_ROUNDS && !finished; round++) {
+            size_t wins = find_winners(s);
             if (wins == 0)
                 break;
             /* When the winners are more than the target needs, the
-             * cheapest go first. */
-            if (wins > needed_collapses(s, &g))
-                sort_candidates(cand, wins);
-            /* Winners share no end and a collapse changes only its own
-             * ends, so a batch of them is planned before any of the batch
-             * is applied; validity is tested as each one's turn comes. */
-            size_t round_done = 0;
-            for (size_t i0 = 0; i0 < wins && !finished; i0 += PLAN_BATCH) {
-                const size_t nc = wins - i0 < PLAN_BATCH ? wins - i0 : PLAN_BATCH;
-                uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
-                double pc[PLAN_BATCH], pt[3 * PLAN_BATCH];
-                for (size_t j = 0; j < nc; j++) {
-                    pa[j] = cand[i0 + j].a;
-                    pb[j] = cand[i0 + j].b;
-                }
-                mr_simplifier_plan_edges(s, nc, pa, pb, pc, pr, pk, pt);
-                for (size_t j = 0; j < nc; j++) {
-                    static const int ahead[3] = {PF0, PF1, PF2};
-                    for (int st = 0; st < 3; st++) {
-                        if (j + ahead[st] < nc) {
-                            mr_collapse_prefetch(m, pr[j + ahead[st]], st);
-                            mr_collapse_prefetch(m, pk[j + ahead[st]], st);
-                        }
-                    }
-                    if (!try_collapse(s, pr[j], pk[j], pt + 3 * j, pc[j], g.limit, &worst)) {
-                        /* Out of the pass: mark nothing, so that the other
-                         * candidates at its ends can win the next round. */
-                        continue;
-                    }
-                    done++;
-                    round_done++;
-                    if (mr_simplifier_reached(s, &g)) {
-                        finished = true;
-                        break;
-                    }
-                    if (o->progress && done >= next_report) {
-                        o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
-                                    o->progress_user);
-                        next_report += g.planned / 100 + 1;
-                    }
+             * cheapest go first, and no more than twice the need are
+             * tried (the rest stay candidates). */
+            const size_t needed = needed_collapses(s, &g);
+            const bool sorted = wins > needed;
+            if (sorted) {
+                sort_ids(bt, bt->wid, wins);
+                const size_t cap = 2 * needed + 64;
+                wins = wins < cap ? wins : cap;
+            }
+            size_t round_done = 0, refused = 0;
+            for (size_t c0 = 0; c0 < wins && !finished; c0 += WIN_CHUNK) {
+                const size_t nc = wins - c0 < WIN_CHUNK ? wins - c0 : WIN_CHUNK;
+                for (size_t i = 0; i < nc; i++)
+                    bt->win[i].at = bt->wid[c0 + i];
+                size_t invalid;
+                const size_t made = run_chunk(s, bt->win, nc, &g, sorted, &worst, &invalid);
+                round_done += made;
+                refused += invalid;
+                done += made;
+                if (mr_simplifier_reached(s, &g))
+                    finished = true;
+                if (o->progress && done >= next_report) {
+                    o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
+                                o->progress_user);
+                    next_report = done + g.planned / 100 + 1;
                 }
             }
             pass_done += round_done;
-            productive += round_done > wins - round_done;
-            /* The winners leave the candidates (those that failed
-             * validity too): the rest follow them. */
-            cand += wins;
-            nsel -= wins;
+            productive += round_done > refused;
+            if (round_done == 0 && refused == 0)
+                break; /* nothing happened (cannot: every winner is tried) */
         }
         if (pass_done == 0) {
             if (!partial)

@@ -195,7 +195,7 @@ void mr_collapse_mesh_free(mr_collapse_mesh *m)
 mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, size_t stride,
                                 size_t vertex_count, const uint32_t *indices,
                                 size_t triangle_count, const double centre[3], double scale,
-                                mr_error *err)
+                                int threads, mr_error *err)
 {
     memset(m, 0, sizeof *m);
     const size_t vc = vertex_count, tc = triangle_count;
@@ -265,15 +265,20 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
         for (uint32_t k = 0; k < 3; k++)
             m->refs[m->start[tri[k]] + m->count[tri[k]]++] = 3 * (uint32_t)t + k;
     }
-    for (size_t v = 0; v < vc; v++) {
+    m->live_vertices = live_vertices;
+    /* Positions and the classification: each vertex on its own (the same
+     * result on any number of threads). */
+    const ptrdiff_t nv = (ptrdiff_t)vc;
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++) {
         float p[3];
-        memcpy(p, (const char *)positions + v * stride, sizeof p);
+        memcpy(p, (const char *)positions + (size_t)v * stride, sizeof p);
         for (int k = 0; k < 3; k++)
             m->pos[3 * v + k] = (float)((p[k] - centre[k]) * scale);
     }
-    m->live_vertices = live_vertices;
-
-    for (size_t v = 0; v < vc; v++)
+#pragma omp parallel for schedule(dynamic, 4096) num_threads(threads) \
+    if (threads > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
         m->flags[v] = m->count[v] ? classify_vertex(m, (uint32_t)v) : MR_VF_REMOVED;
     return MR_OK;
 }
@@ -496,7 +501,7 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
         if ((fu & keep) & ~(fv & keep))
             return false;
     }
-    assert(!((fu | fv) & MR_VF_DIRTY)); /* mr_collapse_clean first */
+    assert(!mr_collapse_dirty(m, u) && !mr_collapse_dirty(m, v)); /* mr_collapse_clean first */
     const uint32_t nu = m->count[u], nv = m->count[v];
     if (nu > MR_COLLAPSE_MAX_DEGREE || nv > MR_COLLAPSE_MAX_DEGREE)
         return valid_large(m, u, v, t, v_stays, limits);
@@ -660,6 +665,14 @@ static void compact_refs(mr_collapse_mesh *m)
     m->refs_size = w;
 }
 
+void mr_collapse_compact(mr_collapse_mesh *m) { compact_refs(m); }
+
+void mr_collapse_prepare(mr_collapse_mesh *m)
+{
+    if (m->lazy && !m->dead)
+        m->dead = mr_calloc_array(m->vertex_count, sizeof *m->dead);
+}
+
 void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
 {
     if (m->refs_size + m->count[u] + m->count[v] > m->refs_capacity)
@@ -668,7 +681,7 @@ void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
 
 void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v)
 {
-    if (!(m->flags[v] & MR_VF_DIRTY))
+    if (!mr_collapse_dirty(m, v))
         return;
     uint32_t *list = m->refs + m->start[v];
     uint32_t n = 0;
@@ -678,13 +691,12 @@ void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v)
     }
     m->count[v] = n;
     m->dead[v] = 0;
-    m->flags[v] &= (uint8_t)~MR_VF_DIRTY;
 }
 
 /* Live triangles of c: its list less the dead entries a lazy removal left. */
 static inline uint32_t live_count(const mr_collapse_mesh *m, uint32_t c)
 {
-    return m->count[c] - (m->flags[c] & MR_VF_DIRTY ? m->dead[c] : 0);
+    return m->count[c] - (m->dead ? m->dead[c] : 0);
 }
 
 /* Take corner id e out of its vertex c's list (order does not matter):
@@ -697,10 +709,7 @@ static inline uint32_t live_count(const mr_collapse_mesh *m, uint32_t c)
 static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
 {
     if (m->lazy && m->count[c] > LAZY_MIN) {
-        if (!m->dead)
-            m->dead = mr_calloc_array(m->vertex_count, sizeof *m->dead);
         if (m->dead) {
-            m->flags[c] |= MR_VF_DIRTY;
             m->dead[c]++;
             return;
         }
@@ -717,10 +726,31 @@ static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
     }
 }
 
-unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
-                           const double target[3])
+uint32_t mr_collapse_opposites(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                               uint32_t opp[2], uint32_t *ears)
 {
-    assert(!((m->flags[u] | m->flags[v]) & MR_VF_DIRTY)); /* mr_collapse_clean first */
+    const uint32_t *lu = mr_collapse_vertex_tris(m, u);
+    uint32_t n = 0, e = 0;
+    opp[0] = opp[1] = MR_COLLAPSE_NONE;
+    for (uint32_t i = 0; i < m->count[u] && n < 2; i++) {
+        const uint32_t c = lu[i], j = c % 3;
+        const uint32_t *tri = CORNER_TRI(m, c);
+        const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
+        if (a == v || b == v) {
+            const uint32_t o = a == v ? b : a;
+            opp[n++] = o;
+            e += live_count(m, o) == 1;
+        }
+    }
+    if (ears)
+        *ears = e;
+    return n;
+}
+
+unsigned mr_collapse_apply_at(mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                              const double target[3], uint32_t *out, size_t *removed)
+{
+    assert(!mr_collapse_dirty(m, u) && !mr_collapse_dirty(m, v)); /* mr_collapse_clean first */
     const uint32_t nu = m->count[u], nv = m->count[v];
     const uint32_t *lu = mr_collapse_vertex_tris(m, u), *lv = mr_collapse_vertex_tris(m, v);
     /* u's corners become v's; the triangles on the edge (one or two, as
@@ -728,6 +758,7 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
      * after the loop, which has no branch on which they are. */
     uint32_t dead[3];
     unsigned nd = 0;
+    size_t gone = 1; /* u */
     for (uint32_t i = 0; i < nu; i++) {
         const uint32_t e = lu[i], j = e % 3, base = e - j;
         uint32_t *tri = m->tris + base;
@@ -744,15 +775,13 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
         if (live_count(m, c) == 0) { /* an ear's tip: now unreferenced */
             mr_collapse_clean(m, c);
             m->flags[c] |= MR_VF_REMOVED;
-            m->live_vertices--;
-        } else if (MR_UNLIKELY(m->flags[c] & MR_VF_DIRTY) && 2 * m->dead[c] > m->count[c]) {
+            gone++;
+        } else if (MR_UNLIKELY(mr_collapse_dirty(m, c)) && 2 * m->dead[c] > m->count[c]) {
             mr_collapse_clean(m, c);
         }
     }
-    const unsigned deleted = nd;
-    /* v's merged list, at the end of refs: v's surviving triangles, then
-     * u's (their corners now hold v). */
-    uint32_t *out = m->refs + m->refs_size;
+    /* v's merged list at out: v's surviving triangles, then u's (their
+     * corners now hold v). */
     uint32_t n = 0;
     for (uint32_t i = 0; i < nv; i++) {
         out[n] = lv[i];
@@ -762,9 +791,8 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
         out[n] = lu[i];
         n += m->tris[lu[i] - lu[i] % 3] != MR_COLLAPSE_NONE;
     }
-    m->start[v] = (uint32_t)m->refs_size;
+    m->start[v] = (uint32_t)(out - m->refs);
     m->count[v] = n;
-    m->refs_size += n;
     m->count[u] = 0;
 
     float t[3] = {(float)target[0], (float)target[1], (float)target[2]};
@@ -776,7 +804,20 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
     pv[2] = t[2];
     m->flags[v] |= m->flags[u] & (MR_VF_BOUNDARY | MR_VF_SEAM);
     m->flags[u] |= MR_VF_REMOVED;
-    m->live_vertices--;
+    *removed = gone;
+    return nd;
+}
+
+unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                           const double target[3])
+{
+    if (m->lazy && !m->dead)
+        mr_collapse_prepare(m);
+    size_t gone;
+    const unsigned deleted =
+        mr_collapse_apply_at(m, u, v, target, m->refs + m->refs_size, &gone);
+    m->refs_size += m->count[v];
+    m->live_vertices -= gone;
     m->live_triangles -= deleted;
     return deleted;
 }

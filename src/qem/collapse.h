@@ -48,9 +48,6 @@ enum {
     MR_VF_REMOVED = 1u << 3,     /* collapsed away, or never referenced */
     MR_VF_MOVED = 1u << 4,       /* position differs from the input's */
     MR_VF_NONMANIFOLD = 1u << 5,
-    MR_VF_DIRTY = 1u << 7,       /* the list still holds deleted triangles
-                                    (a lazy mesh's long lists: see
-                                    mr_collapse_clean) */
     MR_VF_BLOCKED = 1u << 6      /* simplifier's bookkeeping: an edge at
                                     this vertex was found invalid and left
                                     the queue until the ring changes */
@@ -65,8 +62,10 @@ typedef struct mr_collapse_mesh {
     uint32_t *refs;      /* refs_capacity */
     size_t refs_size, refs_capacity;
     uint8_t *flags;      /* vertex_count, MR_VF_* */
-    uint32_t *dead;      /* vertex_count, or NULL until the first lazy
-                            removal: deleted triangles a DIRTY list holds */
+    uint32_t *dead;      /* vertex_count, or NULL (lazy meshes only): the
+                            deleted triangles v's list still holds (a
+                            "dirty" list when nonzero; kept apart from the
+                            flags, which other collapses read meanwhile) */
     bool lazy;           /* long lists keep deleted triangles until cleaned */
     size_t live_vertices;  /* referenced, not removed */
     size_t live_triangles;
@@ -82,12 +81,13 @@ typedef struct mr_collapse_limits {
 } mr_collapse_limits;
 
 /* Build the working mesh: positions are normalised as (p - centre) *
- * scale and stored as float. Indices must be in range. On failure the mesh
- * is left empty (safe to free). */
+ * scale and stored as float. Indices must be in range. Positions and
+ * classification run on up to `threads` threads (same result on any
+ * number). On failure the mesh is left empty (safe to free). */
 mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, size_t stride,
                                 size_t vertex_count, const uint32_t *indices,
                                 size_t triangle_count, const double centre[3], double scale,
-                                mr_error *err);
+                                int threads, mr_error *err);
 void mr_collapse_mesh_free(mr_collapse_mesh *m);
 
 /* v's list: corner ids 3t + j, tris[3t + j] == v. */
@@ -164,15 +164,21 @@ void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v);
  * of more than 64 entries would cost the list's length at every deletion
  * -- quadratic around a vertex of huge valence (the centre of a fanned
  * polygon loses a triangle with every collapse on its rim). Such a list
- * keeps the entry, the vertex is flagged DIRTY and counts it in dead[];
+ * keeps the entry and counts it in dead[] (the list is then dirty);
  * it is cleaned once half of it is dead, at compaction, and by this call,
- * which every reader of a DIRTY vertex's list makes first: the collapse's
+ * which every reader of a dirty list makes first: the collapse's
  * two ends before mr_collapse_valid and mr_collapse_apply (they assert
  * it). A deleted triangle's entries never match a vertex
- * (mr_collapse_edge_triangles counts right on a DIRTY list). Writes only
- * v's list and count.
+ * (mr_collapse_edge_triangles counts right on a dirty list). Writes only
+ * v's list, count and dead[v].
  */
 void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v);
+
+/* Does v's list still hold deleted triangles? */
+static inline bool mr_collapse_dirty(const mr_collapse_mesh *m, uint32_t v)
+{
+    return m->dead && m->dead[v];
+}
 
 /*
  * Collapse u into v, v moving to `target`: the triangles on the edge are
@@ -184,5 +190,48 @@ void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v);
  */
 unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
                            const double target[3]);
+
+/*
+ * What one collapse u -> v touches, so that several can run at once (the
+ * batched strategy's rounds):
+ *   reads   the lists of u and v, their triangles, the flags and positions
+ *           of every vertex of those triangles (the closed 1-rings of u and
+ *           v: mr_collapse_valid), and the lists, counts and flags of the
+ *           opposite vertices (the third vertices of the edge's triangles);
+ *   writes  u and v (position, flags, start, count), their triangles
+ *           (relabelled or deleted), the merged list's slots, and the
+ *           opposite vertices' lists, counts and dead[] (and REMOVED in
+ *           the flags of an ear's tip, whose only triangle is on the
+ *           edge).
+ * It changes no other vertex's position, flags or list. So two collapses A
+ * and B commute, and may run at the same time, when no end of A shares a
+ * triangle with an end of B (a symmetric relation) and their opposite
+ * vertices differ; each one's validity then still holds after the other.
+ * Global state -- refs_size, live_vertices, live_triangles, allocating
+ * dead[] -- is left to the caller: this form writes v's merged list at
+ * `out` (count[u] + count[v] entries inside refs, handed out by the
+ * caller), stores the vertices it removes (u, and an ear's tip) in
+ * *removed, and returns the triangles it deletes. The caller zeroes the
+ * slots the list leaves unused (no compaction tag may stay behind) and
+ * sets refs_size past them. A lazy mesh needs dead[] allocated first
+ * (mr_collapse_prepare).
+ */
+unsigned mr_collapse_apply_at(mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                              const double target[3], uint32_t *out, size_t *removed);
+
+/* The opposite vertices of edge (u, v) (MR_COLLAPSE_NONE past the count
+ * returned: 1 on a boundary, else 2), from u's list; *ears (when not NULL)
+ * counts those left without a triangle by the collapse. Reads u's list,
+ * its triangles and the opposite vertices' counts. */
+uint32_t mr_collapse_opposites(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
+                               uint32_t opp[2], uint32_t *ears);
+
+/* Allocate dead[] for a lazy mesh (before collapses run concurrently; a
+ * mesh without it removes entries eagerly, which is slower, not wrong). */
+void mr_collapse_prepare(mr_collapse_mesh *m);
+
+/* Compact refs now (exclusive access): afterwards the free room is at
+ * least one entry per live triangle. */
+void mr_collapse_compact(mr_collapse_mesh *m);
 
 #endif /* MR_COLLAPSE_H */

@@ -509,6 +509,15 @@ static void merge_quadrics(mr_simplifier *s, uint32_t r, uint32_t k, const doubl
     mr_quadric_store(&s->q[k], &qk);
 }
 
+unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,
+                                   const double target[3], uint32_t *out, size_t *removed)
+{
+    if (s->attr_apply)
+        s->attr_apply(s, r, k, target);
+    merge_quadrics(s, r, k, target);
+    return mr_collapse_apply_at(&s->m, r, k, target, out, removed);
+}
+
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
 {
     if (s->attr_apply)

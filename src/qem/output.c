@@ -110,7 +110,7 @@ static size_t prune(mr_simplifier *s, double bound)
     }
     for (size_t v = 0; v < vc; v++)
         if (!(m->flags[v] & MR_VF_REMOVED) && tris[mr_uf_find(parent, (uint32_t)v)]) {
-            m->flags[v] = (uint8_t)((m->flags[v] & ~MR_VF_DIRTY) | MR_VF_REMOVED);
+            m->flags[v] |= MR_VF_REMOVED;
             if (m->dead)
                 m->dead[v] = 0;
             m->count[v] = 0;
@@ -154,29 +154,84 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
         mr_simplified_free(out);
         return mr_fail_nomem(err, NULL, nv * 16 + nt * 12);
     }
-    size_t n = 0;
-    for (size_t v = 0; v < vc; v++) {
-        remap[v] = NONE;
-        if (m->flags[v] & MR_VF_REMOVED)
-            continue;
-        remap[v] = (uint32_t)n;
-        out->origin[n] = (uint32_t)v;
-        float *p = out->positions + 3 * n;
-        if (m->flags[v] & MR_VF_MOVED)
-            mr_simplifier_position(s, (uint32_t)v, p);
-        else
-            memcpy(p, (const char *)positions + v * stride, 3 * sizeof(float));
-        n++;
+    /* Blocks of a fixed size, counted, then filled from their prefix sums
+     * (the same output on any number of threads). */
+    enum { BLOCK = 65536 };
+    const size_t tc = m->triangle_count;
+    const size_t nbv = (vc + BLOCK - 1) / BLOCK, nbt = (tc + BLOCK - 1) / BLOCK;
+    size_t *boff = mr_alloc_array(nbv + nbt + 2, sizeof *boff);
+    if (!boff) {
+        free(remap);
+        mr_simplified_free(out);
+        return mr_fail_nomem(err, NULL, (nbv + nbt) * sizeof *boff);
     }
-    size_t t = 0;
-    for (size_t i = 0; i < m->triangle_count; i++) {
-        const uint32_t *tri = m->tris + 3 * i;
-        if (tri[0] == NONE)
-            continue;
-        for (int k = 0; k < 3; k++)
-            out->indices[3 * t + k] = remap[tri[k]];
-        t++;
+    size_t *toff = boff + nbv + 1;
+    const int nthreads = s->threads > 0 ? s->threads : 1;
+    const bool par = nthreads > 1 && vc + tc > 4 * (size_t)BLOCK;
+    size_t n = 0, t = 0;
+#pragma omp parallel num_threads(nthreads) if (par)
+    {
+#pragma omp for schedule(static)
+        for (ptrdiff_t b = 0; b < (ptrdiff_t)nbv; b++) {
+            const size_t v1 = (size_t)(b + 1) * BLOCK < vc ? (size_t)(b + 1) * BLOCK : vc;
+            size_t c = 0;
+            for (size_t v = (size_t)b * BLOCK; v < v1; v++)
+                c += !(m->flags[v] & MR_VF_REMOVED);
+            boff[b] = c;
+        }
+#pragma omp single
+        for (size_t b = 0; b < nbv; b++) {
+            const size_t c = boff[b];
+            boff[b] = n;
+            n += c;
+        }
+#pragma omp for schedule(static)
+        for (ptrdiff_t b = 0; b < (ptrdiff_t)nbv; b++) {
+            const size_t v1 = (size_t)(b + 1) * BLOCK < vc ? (size_t)(b + 1) * BLOCK : vc;
+            size_t at = boff[b];
+            for (size_t v = (size_t)b * BLOCK; v < v1; v++) {
+                remap[v] = NONE;
+                if (m->flags[v] & MR_VF_REMOVED)
+                    continue;
+                remap[v] = (uint32_t)at;
+                out->origin[at] = (uint32_t)v;
+                float *p = out->positions + 3 * at;
+                if (m->flags[v] & MR_VF_MOVED)
+                    mr_simplifier_position(s, (uint32_t)v, p);
+                else
+                    memcpy(p, (const char *)positions + v * stride, 3 * sizeof(float));
+                at++;
+            }
+        }
+#pragma omp for schedule(static)
+        for (ptrdiff_t b = 0; b < (ptrdiff_t)nbt; b++) {
+            const size_t i1 = (size_t)(b + 1) * BLOCK < tc ? (size_t)(b + 1) * BLOCK : tc;
+            size_t c = 0;
+            for (size_t i = (size_t)b * BLOCK; i < i1; i++)
+                c += m->tris[3 * i] != NONE;
+            toff[b] = c;
+        }
+#pragma omp single
+        for (size_t b = 0; b < nbt; b++) {
+            const size_t c = toff[b];
+            toff[b] = t;
+            t += c;
+        }
+#pragma omp for schedule(static)
+        for (ptrdiff_t b = 0; b < (ptrdiff_t)nbt; b++) {
+            const size_t i1 = (size_t)(b + 1) * BLOCK < tc ? (size_t)(b + 1) * BLOCK : tc;
+            size_t at = toff[b];
+            for (size_t i = (size_t)b * BLOCK; i < i1; i++) {
+                const uint32_t *tri = m->tris + 3 * i;
+                if (tri[0] == NONE)
+                    continue;
+                for (int k = 0; k < 3; k++)
+                    out->indices[3 * at + k] = remap[tri[k]];
+                at++;
+            }
+        }
     }
+    free(boff);
     free(remap);
     out->vertex_count = n;
     out->triangle_count = t;

@@ -150,10 +150,7 @@ void mr_simplifier_free(mr_simplifier *s)
 {
     mr_collapse_mesh_free(&s->m);
     free(s->q);
-    free(s->cand);
-    free(s->mark);
-    free(s->hist);
-    free(s->best64);
+    mr_simplifier_batched_free(s);
     memset(s, 0, sizeof *s);
 }
 
@@ -274,8 +271,9 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         s->box[k] = 0.5 * (hi[k] - lo[k]) * s->scale + 1e-6;
     }
 
+    s->threads = mr_thread_count(o ? o->threads : 0);
     st = mr_collapse_mesh_init(&s->m, positions, stride, vertex_count, indices, triangle_count,
-                               s->centre, s->scale, err);
+                               s->centre, s->scale, s->threads, err);
     if (st != MR_OK)
         return st;
     mr_collapse_mesh *m = &s->m;
@@ -315,7 +313,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     }
     /* A gather over each vertex's own triangles, writing only its own
      * quadric: the same result on any number of threads. */
-    const int nthreads = mr_thread_count(o->threads);
+    const int nthreads = s->threads;
     const ptrdiff_t nv = (ptrdiff_t)vertex_count;
 #pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
     for (ptrdiff_t v = 0; v < nv; v++)

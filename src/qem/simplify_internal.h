@@ -20,10 +20,9 @@ typedef struct mr_simplifier mr_simplifier;
  * of mr_simplifier_run_greedy. */
 typedef struct mr_greedy mr_greedy;
 
-/* batched.c: an edge (a, b) of a pass and the bits of its (float) cost. */
-typedef struct mr_candidate {
-    uint32_t key, a, b;
-} mr_candidate;
+/* batched.c's state (its own file), from mr_simplifier_batched_init to
+ * mr_simplifier_free. */
+typedef struct mr_batched mr_batched;
 
 struct mr_simplifier {
     mr_collapse_mesh m;
@@ -32,11 +31,8 @@ struct mr_simplifier {
     int half;
     int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
     mr_greedy *greedy;       /* else greedy.c's, while it runs */
-    struct mr_candidate *cand; /* batched: a pass's edges */
-    size_t cand_cap;
-    uint8_t *mark;           /* batched: per vertex, changed in this pass */
-    uint32_t *hist;          /* batched: histogram */
-    uint64_t *best64;        /* batched: per vertex, its cheapest candidate */
+    mr_batched *bt;          /* else batched.c's */
+    int threads;             /* threads the run may use (options.threads) */
     double centre[3], scale, diagonal;
     double error_base;       /* bounding-box diagonal of all the input's
                                 vertices: relative errors are relative to it */
@@ -140,6 +136,14 @@ bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const
 bool mr_simplifier_valid(const mr_simplifier *s, uint32_t u, uint32_t w, double *cost);
 /* Apply a valid planned collapse: attribute hook, quadrics, mesh. */
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
+/* The same for one of several concurrent collapses (mr_collapse_apply_at
+ * says which may run together): the merged list goes to out, the removed
+ * vertices to *removed; returns the deleted triangles. Writes only what
+ * the collapse owns (its ends, their triangles, its opposite vertices'
+ * lists, k's quadric, and through the attribute hook r's corners and k's
+ * wedges). */
+unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,
+                                   const double target[3], uint32_t *out, size_t *removed);
 
 /* ---- output.c: the end of a run */
 /* After the strategy: why it stopped (s->stop) and options.prune
@@ -157,6 +161,7 @@ mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err);
 size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o,
                                 double *max_error);
 mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
+void mr_simplifier_batched_free(mr_simplifier *s);
 size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                                  double *max_error);
 
