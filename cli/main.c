@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "../src/core/omp_compat.h"
 
@@ -95,6 +96,17 @@ static int take_threads(int *argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    /* The parallel simplifier meets at a barrier a few thousand times a
+     * run. OpenMP's threads wait there by spinning, by default for long
+     * (libgomp: 300,000 turns); on a machine whose cores are busy with
+     * other work a spinning thread holds the core its partner needs, and
+     * a run took 8x longer. A short spin, then sleep, costs nothing on idle
+     * cores. libgomp reads its settings when it is loaded, before main:
+     * unless the user set one, the tool starts itself again with a short
+     * spin (once: the variable is then set). */
+    if (!getenv("GOMP_SPINCOUNT") && !getenv("OMP_WAIT_POLICY") &&
+        setenv("GOMP_SPINCOUNT", "10000", 0) == 0)
+        execv("/proc/self/exe", argv); /* returns only on failure: go on */
     install_signal_handlers();
     if (take_threads(&argc, argv) != 0)
         return CLI_USAGE;
