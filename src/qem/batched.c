@@ -112,10 +112,7 @@ typedef struct mr_candidate {
 typedef struct mr_winner {
     uint32_t at;      /* candidate index */
     uint32_t r, k;    /* r goes, k stays */
-    uint32_t opp[2];  /* the edge's opposite vertices (NONE past one) */
     uint8_t state;    /* W_* */
-    uint8_t removes;  /* vertices the collapse removes: 1 + ears */
-    uint8_t deletes;  /* triangles it deletes */
     size_t slot;      /* where its merged list goes in refs */
     uint32_t slots;   /* and the room it has there */
     uint32_t group;   /* its group of blocks at this level, or NONE */
@@ -585,14 +582,14 @@ static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t 
  * vertex knows the range of triangle blocks its triangles lie in (home_lo
  * and home_hi, in blocks of BLOCK_TRIANGLES; a collapse widens the
  * survivor's range to both ends', and a vertex that loses triangles keeps
- * its range, which stays a bound). A winner whose ends and opposite
- * vertices all lie in one group of blocks (at a level: blocks >> shift)
- * touches nothing outside that group: its ends' triangles, the vertices
- * of those triangles, and the opposite vertices' lists all belong to
- * triangles of the group. Two such winners of different groups therefore
- * commute (mr_collapse_apply_at: no end of one shares a triangle with an
- * end of the other, and their opposite vertices differ), so the groups
- * run concurrently, each testing (mr_simplifier_allowed) and applying its
+ * its range, which stays a bound). A winner whose two ends lie in one
+ * group of blocks (at a level: blocks >> shift) reads and writes only
+ * triangles of that group and their vertices; the one thing two winners
+ * of different groups may share is an opposite vertex, whose list the
+ * concurrent collapse leaves alone (mr_collapse_apply_at, shared: the
+ * entry is only counted dead). So two such winners commute -- no end of
+ * one shares a triangle with an end of the other -- and the groups run
+ * concurrently, each testing (mr_simplifier_allowed) and applying its
  * winners in winner order on the mesh as the collapses before them left
  * it, exactly as the sequential sweep does; refs space is handed out by
  * prefix sums. Winners that span groups go on to the next level, with
@@ -636,24 +633,19 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
                 }
                 if (x->state == W_INVALID)
                     continue;
-                uint32_t ears;
-                x->deletes = (uint8_t)mr_collapse_opposites(m, x->r, x->k, x->opp, &ears);
-                x->removes = (uint8_t)(1 + ears);
-                rv += x->removes;
-                rt += x->deletes;
-                const uint32_t v[4] = {x->r, x->k, x->opp[0], x->opp[1]};
+                rv += 3; /* at most: an end and two ears */
+                rt += 2;
                 const uint32_t grp = bt->home_lo[x->r] >> shift;
-                bool one = true;
-                for (int q = 0; q < 4; q++)
-                    one &= v[q] == NONE || ((bt->home_lo[v[q]] >> shift == grp) &
-                                            (bt->home_hi[v[q]] >> shift == grp));
+                const bool one = (bt->home_hi[x->r] >> shift == grp) &
+                                 (bt->home_lo[x->k] >> shift == grp) &
+                                 (bt->home_hi[x->k] >> shift == grp);
                 x->group = one ? grp : NONE;
             }
 #pragma omp single
             {
-                if (level == 0)
-                    whole = m->live_vertices - rv <= g->vertices ||
-                            (g->triangles && m->live_triangles - rt <= g->triangles);
+                if (level == 0) /* (rv, rt: bounds of what the winners remove) */
+                    whole = rv + g->vertices >= m->live_vertices ||
+                            (g->triangles && rt + g->triangles >= m->live_triangles);
                 stop = whole || nl == 0 || level >= MAX_LEVELS;
                 /* the grouped winners by group (counting sort: winner
                  * order within a group), their refs room by prefix sum
@@ -668,7 +660,7 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
                     const mr_winner *x = &list[i];
                     if (x->state != W_INVALID && x->group != NONE) {
                         gcount[x->group + 1]++;
-                        need += (size_t)m->count[x->r] + m->count[x->k] + 1 - 2u * x->deletes;
+                        need += (size_t)m->count[x->r] + m->count[x->k] + 1;
                     }
                 }
                 if (!stop && m->refs_size + need > m->refs_capacity) {
@@ -689,7 +681,7 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
                             continue;
                         }
                         x->slot = at;
-                        x->slots = m->count[x->r] + m->count[x->k] + 1 - 2u * x->deletes;
+                        x->slots = m->count[x->r] + m->count[x->k] + 1;
                         at += x->slots;
                         grouped[gcount[x->group]++] = *x;
                         nin++;

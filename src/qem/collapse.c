@@ -726,29 +726,9 @@ static void list_remove(mr_collapse_mesh *m, uint32_t c, uint32_t e)
     }
 }
 
-uint32_t mr_collapse_opposites(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
-                               uint32_t opp[2], uint32_t *ears)
-{
-    const uint32_t *lu = mr_collapse_vertex_tris(m, u);
-    uint32_t n = 0, e = 0;
-    opp[0] = opp[1] = MR_COLLAPSE_NONE;
-    for (uint32_t i = 0; i < m->count[u] && n < 2; i++) {
-        const uint32_t c = lu[i], j = c % 3;
-        const uint32_t *tri = CORNER_TRI(m, c);
-        const uint32_t a = corner_next(tri, j), b = corner_prev(tri, j);
-        if (a == v || b == v) {
-            const uint32_t o = a == v ? b : a;
-            opp[n++] = o;
-            e += live_count(m, o) == 1;
-        }
-    }
-    if (ears)
-        *ears = e;
-    return n;
-}
-
 unsigned mr_collapse_apply_at(mr_collapse_mesh *m, uint32_t u, uint32_t v,
-                              const double target[3], uint32_t *out, size_t *removed)
+                              const double target[3], uint32_t *out, size_t *removed,
+                              bool shared)
 {
     assert(!mr_collapse_dirty(m, u) && !mr_collapse_dirty(m, v)); /* mr_collapse_clean first */
     const uint32_t nu = m->count[u], nv = m->count[v];
@@ -771,6 +751,17 @@ unsigned mr_collapse_apply_at(mr_collapse_mesh *m, uint32_t u, uint32_t v,
     for (unsigned d = 0; d < nd; d++) {
         const uint32_t ec = dead[d], base = ec - ec % 3, c = m->tris[ec];
         m->tris[base] = m->tris[base + 1] = m->tris[base + 2] = MR_COLLAPSE_NONE;
+        if (shared) {
+            /* c may be the opposite vertex of another collapse running
+             * now: its list is left as it is, the entry counted dead
+             * (no one reads it meanwhile: c is an end of neither) */
+            const uint32_t dc = __atomic_add_fetch(&m->dead[c], 1, __ATOMIC_RELAXED);
+            if (dc == m->count[c]) { /* an ear's tip (never shared): now unreferenced */
+                m->flags[c] |= MR_VF_REMOVED;
+                gone++;
+            }
+            continue;
+        }
         list_remove(m, c, ec);
         if (live_count(m, c) == 0) { /* an ear's tip: now unreferenced */
             mr_collapse_clean(m, c);
@@ -815,7 +806,7 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
         mr_collapse_prepare(m);
     size_t gone;
     const unsigned deleted =
-        mr_collapse_apply_at(m, u, v, target, m->refs + m->refs_size, &gone);
+        mr_collapse_apply_at(m, u, v, target, m->refs + m->refs_size, &gone, false);
     m->refs_size += m->count[v];
     m->live_vertices -= gone;
     m->live_triangles -= deleted;

@@ -196,35 +196,31 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
  * batched strategy's rounds):
  *   reads   the lists of u and v, their triangles, the flags and positions
  *           of every vertex of those triangles (the closed 1-rings of u and
- *           v: mr_collapse_valid), and the lists, counts and flags of the
- *           opposite vertices (the third vertices of the edge's triangles);
+ *           v: mr_collapse_valid), and the counts of the opposite vertices
+ *           (the third vertices of the edge's triangles);
  *   writes  u and v (position, flags, start, count), their triangles
- *           (relabelled or deleted), the merged list's slots, and the
- *           opposite vertices' lists, counts and dead[] (and REMOVED in
- *           the flags of an ear's tip, whose only triangle is on the
- *           edge).
- * It changes no other vertex's position, flags or list. So two collapses A
- * and B commute, and may run at the same time, when no end of A shares a
- * triangle with an end of B (a symmetric relation) and their opposite
- * vertices differ; each one's validity then still holds after the other.
- * Global state -- refs_size, live_vertices, live_triangles, allocating
- * dead[] -- is left to the caller: this form writes v's merged list at
- * `out` (count[u] + count[v] entries inside refs, handed out by the
- * caller), stores the vertices it removes (u, and an ear's tip) in
- * *removed, and returns the triangles it deletes. The caller zeroes the
- * slots the list leaves unused (no compaction tag may stay behind) and
- * sets refs_size past them. A lazy mesh needs dead[] allocated first
- * (mr_collapse_prepare).
+ *           (relabelled or deleted), the merged list's slots, and of each
+ *           opposite vertex dead[] (atomically when `shared`: its list is
+ *           then left as it is, the entry only counted dead, so that two
+ *           collapses may share an opposite vertex; else its list and
+ *           count too) and, for an ear's tip (whose only triangle is on the
+ *           edge), the REMOVED flag.
+ * It changes no other vertex's position, flags or list. So two shared
+ * collapses A and B commute, and may run at the same time, when no end of
+ * A shares a triangle with an end of B (a symmetric relation); each one's
+ * validity then still holds after the other. Global state -- refs_size,
+ * live_vertices, live_triangles, allocating dead[] -- is left to the
+ * caller: this form writes v's merged list at `out` (room for count[u] +
+ * count[v] + 1 entries inside refs, handed out by the caller: the merge
+ * writes one entry past its end), stores the vertices it removes (u, and
+ * an ear's tip) in *removed, and returns the triangles it deletes. The
+ * caller zeroes the slots the list leaves unused (no compaction tag may
+ * stay behind) and sets refs_size past them. `shared` needs a lazy mesh
+ * with dead[] allocated (mr_collapse_prepare).
  */
 unsigned mr_collapse_apply_at(mr_collapse_mesh *m, uint32_t u, uint32_t v,
-                              const double target[3], uint32_t *out, size_t *removed);
-
-/* The opposite vertices of edge (u, v) (MR_COLLAPSE_NONE past the count
- * returned: 1 on a boundary, else 2), from u's list; *ears (when not NULL)
- * counts those left without a triangle by the collapse. Reads u's list,
- * its triangles and the opposite vertices' counts. */
-uint32_t mr_collapse_opposites(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
-                               uint32_t opp[2], uint32_t *ears);
+                              const double target[3], uint32_t *out, size_t *removed,
+                              bool shared);
 
 /* Allocate dead[] for a lazy mesh (before collapses run concurrently; a
  * mesh without it removes entries eagerly, which is slower, not wrong). */

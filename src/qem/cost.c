@@ -515,7 +515,7 @@ unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,
     if (s->attr_apply)
         s->attr_apply(s, r, k, target);
     merge_quadrics(s, r, k, target);
-    return mr_collapse_apply_at(&s->m, r, k, target, out, removed);
+    return mr_collapse_apply_at(&s->m, r, k, target, out, removed, true);
 }
 
 void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
