@@ -20,12 +20,14 @@
  *
  * Rounds within a pass: a candidate cheaper than every other candidate at
  * its two ends wins (find_winners); winners share no end. They are taken
- * in chunks and slices of fixed sizes (run_chunk): winners whose
- * neighbourhoods no winner of another slice touches run concurrently,
- * each slice in order; the rest follow. Every order and tie comes from
- * the mesh (costs, then vertex ids), never from a thread's timing or the
- * thread count; the layout of the candidates (blocks of BLOCK_TRIANGLES
- * triangles) and the chunk and slice sizes are constants. So the output is
+ * in chunks of a fixed size (run_chunk): winners whose two ends lie in
+ * one group of triangle blocks touch nothing of another group's, so the
+ * groups run concurrently, each in order; winners spanning groups follow
+ * with wider groups, the last few on one thread. Every order and tie
+ * comes from the mesh (costs, then vertex ids), never from a thread's
+ * timing or the thread count; the layout of the candidates (blocks of
+ * BLOCK_TRIANGLES triangles), the chunk size and the levels of groups are
+ * constants. So the output is
  * byte-identical at every thread count, and in a build without OpenMP.
  *
  * Why it is fast: no heap with mutable keys (a sift per neighbour edge
@@ -39,6 +41,7 @@
 
 #include "../core/omp_compat.h"
 
+#include <assert.h>
 #include <math.h>
 
 #define NONE MR_COLLAPSE_NONE
@@ -419,70 +422,55 @@ static inline uint64_t prio_of(const mr_batched *bt, uint32_t at)
     return (uint64_t)c.key << 32 | (c.a < c.b ? c.a : c.b);
 }
 
-static void sift_ids(const mr_batched *bt, uint32_t *w, size_t j, size_t n)
+/* The priority of a winner id, and of a winner record. */
+typedef uint64_t (*prio_fn)(const mr_batched *bt, const void *e);
+
+static uint64_t id_prio(const mr_batched *bt, const void *e)
 {
-    const uint32_t x = w[j];
-    const uint64_t px = prio_of(bt, x);
+    return prio_of(bt, *(const uint32_t *)e);
+}
+
+static uint64_t winner_prio(const mr_batched *bt, const void *e)
+{
+    return prio_of(bt, ((const mr_winner *)e)->at);
+}
+
+static void sift(const mr_batched *bt, char *a, size_t size, prio_fn key, size_t j, size_t n,
+                 char *held)
+{
+    memcpy(held, a + j * size, size);
+    const uint64_t px = key(bt, held);
     for (;;) {
         size_t c = 2 * j + 1;
         if (c >= n)
             break;
-        if (c + 1 < n && prio_of(bt, w[c]) < prio_of(bt, w[c + 1]))
+        if (c + 1 < n && key(bt, a + c * size) < key(bt, a + (c + 1) * size))
             c++;
-        if (px >= prio_of(bt, w[c]))
+        if (px >= key(bt, a + c * size))
             break;
-        w[j] = w[c];
+        memcpy(a + j * size, a + c * size, size);
         j = c;
     }
-    w[j] = x;
+    memcpy(a + j * size, held, size);
 }
 
-/* Heap sort of winner ids by priority, in place. */
-static void sort_ids(const mr_batched *bt, uint32_t *w, size_t n)
+/* Heap sort by priority, in place, of n elements of `size` bytes (winner
+ * ids before a round's chunks when the winners are more than the target
+ * needs; a chunk's winner records when the target falls inside it).
+ * Priorities are distinct, so the order is total. */
+static void sort_by_prio(const mr_batched *bt, void *base, size_t n, size_t size, prio_fn key)
 {
+    char *a = base, held[sizeof(mr_winner)], top[sizeof(mr_winner)];
+    assert(size <= sizeof held);
     if (n < 2)
         return;
     for (size_t i = n / 2; i-- > 0;)
-        sift_ids(bt, w, i, n);
+        sift(bt, a, size, key, i, n, held);
     for (size_t e = n - 1; e > 0; e--) {
-        const uint32_t t = w[0];
-        w[0] = w[e];
-        w[e] = t;
-        sift_ids(bt, w, 0, e);
-    }
-}
-
-static void sift_winners(const mr_batched *bt, mr_winner *w, size_t j, size_t n)
-{
-    const mr_winner x = w[j];
-    const uint64_t px = prio_of(bt, x.at);
-    for (;;) {
-        size_t c = 2 * j + 1;
-        if (c >= n)
-            break;
-        if (c + 1 < n && prio_of(bt, w[c].at) < prio_of(bt, w[c + 1].at))
-            c++;
-        if (px >= prio_of(bt, w[c].at))
-            break;
-        w[j] = w[c];
-        j = c;
-    }
-    w[j] = x;
-}
-
-/* Heap sort of committed winners by priority (a chunk's, only when the
- * target falls inside it). */
-static void sort_winners(const mr_batched *bt, mr_winner *w, size_t n)
-{
-    if (n < 2)
-        return;
-    for (size_t i = n / 2; i-- > 0;)
-        sift_winners(bt, w, i, n);
-    for (size_t e = n - 1; e > 0; e--) {
-        const mr_winner t = w[0];
-        w[0] = w[e];
-        w[e] = t;
-        sift_winners(bt, w, 0, e);
+        memcpy(top, a, size);
+        memcpy(a, a + e * size, size);
+        memcpy(a + e * size, top, size);
+        sift(bt, a, size, key, 0, e, held);
     }
 }
 
@@ -538,8 +526,10 @@ static void plan_winners(const mr_simplifier *s, mr_winner *w, size_t n, double 
  * left (a constant, as SLICE). */
 #define WIN_CHUNK 8192
 
-/* Apply winner x now if it is still allowed, its merged list at out (room
- * for the counts of its ends) or, when out is NULL, at the end of refs. */
+/* Apply winner x now if it is still allowed: concurrently, its merged
+ * list at out (x->slots of room) and what it removes added to *gone and
+ * *deleted; or, when out is NULL, on one thread at the end of refs, the
+ * mesh's counts updated. */
 static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t *out,
                          size_t *gone, size_t *deleted)
 {
@@ -555,19 +545,13 @@ static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t 
         return false;
     }
     if (out) {
-        const uint32_t slots = x->slots;
         size_t rm;
         *deleted += mr_simplifier_collapse_at(s, x->r, x->k, x->target, out, &rm);
         *gone += rm;
-        for (uint32_t j = m->count[x->k]; j < slots; j++)
+        for (uint32_t j = m->count[x->k]; j < x->slots; j++)
             out[j] = 0; /* no compaction tag may stay behind */
     } else {
-        const size_t v0 = m->live_vertices, t0 = m->live_triangles;
-        mr_simplifier_collapse(s, x->r, x->k, x->target);
-        *gone += v0 - m->live_vertices;
-        *deleted += t0 - m->live_triangles;
-        m->live_vertices = v0; /* the caller counts */
-        m->live_triangles = t0;
+        mr_simplifier_collapse(s, x->r, x->k, x->target); /* counts itself */
     }
     bt->mark[x->r] = bt->mark[x->k] = 1;
     /* the survivor holds both ends' triangles */
@@ -621,16 +605,11 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
         }
         for (int level = 0; !stop; level++) {
             const ptrdiff_t nw = (ptrdiff_t)nl;
-            /* each winner's group at this level, or NONE when it spans
-             * groups (the opposite vertices from the mesh as it stands) */
-#pragma omp for schedule(dynamic, 64) reduction(+ : rv, rt)
+            /* each winner's group at this level (from its ends' block
+             * ranges), or NONE when it spans groups */
+#pragma omp for schedule(static) reduction(+ : rv, rt)
             for (ptrdiff_t i = 0; i < nw; i++) {
                 mr_winner *x = &list[i];
-                static const int ahead[3] = {PF0, PF1, PF2};
-                for (int st = 0; st < 2; st++) {
-                    if (i + ahead[st + 1] < nw)
-                        mr_collapse_prefetch(m, list[i + ahead[st + 1]].r, st);
-                }
                 if (x->state == W_INVALID)
                     continue;
                 rv += 3; /* at most: an end and two ears */
@@ -735,16 +714,13 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
         list = w;
         nl = n;
         if (!sorted)
-            sort_winners(bt, w, n);
+            sort_by_prio(bt, w, n, sizeof *w, winner_prio);
     }
     for (size_t i = 0; i < nl && !mr_simplifier_reached(s, g); i++) {
         mr_winner *x = &list[i];
         if (x->state == W_INVALID)
             continue;
-        size_t rm = 0, dt = 0;
-        if (apply_winner(s, x, g->limit, NULL, &rm, &dt)) {
-            m->live_vertices -= rm;
-            m->live_triangles -= dt;
+        if (apply_winner(s, x, g->limit, NULL, NULL, NULL)) {
             made++;
             wmax = x->cost > wmax ? x->cost : wmax;
         } else {
@@ -940,7 +916,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             const size_t needed = needed_collapses(s, &g);
             const bool sorted = wins > needed;
             if (sorted) {
-                sort_ids(bt, bt->wid, wins);
+                sort_by_prio(bt, bt->wid, wins, sizeof *bt->wid, id_prio);
                 const size_t cap = 2 * needed + 64;
                 wins = wins < cap ? wins : cap;
             }

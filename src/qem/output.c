@@ -138,6 +138,18 @@ void mr_simplifier_finish(mr_simplifier *s, const mr_simplify_options *o, double
 
 /* ---- output ---------------------------------------------------------------- */
 
+/* Counts c[0..n) become their exclusive prefix sums; returns the total. */
+static size_t exclusive_prefix(size_t *c, size_t n)
+{
+    size_t sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        const size_t x = c[i];
+        c[i] = sum;
+        sum += x;
+    }
+    return sum;
+}
+
 mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
                                mr_simplified *out, mr_error *err)
 {
@@ -180,11 +192,7 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
             boff[b] = c;
         }
 #pragma omp single
-        for (size_t b = 0; b < nbv; b++) {
-            const size_t c = boff[b];
-            boff[b] = n;
-            n += c;
-        }
+        n = exclusive_prefix(boff, nbv);
 #pragma omp for schedule(static)
         for (ptrdiff_t b = 0; b < (ptrdiff_t)nbv; b++) {
             const size_t v1 = (size_t)(b + 1) * BLOCK < vc ? (size_t)(b + 1) * BLOCK : vc;
@@ -212,11 +220,7 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
             toff[b] = c;
         }
 #pragma omp single
-        for (size_t b = 0; b < nbt; b++) {
-            const size_t c = toff[b];
-            toff[b] = t;
-            t += c;
-        }
+        t = exclusive_prefix(toff, nbt);
 #pragma omp for schedule(static)
         for (ptrdiff_t b = 0; b < (ptrdiff_t)nbt; b++) {
             const size_t i1 = (size_t)(b + 1) * BLOCK < tc ? (size_t)(b + 1) * BLOCK : tc;

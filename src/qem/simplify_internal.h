@@ -139,9 +139,9 @@ void mr_simplifier_collapse(mr_simplifier *s, uint32_t r, uint32_t k, const doub
 /* The same for one of several concurrent collapses (mr_collapse_apply_at
  * says which may run together): the merged list goes to out, the removed
  * vertices to *removed; returns the deleted triangles. Writes only what
- * the collapse owns (its ends, their triangles, its opposite vertices'
- * lists, k's quadric, and through the attribute hook r's corners and k's
- * wedges). */
+ * the collapse owns (its ends, their triangles, k's quadric, and through
+ * the attribute hook r's corners and k's wedges), and its opposite
+ * vertices' dead[] counts, atomically (their lists stay as they are). */
 unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,
                                    const double target[3], uint32_t *out, size_t *removed);
 
