@@ -595,7 +595,8 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
     size_t ngroups = 0;
     unsigned shift = FIRST_SHIFT;
     double wmax = *worst;
-    bool whole = false, stop = false;
+    bool whole = false, stop = false, compact = false;
+    size_t room = 0;
 #pragma omp parallel num_threads(nt) if (par)
     {
 #pragma omp for schedule(dynamic, 1)
@@ -642,10 +643,14 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
                         need += (size_t)m->count[x->r] + m->count[x->k] + 1;
                     }
                 }
-                if (!stop && m->refs_size + need > m->refs_capacity) {
-                    mr_collapse_compact(m);
-                    stop = m->refs_size + need > m->refs_capacity;
-                }
+                compact = !stop && m->refs_size + need > m->refs_capacity;
+                room = need;
+            }
+            if (compact) /* on the whole team */
+                mr_collapse_compact(m);
+#pragma omp single
+            {
+                stop = stop || m->refs_size + room > m->refs_capacity;
                 nin = 0;
                 if (!stop) {
                     for (size_t q = 0; q < ngroups; q++)

@@ -1,6 +1,7 @@
 /* The working mesh of the edge-collapse simplifiers: see collapse.h. */
 #include "collapse.h"
 
+#include "../core/omp_compat.h"
 #include "../mesh/adjacency.h"
 #include "quadric.h"
 
@@ -189,6 +190,8 @@ void mr_collapse_mesh_free(mr_collapse_mesh *m)
     free(m->refs);
     free(m->flags);
     free(m->dead);
+    free(m->seg);
+    free(m->alive);
     memset(m, 0, sizeof *m);
 }
 
@@ -216,7 +219,10 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     m->pos = mr_alloc_array(3 * vc + 1, sizeof *m->pos);
     m->tris = mr_alloc_array(3 * tc, sizeof *m->tris);
     m->flags = mr_calloc_array(vc, sizeof *m->flags);
-    if (!m->start || !m->count || !m->pos || !m->tris || !m->flags) {
+    m->threads = threads > 1 ? threads : 1;
+    m->seg = mr_alloc_array(3 * ((size_t)m->threads + 1), sizeof *m->seg);
+    m->alive = mr_alloc_array((tc + 63) / 64 + 1, sizeof *m->alive);
+    if (!m->start || !m->count || !m->pos || !m->tris || !m->flags || !m->seg || !m->alive) {
         mr_collapse_mesh_free(m);
         return mr_fail_nomem(err, NULL, vc * 21 + tc * 12);
     }
@@ -631,41 +637,146 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
 
 /* ---- apply ------------------------------------------------------------------ */
 
-/* Compact refs in place: every live list moves down, in the order the lists
- * lie in the array. The first entry of each live list is swapped for a tag
- * naming its vertex, so one forward scan finds the lists among the garbage;
- * the displaced entry waits in start[v]. */
-static void compact_refs(mr_collapse_mesh *m)
+/*
+ * Compaction in place by the calling team (see mr_collapse_compact): every
+ * live list moves down, in the order the lists lie in the array, a dirty
+ * list losing its deleted triangles on the way. The first entry of each
+ * live list is swapped for a tag naming its vertex (the entry waits in
+ * start[v]), so a forward scan finds the lists among the garbage. refs is
+ * cut into one segment per thread at list heads; each thread slides its
+ * segment's lists down to the segment's start; one thread then slides the
+ * segments together, and every list's start moves by its segment's shift.
+ * A list lies within one segment (segments begin at heads, lists do not
+ * overlap), and garbage never holds a tag (the room a collapse leaves
+ * unused is zeroed), so the lists keep their order: the layout of one
+ * sequential sweep, on any team.
+ */
+static void compact_team(mr_collapse_mesh *m)
 {
     uint32_t *refs = m->refs;
-    if (m->dead) /* exact lists: the room left is then as init sized it */
-        for (size_t v = 0; v < m->vertex_count; v++)
-            mr_collapse_clean(m, (uint32_t)v);
-    for (size_t v = 0; v < m->vertex_count; v++) {
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+#pragma omp for schedule(static)
+    for (ptrdiff_t i = 0; i < nv; i++) {
+        const uint32_t v = (uint32_t)i;
         if (!m->count[v])
             continue;
         const uint32_t s = m->start[v];
         m->start[v] = refs[s];
-        refs[s] = (uint32_t)v | LIST_TAG;
+        refs[s] = v | LIST_TAG;
     }
-    size_t w = 0;
-    for (size_t r = 0; r < m->refs_size;) {
-        const uint32_t x = refs[r];
-        if (!(x & LIST_TAG)) {
-            r++;
-            continue;
+    /* which triangles live, one bit each (a sweep in memory order: the
+     * dirty lists' entries then read bits in cache, not triangles) */
+    uint64_t *alive = m->alive;
+    const ptrdiff_t nw = (ptrdiff_t)((m->triangle_count + 63) / 64);
+#pragma omp for schedule(static)
+    for (ptrdiff_t i = 0; i < nw; i++) {
+        const size_t t0 = 64 * (size_t)i;
+        const size_t nt = m->triangle_count - t0 < 64 ? m->triangle_count - t0 : 64;
+        uint64_t bits = 0;
+        for (size_t t = 0; t < nt; t++)
+            bits |= (uint64_t)(m->tris[3 * (t0 + t)] != MR_COLLAPSE_NONE) << t;
+        alive[i] = bits;
+    }
+    const int team = omp_get_num_threads(), me = omp_get_thread_num();
+    const int nseg = team < m->threads ? team : m->threads;
+    size_t *seg = m->seg, *live = seg + nseg + 1, *shift = live + nseg + 1;
+    const size_t size = m->refs_size;
+    if (me < nseg) {
+        size_t p = me == 0 ? 0 : size / (size_t)nseg * (size_t)me;
+        while (p < size && !(refs[p] & LIST_TAG))
+            p++;
+        seg[me] = p;
+        if (me == nseg - 1)
+            seg[nseg] = size;
+    }
+#pragma omp barrier
+    if (me < nseg) {
+        /* heads found a batch ahead, so that their vertices' counts and
+         * starts (in vertex order, so scattered) are fetched meanwhile */
+        enum { HEADS = 32 };
+        uint32_t hv[HEADS];
+        size_t hp[HEADS];
+        const size_t end = seg[me + 1];
+        size_t w = seg[me];
+        for (size_t r = seg[me]; r < end;) {
+            int nh = 0;
+            for (; r < end && nh < HEADS; r++) {
+                const uint32_t x = refs[r];
+                if (x & LIST_TAG) {
+                    const uint32_t v = x & ~LIST_TAG;
+                    __builtin_prefetch(m->count + v);
+                    __builtin_prefetch(m->start + v);
+                    if (m->dead)
+                        __builtin_prefetch(m->dead + v);
+                    hv[nh] = v;
+                    hp[nh++] = r;
+                }
+            }
+            /* a list lies between its head and the next: the entries the
+             * moves write are never heads (w <= the list's own place) */
+            for (int h = 0; h < nh; h++) {
+                const uint32_t v = hv[h], n = m->count[v];
+                const size_t at = w, src = hp[h];
+                refs[src] = m->start[v]; /* the first entry back */
+                if (m->dead && m->dead[v]) {
+                    /* exact lists: the room left is then as init sized it */
+                    for (uint32_t k = 0; k < n; k++) {
+                        const uint32_t c = refs[src + k], t = c / 3;
+                        refs[w] = c;
+                        w += (alive[t / 64] >> (t % 64)) & 1;
+                    }
+                    m->count[v] = (uint32_t)(w - at);
+                    m->dead[v] = 0;
+                } else {
+                    for (uint32_t k = 0; k < n; k++)
+                        refs[w + k] = refs[src + k];
+                    w += n;
+                }
+                m->start[v] = (uint32_t)at;
+            }
         }
-        const uint32_t v = x & ~LIST_TAG, n = m->count[v];
-        refs[w] = m->start[v];
-        memmove(refs + w + 1, refs + r + 1, (size_t)(n - 1) * sizeof *refs);
-        m->start[v] = (uint32_t)w;
-        w += n;
-        r += n;
+        live[me] = w - seg[me];
     }
-    m->refs_size = w;
+#pragma omp barrier
+#pragma omp single
+    {
+        size_t d = 0;
+        for (int t = 0; t < nseg; t++) {
+            if (d != seg[t] && live[t])
+                memmove(refs + d, refs + seg[t], live[t] * sizeof *refs);
+            shift[t] = seg[t] - d;
+            d += live[t];
+        }
+        m->refs_size = d;
+    }
+#pragma omp for schedule(static)
+    for (ptrdiff_t v = 0; v < nv; v++) {
+        if (!m->count[v])
+            continue;
+        /* the last segment starting at or before the list (an empty
+         * segment shares its start with the next one) */
+        const uint32_t s = m->start[v];
+        int lo = 0, hi = nseg - 1;
+        while (lo < hi) {
+            const int mid = (lo + hi + 1) / 2;
+            if (seg[mid] <= s)
+                lo = mid;
+            else
+                hi = mid - 1;
+        }
+        m->start[v] = (uint32_t)(s - shift[lo]);
+    }
 }
 
-void mr_collapse_compact(mr_collapse_mesh *m) { compact_refs(m); }
+void mr_collapse_compact(mr_collapse_mesh *m)
+{
+    if (omp_in_parallel()) {
+        compact_team(m);
+        return;
+    }
+#pragma omp parallel num_threads(m->threads) if (m->threads > 1 && m->vertex_count > 65536)
+    compact_team(m);
+}
 
 void mr_collapse_prepare(mr_collapse_mesh *m)
 {
@@ -676,7 +787,7 @@ void mr_collapse_prepare(mr_collapse_mesh *m)
 void mr_collapse_reserve(mr_collapse_mesh *m, uint32_t u, uint32_t v)
 {
     if (m->refs_size + m->count[u] + m->count[v] > m->refs_capacity)
-        compact_refs(m);
+        mr_collapse_compact(m);
 }
 
 void mr_collapse_clean(mr_collapse_mesh *m, uint32_t v)

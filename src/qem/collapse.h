@@ -69,6 +69,10 @@ typedef struct mr_collapse_mesh {
     bool lazy;           /* long lists keep deleted triangles until cleaned */
     size_t live_vertices;  /* referenced, not removed */
     size_t live_triangles;
+    int threads;         /* compaction's team (mr_collapse_compact) */
+    size_t *seg;         /* 3 * (threads + 1): compaction's segments */
+    uint64_t *alive;     /* a bit per triangle, set when live: compaction's
+                            (valid only during one) */
 } mr_collapse_mesh;
 
 /* Limits of mr_collapse_valid. */
@@ -227,7 +231,11 @@ unsigned mr_collapse_apply_at(mr_collapse_mesh *m, uint32_t u, uint32_t v,
 void mr_collapse_prepare(mr_collapse_mesh *m);
 
 /* Compact refs now (exclusive access): afterwards the free room is at
- * least one entry per live triangle. */
+ * least one entry per live triangle. Runs on up to m->threads threads;
+ * inside a parallel region every thread of the team must call it (it
+ * shares the work out and meets the others at barriers). The layout it
+ * leaves -- every live list in the order the lists lay in refs, from 0 --
+ * is the same on any number of threads. */
 void mr_collapse_compact(mr_collapse_mesh *m);
 
 #endif /* MR_COLLAPSE_H */
