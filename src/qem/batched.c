@@ -22,8 +22,10 @@
  * its two ends wins (find_winners); winners share no end. They are taken
  * in chunks of a fixed size (run_chunk): winners whose two ends lie in
  * one group of triangle blocks touch nothing of another group's, so the
- * groups run concurrently, each in order; winners spanning groups follow
- * with wider groups, the last few on one thread. Every order and tie
+ * groups run concurrently, each in order (apply_levels); winners spanning
+ * groups follow with wider groups, the last few on one thread; a chunk in
+ * which the target may be reached goes in priority order, in steps short
+ * of it. Every order and tie
  * comes from the mesh (costs, then vertex ids), never from a thread's
  * timing or the thread count; the layout of the candidates (blocks of
  * BLOCK_TRIANGLES triangles), the chunk size and the levels of groups are
@@ -124,8 +126,8 @@ typedef struct mr_winner {
 } mr_winner;
 
 /* A winner is invalid (past the error bound, or refused when its turn
- * came), valid (planned), then inner or on a slice border (run_chunk). */
-enum { W_INVALID = 0, W_VALID = 1, W_INNER = 2, W_BORDER = 3 };
+ * came) or valid (planned). */
+enum { W_INVALID = 0, W_VALID = 1 };
 
 /* Triangles per gathering block: a pass's candidates lie in blocks, one
  * per run of this many triangles, each with its own live count, so that
@@ -145,12 +147,17 @@ struct mr_batched {
     uint64_t *best;      /* per vertex: winner selection; UINT64_MAX
                             between uses */
     uint32_t *home_lo, *home_hi; /* per vertex: the range of blocks its
-                                    triangles lie in (run_chunk) */
-    uint32_t *gcount;    /* per group of blocks, and one more */
+                                    triangles lie in (apply_levels) */
+    uint32_t *gcount;    /* per group of blocks: its winners' end */
     uint32_t *hist;      /* HIST_BUCKETS per thread */
     uint32_t *wid;       /* a round's winners: candidate indices */
     size_t wid_cap;
-    mr_winner *win, *win2; /* WIN_CHUNK each */
+    mr_winner *win;      /* WIN_CHUNK: a chunk's winners */
+    uint32_t *cur, *next, *grouped; /* WIN_CHUNK each: winner indices */
+    uint32_t *tcount;    /* per thread and group: winners, then offsets */
+    size_t *tslots;      /* per thread and group: refs room, then offsets */
+    size_t tgroups;      /* groups each thread's rows have room for */
+    size_t *tspan;       /* per thread: winners spanning groups, then offset */
     int threads;
 };
 
@@ -256,7 +263,12 @@ void mr_simplifier_batched_free(mr_simplifier *s)
     free(b->home_hi);
     free(b->gcount);
     free(b->win);
-    free(b->win2);
+    free(b->cur);
+    free(b->next);
+    free(b->grouped);
+    free(b->tcount);
+    free(b->tslots);
+    free(b->tspan);
     free(b->wid);
     free(b);
     s->bt = NULL;
@@ -508,22 +520,21 @@ static void plan_winners(const mr_simplifier *s, mr_winner *w, size_t n, double 
     }
 }
 
-/* Levels of grouping in run_chunk: groups of 2^FIRST_SHIFT blocks at
- * the first, LEVEL_SHIFT bits wider at each next, at most MAX_LEVELS of
- * them (constants: what runs together must not depend on the thread
- * count; these keep the error at 1 % on the bunny and the armadillo
- * within 2 % of the sequential sweep's). */
+/* Levels of grouping in apply_levels: groups of 2^FIRST_SHIFT blocks at
+ * the first, LEVEL_SHIFT bits wider at each next (constants: what runs
+ * together must not depend on the thread count; these keep the error at
+ * 1 % on the bunny and the armadillo within 2 % of the sequential
+ * sweep's). */
 #define FIRST_SHIFT 2
+#define LEVEL_SHIFT 3
 
 /* The block ranges are found anew every this many passes (between, the
- * collapses keep them a bound: see run_chunk). */
+ * collapses keep them a bound: see apply_levels). */
 #define HOME_EVERY 2
-#define LEVEL_SHIFT 3
-#define MAX_LEVELS 6
 
 /* Winners planned and applied together: a round's winners go through
  * run_chunk in chunks of this many, each on the mesh the chunks before it
- * left (a constant, as SLICE). */
+ * left (a constant, as BLOCK_TRIANGLES). */
 #define WIN_CHUNK 8192
 
 /* Apply winner x now if it is still allowed: concurrently, its merged
@@ -560,27 +571,215 @@ static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t 
     return true;
 }
 
+/* The group of blocks winner x lies in at a level (blocks >> shift), or
+ * NONE when its ends' block ranges span groups. */
+static inline uint32_t winner_group(const mr_batched *bt, const mr_winner *x, unsigned shift)
+{
+    const uint32_t grp = bt->home_lo[x->r] >> shift;
+    const bool one = (bt->home_hi[x->r] >> shift == grp) & (bt->home_lo[x->k] >> shift == grp) &
+                     (bt->home_hi[x->k] >> shift == grp);
+    return one ? grp : NONE;
+}
+
+/* What a set of applied winners did. */
+typedef struct mr_applied {
+    size_t made, bad;
+    double worst;
+} mr_applied;
+
+/* Apply winner x (concurrently, at its slot, when `at`), and count it. */
+static inline void apply_counted(mr_simplifier *s, mr_winner *x, double limit, bool at,
+                                 size_t *gone, size_t *deleted, size_t *made, size_t *bad,
+                                 double *worst)
+{
+    if (apply_winner(s, x, limit, at ? s->m.refs + x->slot : NULL, gone, deleted)) {
+        (*made)++;
+        *worst = x->cost > *worst ? x->cost : *worst;
+    } else {
+        (*bad)++;
+    }
+}
+
 /*
- * One chunk of a round's winners, the same on any number of threads.
- * Winners share no end; each is planned on the mesh as it stands. Every
- * vertex knows the range of triangle blocks its triangles lie in (home_lo
- * and home_hi, in blocks of BLOCK_TRIANGLES; a collapse widens the
- * survivor's range to both ends', and a vertex that loses triangles keeps
- * its range, which stays a bound). A winner whose two ends lie in one
- * group of blocks (at a level: blocks >> shift) reads and writes only
- * triangles of that group and their vertices; the one thing two winners
- * of different groups may share is an opposite vertex, whose list the
- * concurrent collapse leaves alone (mr_collapse_apply_at, shared: the
- * entry is only counted dead). So two such winners commute -- no end of
- * one shares a triangle with an end of the other -- and the groups run
- * concurrently, each testing (mr_simplifier_allowed) and applying its
- * winners in winner order on the mesh as the collapses before them left
- * it, exactly as the sequential sweep does; refs space is handed out by
- * prefix sums. Winners that span groups go on to the next level, with
- * groups LEVEL_SHIFT times as wide, and those left after the last level
- * follow in winner order on one thread. A chunk that may reach the
- * target runs on one thread in priority order, up to the target. Returns
- * the collapses made; *invalid counts the winners found invalid.
+ * Apply the winners w[idx[0..n)], in that order, the same on any number
+ * of threads. Winners share no end; each is tested on the mesh as it
+ * stands when its turn comes. Every vertex knows the range of triangle
+ * blocks its triangles lie in (home_lo and home_hi, in blocks of
+ * BLOCK_TRIANGLES; a collapse widens the survivor's range to both ends',
+ * and a vertex that loses triangles keeps its range, which stays a
+ * bound). A winner whose two ends lie in one group of blocks (at a level:
+ * blocks >> shift) reads and writes only triangles of that group
+ * and their vertices; the one thing two winners of different groups may
+ * share is an opposite vertex, whose list the concurrent collapse leaves
+ * alone (mr_collapse_apply_at, shared: the entry is only counted dead).
+ * So two such winners commute -- no end of one shares a triangle with an
+ * end of the other -- and the groups run concurrently, each testing
+ * (mr_simplifier_allowed) and applying its winners in order on the mesh
+ * as the collapses before them left it. Winners that span groups go on to
+ * the next level, with groups LEVEL_SHIFT bits wider; those left when one
+ * group would hold every block follow in order on one thread.
+ *
+ * Each level: every thread takes a fixed share of the winners and counts,
+ * per group, its winners and the refs room they need; prefix sums over
+ * (group, thread) give each winner its place among its group's -- the
+ * winners' order within a group, whatever the shares -- and its room in
+ * refs, in the same order (an upper bound: a collapse only shrinks the
+ * lists of the vertices it does not own; the edge's triangles are in both
+ * lists and die; the merge writes one entry past its end).
+ */
+static void apply_levels(mr_simplifier *s, mr_winner *w, const uint32_t *idx, size_t n,
+                         const mr_simplify_goal *g, mr_applied *res)
+{
+    mr_batched *bt = s->bt;
+    mr_collapse_mesh *m = &s->m;
+    const int nt = bt->threads;
+    const bool par = nt > 1 && n >= 2048;
+    uint32_t *cur = bt->cur, *next = bt->next, *gend = bt->gcount;
+    const uint32_t *grouped = bt->grouped;
+    if (idx != cur)
+        memcpy(cur, idx, n * sizeof *cur);
+    size_t ncur = n, ngroups = 0, room = 0, base = 0, gone = 0, deleted = 0;
+    size_t made = 0, bad = 0;
+    double wmax = res->worst;
+    unsigned shift = FIRST_SHIFT;
+    bool stop = (bt->nblocks - 1) >> shift == 0 || n == 0, compact = false;
+#pragma omp parallel num_threads(nt) if (par)
+    {
+        const int me = omp_get_thread_num(), team = omp_get_num_threads();
+        uint32_t *cnt = bt->tcount + (size_t)me * bt->tgroups;
+        size_t *room_of = bt->tslots + (size_t)me * bt->tgroups;
+        while (!stop) {
+            /* this thread's share of the winners: their groups, counted */
+            const size_t i0 = ncur * (size_t)me / (size_t)team;
+            const size_t i1 = ncur * (size_t)(me + 1) / (size_t)team;
+            const size_t ng = ((bt->nblocks - 1) >> shift) + 1;
+            memset(cnt, 0, ng * sizeof *cnt);
+            memset(room_of, 0, ng * sizeof *room_of);
+            size_t span = 0;
+            for (size_t i = i0; i < i1; i++) {
+                mr_winner *x = &w[cur[i]];
+                x->group = winner_group(bt, x, shift);
+                x->slots = m->count[x->r] + m->count[x->k] + 1;
+                if (x->group != NONE) {
+                    cnt[x->group]++;
+                    room_of[x->group] += x->slots;
+                } else {
+                    span++;
+                }
+            }
+            bt->tspan[me] = span;
+#pragma omp barrier
+#pragma omp single
+            {
+                /* group by group, thread by thread: where each thread's
+                 * winners of a group go, and their room; then the
+                 * spanning ones, thread by thread */
+                size_t at = 0, r = 0;
+                for (size_t q = 0; q < ng; q++) {
+                    for (int t = 0; t < team; t++) {
+                        const size_t row = (size_t)t * bt->tgroups + q;
+                        const uint32_t c = bt->tcount[row];
+                        const size_t sl = bt->tslots[row];
+                        bt->tcount[row] = (uint32_t)at;
+                        bt->tslots[row] = r;
+                        at += c;
+                        r += sl;
+                    }
+                    gend[q] = (uint32_t)at;
+                }
+                size_t sp = 0;
+                for (int t = 0; t < team; t++) {
+                    const size_t c = bt->tspan[t];
+                    bt->tspan[t] = sp;
+                    sp += c;
+                }
+                ngroups = ng;
+                room = r;
+                compact = m->refs_size + room > m->refs_capacity;
+            }
+            if (compact) /* on the whole team */
+                mr_collapse_compact(m);
+#pragma omp single
+            {
+                stop = m->refs_size + room > m->refs_capacity; /* never, after a compaction */
+                base = m->refs_size;
+                if (!stop)
+                    m->refs_size += room;
+                gone = deleted = 0;
+            }
+            if (stop)
+                break;
+            /* the same share again: each winner to its place */
+            size_t sp = bt->tspan[me];
+            for (size_t i = i0; i < i1; i++) {
+                const uint32_t id = cur[i];
+                mr_winner *x = &w[id];
+                if (x->group == NONE) {
+                    next[sp++] = id;
+                    continue;
+                }
+                bt->grouped[cnt[x->group]++] = id;
+                x->slot = base + room_of[x->group];
+                room_of[x->group] += x->slots;
+            }
+#pragma omp barrier
+#pragma omp for schedule(dynamic, 1) reduction(+ : gone, deleted, bad, made) \
+    reduction(max : wmax)
+            for (ptrdiff_t q = 0; q < (ptrdiff_t)ngroups; q++) {
+                const size_t j1 = gend[q], j0 = q ? gend[q - 1] : 0;
+                for (size_t j = j0; j < j1; j++) {
+                    mr_winner *x = &w[grouped[j]];
+                    static const int ahead[3] = {PF0, PF1, PF2};
+                    for (int st = 0; st < 3; st++) {
+                        if (j + (size_t)ahead[st] < j1) {
+                            const mr_winner *y = &w[grouped[j + (size_t)ahead[st]]];
+                            mr_collapse_prefetch(m, y->r, st);
+                            mr_collapse_prefetch(m, y->k, st);
+                        }
+                    }
+                    if (j + PF1 < j1) { /* and the quadrics the collapse merges */
+                        const mr_winner *y = &w[grouped[j + PF1]];
+                        __builtin_prefetch(s->q + y->r);
+                        __builtin_prefetch(s->q + y->k);
+                    }
+                    apply_counted(s, x, g->limit, true, &gone, &deleted, &made, &bad, &wmax);
+                }
+            }
+#pragma omp single
+            {
+                m->live_vertices -= gone;
+                m->live_triangles -= deleted;
+                ncur -= gend[ngroups - 1];
+                uint32_t *t = cur;
+                cur = next;
+                next = t;
+                shift += LEVEL_SHIFT; /* the next level: wider groups */
+                stop = ncur == 0 || (bt->nblocks - 1) >> shift == 0;
+            }
+        }
+    }
+    /* the rest, on one thread, in order (also those a full refs stopped) */
+    for (size_t i = 0; i < ncur; i++)
+        apply_counted(s, &w[cur[i]], g->limit, false, NULL, NULL, &made, &bad, &wmax);
+    res->made += made;
+    res->bad += bad;
+    res->worst = wmax;
+}
+
+/* Winners a chunk applies in several steps with groups at least, when
+ * the target may be reached inside it (below, one by one). */
+#define MIN_GROUPED 64
+
+/*
+ * One chunk of a round's winners, the same on any number of threads:
+ * planned (on all threads), then applied in chunk order (apply_levels).
+ * A chunk in which the target may be reached -- by the bounds of what a
+ * collapse removes: a vertex and two ears, two triangles -- is applied in
+ * priority order instead, in steps: each step the longest run of the next
+ * winners whose bounds cannot reach the target (apply_levels), while such
+ * a run holds MIN_GROUPED of them; the last ones one by one, up to the
+ * target. Returns the collapses made; *invalid counts the winners found
+ * invalid.
  */
 static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simplify_goal *g,
                         bool sorted, double *worst, size_t *invalid)
@@ -588,153 +787,54 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
     mr_batched *bt = s->bt;
     mr_collapse_mesh *m = &s->m;
     const int nt = bt->threads;
-    const bool par = nt > 1 && n >= 2048;
-    mr_winner *list = w, *grouped = bt->win2;
-    uint32_t *gcount = bt->gcount;
-    size_t rv = 0, rt = 0, gone = 0, deleted = 0, bad = 0, made = 0, nl = n, nin = 0;
-    size_t ngroups = 0;
-    unsigned shift = FIRST_SHIFT;
-    double wmax = *worst;
-    bool whole = false, stop = false, compact = false;
-    size_t room = 0;
-#pragma omp parallel num_threads(nt) if (par)
-    {
-#pragma omp for schedule(dynamic, 1)
-        for (ptrdiff_t i0 = 0; i0 < (ptrdiff_t)n; i0 += PLAN_BATCH) {
-            const size_t c = n - (size_t)i0 < PLAN_BATCH ? n - (size_t)i0 : PLAN_BATCH;
-            plan_winners(s, w + i0, c, g->limit);
-        }
-        for (int level = 0; !stop; level++) {
-            const ptrdiff_t nw = (ptrdiff_t)nl;
-            /* each winner's group at this level (from its ends' block
-             * ranges), or NONE when it spans groups */
-#pragma omp for schedule(static) reduction(+ : rv, rt)
-            for (ptrdiff_t i = 0; i < nw; i++) {
-                mr_winner *x = &list[i];
-                if (x->state == W_INVALID)
-                    continue;
-                rv += 3; /* at most: an end and two ears */
-                rt += 2;
-                const uint32_t grp = bt->home_lo[x->r] >> shift;
-                const bool one = (bt->home_hi[x->r] >> shift == grp) &
-                                 (bt->home_lo[x->k] >> shift == grp) &
-                                 (bt->home_hi[x->k] >> shift == grp);
-                x->group = one ? grp : NONE;
-            }
-#pragma omp single
-            {
-                if (level == 0) /* (rv, rt: bounds of what the winners remove) */
-                    whole = rv + g->vertices >= m->live_vertices ||
-                            (g->triangles && rt + g->triangles >= m->live_triangles);
-                stop = whole || nl == 0 || level >= MAX_LEVELS;
-                /* the grouped winners by group (counting sort: winner
-                 * order within a group), their refs room by prefix sum
-                 * (an upper bound: a collapse only shrinks the lists of
-                 * the vertices it does not own; the edge's triangles are
-                 * in both lists and die; the merge writes one entry past
-                 * its end); the others stay in list, in order */
-                ngroups = stop ? 0 : ((bt->nblocks - 1) >> shift) + 1;
-                memset(gcount, 0, (ngroups + 1) * sizeof *gcount);
-                size_t need = 0;
-                for (size_t i = 0; i < nl && !stop; i++) {
-                    const mr_winner *x = &list[i];
-                    if (x->state != W_INVALID && x->group != NONE) {
-                        gcount[x->group + 1]++;
-                        need += (size_t)m->count[x->r] + m->count[x->k] + 1;
-                    }
-                }
-                compact = !stop && m->refs_size + need > m->refs_capacity;
-                room = need;
-            }
-            if (compact) /* on the whole team */
-                mr_collapse_compact(m);
-#pragma omp single
-            {
-                stop = stop || m->refs_size + room > m->refs_capacity;
-                nin = 0;
-                if (!stop) {
-                    for (size_t q = 0; q < ngroups; q++)
-                        gcount[q + 1] += gcount[q];
-                    size_t at = m->refs_size, left = 0;
-                    for (size_t i = 0; i < nl; i++) {
-                        mr_winner *x = &list[i];
-                        if (x->state == W_INVALID)
-                            continue;
-                        if (x->group == NONE) {
-                            list[left++] = *x;
-                            continue;
-                        }
-                        x->slot = at;
-                        x->slots = m->count[x->r] + m->count[x->k] + 1;
-                        at += x->slots;
-                        grouped[gcount[x->group]++] = *x;
-                        nin++;
-                    }
-                    /* gcount[q] is now the end of group q */
-                    m->refs_size = at;
-                    nl = left;
-                }
-                gone = deleted = 0;
-                rv = rt = 0;
-            }
-            if (stop)
-                break;
-#pragma omp for schedule(dynamic, 1) reduction(+ : gone, deleted, bad, made) \
-    reduction(max : wmax)
-            for (ptrdiff_t q = 0; q < (ptrdiff_t)ngroups; q++) {
-                const size_t i1 = gcount[q], i0 = q ? gcount[q - 1] : 0;
-                for (size_t i = i0; i < i1; i++) {
-                    mr_winner *x = &grouped[i];
-                    static const int ahead[3] = {PF0, PF1, PF2};
-                    for (int st = 0; st < 3; st++) {
-                        if (i + (size_t)ahead[st] < i1) {
-                            mr_collapse_prefetch(m, grouped[i + ahead[st]].r, st);
-                            mr_collapse_prefetch(m, grouped[i + ahead[st]].k, st);
-                        }
-                    }
-                    if (i + PF1 < i1) { /* and the quadrics the collapse merges */
-                        __builtin_prefetch(s->q + grouped[i + PF1].r);
-                        __builtin_prefetch(s->q + grouped[i + PF1].k);
-                    }
-                    if (apply_winner(s, x, g->limit, m->refs + x->slot, &gone, &deleted)) {
-                        made++;
-                        wmax = x->cost > wmax ? x->cost : wmax;
-                    } else {
-                        bad++;
-                    }
-                }
-            }
-#pragma omp single
-            {
-                m->live_vertices -= gone;
-                m->live_triangles -= deleted;
-                shift += LEVEL_SHIFT;
-                stop = nl == 0 || (bt->nblocks - 1) >> shift == 0;
-            }
-        }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt) if (nt > 1 && n >= 2048)
+    for (ptrdiff_t i0 = 0; i0 < (ptrdiff_t)n; i0 += PLAN_BATCH) {
+        const size_t c = n - (size_t)i0 < PLAN_BATCH ? n - (size_t)i0 : PLAN_BATCH;
+        plan_winners(s, w + i0, c, g->limit);
     }
-    /* the rest, on one thread: the winners left, in winner order; or, when
-     * the target may be reached here, every winner in priority order */
-    if (whole) {
-        list = w;
-        nl = n;
+    size_t valid = 0;
+    for (size_t i = 0; i < n; i++)
+        valid += w[i].state != W_INVALID;
+    const bool whole = 3 * valid + g->vertices >= m->live_vertices ||
+                       (g->triangles && 2 * valid + g->triangles >= m->live_triangles);
+    mr_applied res = {0, 0, *worst};
+    uint32_t *idx = bt->cur;
+    if (!whole) {
+        size_t k = 0;
+        for (size_t i = 0; i < n; i++)
+            if (w[i].state != W_INVALID)
+                idx[k++] = (uint32_t)i;
+        apply_levels(s, w, idx, k, g, &res);
+    } else {
         if (!sorted)
             sort_by_prio(bt, w, n, sizeof *w, winner_prio);
-    }
-    for (size_t i = 0; i < nl && !mr_simplifier_reached(s, g); i++) {
-        mr_winner *x = &list[i];
-        if (x->state == W_INVALID)
-            continue;
-        if (apply_winner(s, x, g->limit, NULL, NULL, NULL)) {
-            made++;
-            wmax = x->cost > wmax ? x->cost : wmax;
-        } else {
-            bad++;
+        size_t i = 0;
+        while (i < n && !mr_simplifier_reached(s, g)) {
+            /* the next winners whose bounds stay short of the target */
+            const size_t lv = m->live_vertices - g->vertices;
+            const size_t lt = g->triangles ? m->live_triangles - g->triangles : SIZE_MAX;
+            size_t k = 0, j = i;
+            for (; j < n; j++) {
+                if (w[j].state == W_INVALID)
+                    continue;
+                if (3 * (k + 1) >= lv || 2 * (k + 1) >= lt)
+                    break;
+                idx[k++] = (uint32_t)j;
+            }
+            if (k < MIN_GROUPED)
+                break;
+            apply_levels(s, w, idx, k, g, &res);
+            i = j;
+        }
+        for (; i < n && !mr_simplifier_reached(s, g); i++) {
+            if (w[i].state != W_INVALID)
+                apply_counted(s, &w[i], g->limit, false, NULL, NULL, &res.made, &res.bad,
+                              &res.worst);
         }
     }
-    *worst = wmax;
-    *invalid = bad;
-    return made;
+    *worst = res.worst;
+    *invalid = res.bad;
+    return res.made;
 }
 
 /* Each vertex's range of triangle blocks, from its list (deleted entries
@@ -860,11 +960,20 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
     double worst = 0;
     double share = PASS_SHARE;
     bool finished = false;
-    if (!bt->win)
+    if (!bt->win) {
         bt->win = mr_alloc_array(WIN_CHUNK, sizeof *bt->win);
-    if (!bt->win2)
-        bt->win2 = mr_alloc_array(WIN_CHUNK, sizeof *bt->win2);
-    if (!bt->win || !bt->win2)
+        bt->cur = mr_alloc_array(WIN_CHUNK, sizeof *bt->cur);
+        bt->next = mr_alloc_array(WIN_CHUNK, sizeof *bt->next);
+        bt->grouped = mr_alloc_array(WIN_CHUNK, sizeof *bt->grouped);
+        /* the most groups a level has: the first level's */
+        bt->tgroups = ((bt->nblocks - 1) >> FIRST_SHIFT) + 1;
+        const size_t rows = (size_t)bt->threads * bt->tgroups;
+        bt->tcount = mr_alloc_array(rows, sizeof *bt->tcount);
+        bt->tslots = mr_alloc_array(rows, sizeof *bt->tslots);
+        bt->tspan = mr_alloc_array((size_t)bt->threads, sizeof *bt->tspan);
+    }
+    if (!bt->win || !bt->cur || !bt->next || !bt->grouped || !bt->tcount || !bt->tslots ||
+        !bt->tspan)
         finished = true; /* no memory: nothing collapses */
 
     for (unsigned pass = 0; !finished;) {
