@@ -158,6 +158,7 @@ struct mr_batched {
     size_t *tslots;      /* per thread and group: refs room, then offsets */
     size_t tgroups;      /* groups each thread's rows have room for */
     size_t *tspan;       /* per thread: winners spanning groups, then offset */
+    size_t *trun;        /* threads + 1: find_winners' runs of blocks */
     int threads;
 };
 
@@ -238,10 +239,11 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
     b->home_lo = mr_alloc_array(m->vertex_count, sizeof *b->home_lo);
     b->home_hi = mr_alloc_array(m->vertex_count, sizeof *b->home_hi);
     b->gcount = mr_alloc_array(b->nblocks + 2, sizeof *b->gcount);
+    b->trun = mr_alloc_array((size_t)b->threads + 1, sizeof *b->trun);
     if (b->best) /* every entry is UINT64_MAX between uses */
         memset(b->best, 0xFF, m->vertex_count * sizeof *b->best);
     if (!b->cand || !b->boff || !b->bn || !b->bw || !b->mark || !b->hist || !b->best ||
-        !b->home_lo || !b->home_hi || !b->gcount ||
+        !b->home_lo || !b->home_hi || !b->gcount || !b->trun ||
         (s->m.lazy && !s->m.dead))
         return mr_fail_nomem(err, NULL, b->cand_cap * sizeof *b->cand + m->vertex_count * 17);
     return MR_OK;
@@ -269,6 +271,7 @@ void mr_simplifier_batched_free(mr_simplifier *s)
     free(b->tcount);
     free(b->tslots);
     free(b->tspan);
+    free(b->trun);
     free(b->wid);
     free(b);
     s->bt = NULL;
@@ -868,22 +871,48 @@ static void home_ranges(mr_simplifier *s)
  * Every order here comes from the mesh, none from the candidates' places:
  * two copies of a part (a double-sided sheet) reduce alike. The cheapest
  * candidate, ties to the smallest (smaller end, larger end), always wins.
- * Returns the winner count.
+ *
+ * Each thread sweeps its own run of blocks (runs of about equal candidate
+ * counts). A vertex's live candidates lie in the blocks of its triangles
+ * (an unmarked candidate is still an edge of the triangle it was gathered
+ * from), so a vertex whose block range (home_lo, home_hi: a bound) lies
+ * in one thread's run is that thread's alone, and its minimum is kept
+ * with plain loads and stores; only the others need atomics. A minimum
+ * does not depend on the order it is taken in: the same winners on any
+ * number of threads. Returns the winner count.
  */
 static size_t find_winners(mr_simplifier *s)
 {
     mr_batched *bt = s->bt;
-    const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
+    const size_t nb = bt->nblocks;
     size_t live_total = 0;
-    for (size_t i = 0; i < bt->nblocks; i++)
+    for (size_t i = 0; i < nb; i++)
         live_total += bt->bn[i];
     const bool par = bt->threads > 1 && live_total > 65536;
     uint64_t *best = bt->best;
     const uint8_t *mark = bt->mark;
-#pragma omp parallel num_threads(bt->threads) if (par)
+    const uint32_t *lo = bt->home_lo, *hi = bt->home_hi;
+    /* each thread's run of blocks, [run[t], run[t + 1]), by candidate
+     * counts (before the first sweep changes them) */
+    const int team = par ? bt->threads : 1;
+    size_t *run = bt->trun;
     {
-#pragma omp for schedule(dynamic, 8)
-        for (ptrdiff_t i = 0; i < nb; i++) {
+        size_t acc = 0, b = 0;
+        for (int t = 0; t < team; t++) {
+            const size_t want = live_total * (size_t)t / (size_t)team;
+            for (; b < nb && acc < want; b++)
+                acc += bt->bn[b];
+            run[t] = b;
+        }
+        run[team] = nb;
+    }
+#pragma omp parallel num_threads(team) if (par)
+    {
+        const int me = omp_get_thread_num();
+        const size_t b0 = run[me], b1 = run[me + 1];
+        const uint32_t own0 = (uint32_t)b0, own1 = (uint32_t)b1;
+#define SHARED(v) (par && (lo[v] < own0 || hi[v] >= own1))
+        for (size_t i = b0; i < b1; i++) {
             mr_candidate *cand = bt->cand + bt->boff[i];
             uint32_t live = 0;
             for (uint32_t j = 0, n = bt->bn[i]; j < n; j++) {
@@ -891,36 +920,37 @@ static size_t find_winners(mr_simplifier *s)
                 const bool retired = (mark[c.a] | mark[c.b]) || c.key == DEAD_KEY;
                 cand[live] = c;
                 if (!retired) {
-                    min_u64(&best[c.a], (uint64_t)c.key << 32 | c.b, par);
-                    min_u64(&best[c.b], (uint64_t)c.key << 32 | c.a, par);
+                    min_u64(&best[c.a], (uint64_t)c.key << 32 | c.b, SHARED(c.a));
+                    min_u64(&best[c.b], (uint64_t)c.key << 32 | c.a, SHARED(c.b));
                 }
                 live += !retired;
             }
             bt->bn[i] = live;
         }
-#pragma omp for schedule(dynamic, 8)
-        for (ptrdiff_t i = 0; i < nb; i++) {
+#pragma omp barrier
+        for (size_t i = b0; i < b1; i++) {
             mr_candidate *cand = bt->cand + bt->boff[i];
             uint32_t wins = 0;
             for (uint32_t j = 0, n = bt->bn[i]; j < n; j++) {
                 const mr_candidate c = cand[j];
                 const uint64_t k = (uint64_t)c.key << 32;
-                const bool win = (load_u64(&best[c.a], par) == (k | c.b)) &
-                                 (load_u64(&best[c.b], par) == (k | c.a));
+                const bool win = (load_u64(&best[c.a], SHARED(c.a)) == (k | c.b)) &
+                                 (load_u64(&best[c.b], SHARED(c.b)) == (k | c.a));
                 cand[j].key = c.key | (win ? WIN_BIT : 0);
                 wins += win;
             }
             bt->bw[i] = wins;
         }
+#pragma omp barrier
 #pragma omp single
         {
             size_t off = 0;
-            for (size_t i = 0; i < bt->nblocks; i++) {
+            for (size_t i = 0; i < nb; i++) {
                 const size_t w = bt->bw[i];
                 bt->bw[i] = (uint32_t)off;
                 off += w;
             }
-            bt->bw[bt->nblocks] = (uint32_t)off;
+            bt->bw[nb] = (uint32_t)off;
             if (off > bt->wid_cap) {
                 free(bt->wid);
                 bt->wid_cap = off + off / 4;
@@ -929,8 +959,7 @@ static size_t find_winners(mr_simplifier *s)
                     bt->wid_cap = 0;
             }
         }
-#pragma omp for schedule(dynamic, 8)
-        for (ptrdiff_t i = 0; i < nb; i++) {
+        for (size_t i = b0; i < b1; i++) {
             mr_candidate *cand = bt->cand + bt->boff[i];
             const uint32_t base = (uint32_t)bt->boff[i];
             uint32_t at = bt->bw[i];
@@ -941,12 +970,13 @@ static size_t find_winners(mr_simplifier *s)
                     if (bt->wid)
                         bt->wid[at++] = base + j;
                 }
-                store_u64(&best[c.a], UINT64_MAX, par);
-                store_u64(&best[c.b], UINT64_MAX, par);
+                store_u64(&best[c.a], UINT64_MAX, SHARED(c.a));
+                store_u64(&best[c.b], UINT64_MAX, SHARED(c.b));
             }
         }
+#undef SHARED
     }
-    return bt->wid ? bt->bw[bt->nblocks] : 0; /* no memory: stop here */
+    return bt->wid ? bt->bw[nb] : 0; /* no memory: stop here */
 }
 
 size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,

@@ -226,36 +226,26 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
         mr_collapse_mesh_free(m);
         return mr_fail_nomem(err, NULL, vc * 21 + tc * 12);
     }
+    const bool par = threads > 1 && tc > 65536;
     size_t live_tris = 0;
-    for (size_t t = 0; t < tc; t++) {
+    const ptrdiff_t ntri = (ptrdiff_t)tc;
+#pragma omp parallel for schedule(static) reduction(+ : live_tris) num_threads(threads) if (par)
+    for (ptrdiff_t t = 0; t < ntri; t++) {
         const uint32_t *src = indices + 3 * t;
         uint32_t *dst = m->tris + 3 * t;
-        if (mr_triangle_is_degenerate(src)) {
-            dst[0] = dst[1] = dst[2] = MR_COLLAPSE_NONE;
-            continue;
-        }
-        for (int k = 0; k < 3; k++) {
-            dst[k] = src[k];
-            m->start[src[k] + 1]++;
-        }
-        live_tris++;
+        const bool bad = mr_triangle_is_degenerate(src);
+        for (int k = 0; k < 3; k++)
+            dst[k] = bad ? MR_COLLAPSE_NONE : src[k];
+        live_tris += !bad;
     }
     m->live_triangles = live_tris;
 
-    /* Lists of corner ids, in triangle order, with room to grow. */
-    size_t total = 0, live_vertices = 0;
-    for (size_t v = 0; v < vc; v++) {
-        const uint32_t c = m->start[v + 1];
-        m->start[v] = (uint32_t)total;
-        m->count[v] = 0;
-        total += c;
-        live_vertices += c > 0;
-    }
-    /* Live lists never take more than `total` (3 per live triangle)
-     * entries, and a merged list no more than one per live triangle (a
-     * triangle has at most one corner at each end; those on the edge, at
-     * both, die): so after a compaction there is always room for it, at
-     * any valence. */
+    /* Lists of corner ids, in triangle order, with room to grow. Live
+     * lists never take more than `total` (3 per live triangle) entries,
+     * and a merged list no more than one per live triangle (a triangle has
+     * at most one corner at each end; those on the edge, at both, die): so
+     * after a compaction there is always room for it, at any valence. */
+    const size_t total = 3 * live_tris;
     const size_t capacity = total + total / 3 + 64;
     m->refs = mr_alloc_array(capacity, sizeof *m->refs);
     if (!m->refs) {
@@ -264,12 +254,49 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     }
     m->refs_capacity = capacity;
     m->refs_size = total;
-    for (size_t t = 0; t < tc; t++) {
-        const uint32_t *tri = m->tris + 3 * t;
-        if (tri[0] == MR_COLLAPSE_NONE)
-            continue;
-        for (uint32_t k = 0; k < 3; k++)
-            m->refs[m->start[tri[k]] + m->count[tri[k]]++] = 3 * (uint32_t)t + k;
+    /* Each thread counts and fills the lists of its own run of vertices,
+     * sweeping every triangle in order: the same lists on any number of
+     * threads, and no two threads write one vertex's. */
+    size_t live_vertices = 0;
+    size_t *own_total = m->seg;
+#pragma omp parallel num_threads(threads) reduction(+ : live_vertices) if (par)
+    {
+        const int me = omp_get_thread_num(), team = omp_get_num_threads();
+        const size_t v0 = vc * (size_t)me / (size_t)team;
+        const size_t v1 = vc * (size_t)(me + 1) / (size_t)team;
+        const uint32_t lo = (uint32_t)v0, span = (uint32_t)(v1 - v0);
+        memset(m->count + v0, 0, (v1 - v0) * sizeof *m->count);
+        for (size_t t = 0; t < tc; t++) {
+            const uint32_t *tri = m->tris + 3 * t;
+            if (tri[0] == MR_COLLAPSE_NONE)
+                continue;
+            for (int k = 0; k < 3; k++)
+                if (tri[k] - lo < span)
+                    m->count[tri[k]]++;
+        }
+        size_t own = 0;
+        for (size_t v = v0; v < v1; v++) {
+            own += m->count[v];
+            live_vertices += m->count[v] > 0;
+        }
+        own_total[me] = own;
+#pragma omp barrier
+        size_t at = 0;
+        for (int t = 0; t < me; t++)
+            at += own_total[t];
+        for (size_t v = v0; v < v1; v++) {
+            m->start[v] = (uint32_t)at;
+            at += m->count[v];
+            m->count[v] = 0;
+        }
+        for (size_t t = 0; t < tc; t++) {
+            const uint32_t *tri = m->tris + 3 * t;
+            if (tri[0] == MR_COLLAPSE_NONE)
+                continue;
+            for (uint32_t k = 0; k < 3; k++)
+                if (tri[k] - lo < span)
+                    m->refs[m->start[tri[k]] + m->count[tri[k]]++] = 3 * (uint32_t)t + k;
+        }
     }
     m->live_vertices = live_vertices;
     /* Positions and the classification: each vertex on its own (the same
