@@ -626,9 +626,10 @@ static inline void apply_counted(mr_simplifier *s, mr_winner *x, double limit, b
  * per group, its winners and the refs room they need; prefix sums over
  * (group, thread) give each winner its place among its group's -- the
  * winners' order within a group, whatever the shares -- and its room in
- * refs, in the same order (an upper bound: a collapse only shrinks the
- * lists of the vertices it does not own; the edge's triangles are in both
- * lists and die; the merge writes one entry past its end).
+ * refs, in the same order: both ends' counts less one (a collapse only
+ * shrinks the lists of the vertices it does not own; a valid one deletes
+ * at least one triangle, which is in both lists; the merge writes at most
+ * one entry past its end).
  */
 static void apply_levels(mr_simplifier *s, mr_winner *w, const uint32_t *idx, size_t n,
                          const mr_simplify_goal *g, mr_applied *res)
@@ -662,7 +663,7 @@ static void apply_levels(mr_simplifier *s, mr_winner *w, const uint32_t *idx, si
             for (size_t i = i0; i < i1; i++) {
                 mr_winner *x = &w[cur[i]];
                 x->group = winner_group(bt, x, shift);
-                x->slots = m->count[x->r] + m->count[x->k] + 1;
+                x->slots = m->count[x->r] + m->count[x->k] - 1;
                 if (x->group != NONE) {
                     cnt[x->group]++;
                     room_of[x->group] += x->slots;
