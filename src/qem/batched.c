@@ -153,7 +153,7 @@ struct mr_batched {
     uint32_t *wid;       /* a round's winners: candidate indices */
     size_t wid_cap;
     mr_winner *win;      /* WIN_CHUNK: a chunk's winners */
-    uint32_t *cur, *next, *grouped; /* WIN_CHUNK each: winner indices */
+    uint32_t *cur, *next, *grouped, *order; /* WIN_CHUNK each: winner indices */
     uint32_t *tcount;    /* per thread and group: winners, then offsets */
     size_t *tslots;      /* per thread and group: refs room, then offsets */
     size_t tgroups;      /* groups each thread's rows have room for */
@@ -268,6 +268,7 @@ void mr_simplifier_batched_free(mr_simplifier *s)
     free(b->cur);
     free(b->next);
     free(b->grouped);
+    free(b->order);
     free(b->tcount);
     free(b->tslots);
     free(b->tspan);
@@ -437,55 +438,52 @@ static inline uint64_t prio_of(const mr_batched *bt, uint32_t at)
     return (uint64_t)c.key << 32 | (c.a < c.b ? c.a : c.b);
 }
 
-/* The priority of a winner id, and of a winner record. */
-typedef uint64_t (*prio_fn)(const mr_batched *bt, const void *e);
-
-static uint64_t id_prio(const mr_batched *bt, const void *e)
+/* The priority of element e of an id array: a candidate index, or with
+ * w, an index into the winner records w. */
+static inline uint64_t id_prio(const mr_batched *bt, const mr_winner *w, uint32_t e)
 {
-    return prio_of(bt, *(const uint32_t *)e);
+    return prio_of(bt, w ? w[e].at : e);
 }
 
-static uint64_t winner_prio(const mr_batched *bt, const void *e)
+static void sift(const mr_batched *bt, const mr_winner *w, uint32_t *a, size_t j, size_t n)
 {
-    return prio_of(bt, ((const mr_winner *)e)->at);
-}
-
-static void sift(const mr_batched *bt, char *a, size_t size, prio_fn key, size_t j, size_t n,
-                 char *held)
-{
-    memcpy(held, a + j * size, size);
-    const uint64_t px = key(bt, held);
+    const uint32_t held = a[j];
+    const uint64_t px = id_prio(bt, w, held);
     for (;;) {
         size_t c = 2 * j + 1;
         if (c >= n)
             break;
-        if (c + 1 < n && key(bt, a + c * size) < key(bt, a + (c + 1) * size))
-            c++;
-        if (px >= key(bt, a + c * size))
+        uint64_t pc = id_prio(bt, w, a[c]);
+        if (c + 1 < n) {
+            const uint64_t pd = id_prio(bt, w, a[c + 1]);
+            if (pc < pd) {
+                c++;
+                pc = pd;
+            }
+        }
+        if (px >= pc)
             break;
-        memcpy(a + j * size, a + c * size, size);
+        a[j] = a[c];
         j = c;
     }
-    memcpy(a + j * size, held, size);
+    a[j] = held;
 }
 
-/* Heap sort by priority, in place, of n elements of `size` bytes (winner
- * ids before a round's chunks when the winners are more than the target
- * needs; a chunk's winner records when the target falls inside it).
- * Priorities are distinct, so the order is total. */
-static void sort_by_prio(const mr_batched *bt, void *base, size_t n, size_t size, prio_fn key)
+/* Heap sort of n ids by priority, in place (a round's winners, as
+ * candidate indices, when they are more than the target needs; a chunk's,
+ * as indices into w, when the target falls inside it). Priorities are
+ * distinct, so the order is total. */
+static void sort_by_prio(const mr_batched *bt, const mr_winner *w, uint32_t *a, size_t n)
 {
-    char *a = base, held[sizeof(mr_winner)], top[sizeof(mr_winner)];
-    assert(size <= sizeof held);
     if (n < 2)
         return;
     for (size_t i = n / 2; i-- > 0;)
-        sift(bt, a, size, key, i, n, held);
+        sift(bt, w, a, i, n);
     for (size_t e = n - 1; e > 0; e--) {
-        memcpy(top, a, size);
-        memcpy(a, a + e * size, size);
-        memcpy(a + e * size, top, size);
-        sift(bt, a, size, key, 0, e, held);
+        const uint32_t top = a[0];
+        a[0] = a[e];
+        a[e] = top;
+        sift(bt, w, a, 0, e);
     }
 }
 
@@ -810,31 +808,31 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
                 idx[k++] = (uint32_t)i;
         apply_levels(s, w, idx, k, g, &res);
     } else {
+        /* the valid winners in priority order (a sorted round's chunks
+         * are in it already) */
+        uint32_t *ord = bt->order;
+        size_t nv = 0;
+        for (size_t i = 0; i < n; i++)
+            if (w[i].state != W_INVALID)
+                ord[nv++] = (uint32_t)i;
         if (!sorted)
-            sort_by_prio(bt, w, n, sizeof *w, winner_prio);
+            sort_by_prio(bt, w, ord, nv);
         size_t i = 0;
-        while (i < n && !mr_simplifier_reached(s, g)) {
+        while (i < nv && !mr_simplifier_reached(s, g)) {
             /* the next winners whose bounds stay short of the target */
             const size_t lv = m->live_vertices - g->vertices;
             const size_t lt = g->triangles ? m->live_triangles - g->triangles : SIZE_MAX;
-            size_t k = 0, j = i;
-            for (; j < n; j++) {
-                if (w[j].state == W_INVALID)
-                    continue;
-                if (3 * (k + 1) >= lv || 2 * (k + 1) >= lt)
-                    break;
-                idx[k++] = (uint32_t)j;
-            }
+            size_t k = nv - i;
+            k = 3 * k < lv ? k : (lv - 1) / 3;
+            k = 2 * k < lt ? k : (lt - 1) / 2;
             if (k < MIN_GROUPED)
                 break;
-            apply_levels(s, w, idx, k, g, &res);
-            i = j;
+            apply_levels(s, w, ord + i, k, g, &res);
+            i += k;
         }
-        for (; i < n && !mr_simplifier_reached(s, g); i++) {
-            if (w[i].state != W_INVALID)
-                apply_counted(s, &w[i], g->limit, false, NULL, NULL, &res.made, &res.bad,
-                              &res.worst);
-        }
+        for (; i < nv && !mr_simplifier_reached(s, g); i++)
+            apply_counted(s, &w[ord[i]], g->limit, false, NULL, NULL, &res.made, &res.bad,
+                          &res.worst);
     }
     *worst = res.worst;
     *invalid = res.bad;
@@ -996,6 +994,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
         bt->cur = mr_alloc_array(WIN_CHUNK, sizeof *bt->cur);
         bt->next = mr_alloc_array(WIN_CHUNK, sizeof *bt->next);
         bt->grouped = mr_alloc_array(WIN_CHUNK, sizeof *bt->grouped);
+        bt->order = mr_alloc_array(WIN_CHUNK, sizeof *bt->order);
         /* the most groups a level has: the first level's */
         bt->tgroups = ((bt->nblocks - 1) >> FIRST_SHIFT) + 1;
         const size_t rows = (size_t)bt->threads * bt->tgroups;
@@ -1003,7 +1002,8 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
         bt->tslots = mr_alloc_array(rows, sizeof *bt->tslots);
         bt->tspan = mr_alloc_array((size_t)bt->threads, sizeof *bt->tspan);
     }
-    if (!bt->win || !bt->cur || !bt->next || !bt->grouped || !bt->tcount || !bt->tslots ||
+    if (!bt->win || !bt->cur || !bt->next || !bt->grouped || !bt->order || !bt->tcount ||
+        !bt->tslots ||
         !bt->tspan)
         finished = true; /* no memory: nothing collapses */
 
@@ -1061,7 +1061,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             const size_t needed = needed_collapses(s, &g);
             const bool sorted = wins > needed;
             if (sorted) {
-                sort_by_prio(bt, bt->wid, wins, sizeof *bt->wid, id_prio);
+                sort_by_prio(bt, NULL, bt->wid, wins);
                 const size_t cap = 2 * needed + 64;
                 wins = wins < cap ? wins : cap;
             }
