@@ -16,6 +16,7 @@
  * cases shrink, staying above the parallel thresholds. */
 #include "testutil.h"
 #include "core/omp_compat.h"
+#include "qem/collapse.h"
 
 #include <dirent.h>
 #include <inttypes.h>
@@ -386,6 +387,105 @@ static void test_large_scan(void **state)
     report("generated scan", runs_done - runs0, t0);
 }
 
+/* ---- the collapse mesh's compaction -------------------------------------- */
+
+/* Both meshes' lists, counts and refs are the same (the layout, not only
+ * the lists' contents), and every list entry is a live corner of its
+ * vertex. */
+static void assert_same_lists(const mr_collapse_mesh *a, const mr_collapse_mesh *b)
+{
+    assert_int_equal(a->refs_size, b->refs_size);
+    assert_memory_equal(a->start, b->start, a->vertex_count * sizeof *a->start);
+    assert_memory_equal(a->count, b->count, a->vertex_count * sizeof *a->count);
+    assert_memory_equal(a->dead, b->dead, a->vertex_count * sizeof *a->dead);
+    assert_memory_equal(a->refs, b->refs, a->refs_size * sizeof *a->refs);
+    for (size_t v = 0; v < a->vertex_count; v++) {
+        const uint32_t *l = mr_collapse_vertex_tris(a, (uint32_t)v);
+        for (uint32_t i = 0; i < a->count[v]; i++)
+            assert_true(a->tris[l[i]] == v || (a->dead[v] && a->tris[l[i]] == MR_COLLAPSE_NONE));
+    }
+}
+
+/* The same collapses on meshes whose compaction runs on 1, 2, 3 and 8
+ * threads: concurrent-style collapses (opposite vertices' lists left dirty,
+ * room handed out as the batched strategy does), compactions forced every
+ * few thousand collapses and whenever refs runs full; after each, every
+ * mesh has the layout of the 1-thread one. */
+static void test_compaction_layout(void **state)
+{
+    (void)state;
+    mr_mesh in;
+    generate(MR_GEN_SCAN, quick() ? 140000 : 300000, &in);
+    const double centre[3] = {0, 0, 0};
+    mr_collapse_mesh cm[NTHREADS];
+    for (size_t t = 0; t < NTHREADS; t++) {
+        assert_int_equal(mr_collapse_mesh_init(&cm[t], in.positions, 0, in.vertex_count,
+                                               in.indices, in.triangle_count, centre, 1.0,
+                                               thread_counts[t], NULL),
+                         MR_OK);
+        cm[t].lazy = true;
+        mr_collapse_prepare(&cm[t]);
+        assert_non_null(cm[t].dead);
+    }
+    for (size_t t = 1; t < NTHREADS; t++) /* the lists as init fills them */
+        assert_same_lists(&cm[0], &cm[t]);
+    const mr_collapse_limits lim = {0.5, 0};
+    size_t done = 0, compactions = 0;
+    for (size_t step = 0; step < 4 * in.vertex_count && done < in.vertex_count / 2; step++) {
+        const uint32_t u = (uint32_t)((step * 7919u) % in.vertex_count);
+        mr_collapse_mesh *m0 = &cm[0];
+        if (m0->flags[u] & MR_VF_REMOVED || !m0->count[u])
+            continue;
+        /* u's first live triangle: the vertex after u there (the
+         * cleaning, as every reader's, on every mesh alike) */
+        for (size_t t = 0; t < NTHREADS; t++)
+            mr_collapse_clean(&cm[t], u);
+        const uint32_t c0 = mr_collapse_vertex_tris(m0, u)[0];
+        const uint32_t v = m0->tris[c0 - c0 % 3 + (c0 % 3 == 2 ? 0 : c0 % 3 + 1)];
+        for (size_t t = 0; t < NTHREADS; t++)
+            mr_collapse_clean(&cm[t], v);
+        double at[3];
+        mr_collapse_load(m0, v, at);
+        if (!mr_collapse_valid(m0, u, v, at, &lim))
+            continue;
+        for (size_t t = 0; t < NTHREADS; t++) {
+            mr_collapse_mesh *m = &cm[t];
+            const uint32_t room = m->count[u] + m->count[v] - 1;
+            if (m->refs_size + room > m->refs_capacity) {
+                mr_collapse_compact(m);
+                compactions += t == 0;
+            }
+            size_t gone;
+            uint32_t *out = m->refs + m->refs_size;
+            const unsigned deleted = mr_collapse_apply_at(m, u, v, at, out, &gone, true);
+            for (uint32_t j = m->count[v]; j < room; j++)
+                out[j] = 0;
+            m->refs_size += room;
+            m->live_vertices -= gone;
+            m->live_triangles -= deleted;
+        }
+        done++;
+        if (done % 4096 == 0) {
+            for (size_t t = 0; t < NTHREADS; t++)
+                mr_collapse_compact(&cm[t]);
+            compactions++;
+        }
+        if (done % 4096 == 0 || done % 4096 == 2048)
+            for (size_t t = 1; t < NTHREADS; t++)
+                assert_same_lists(&cm[0], &cm[t]);
+    }
+    assert_true(done > in.vertex_count / 8);
+    assert_true(compactions > 4);
+    for (size_t t = 0; t < NTHREADS; t++)
+        mr_collapse_compact(&cm[t]);
+    for (size_t t = 1; t < NTHREADS; t++)
+        assert_same_lists(&cm[0], &cm[t]);
+    print_message("compaction: %zu collapses, %zu compactions\n", done, compactions);
+    for (size_t t = 0; t < NTHREADS; t++)
+        mr_collapse_mesh_free(&cm[t]);
+    mr_mesh_free(&in);
+}
+
 /* A torus with round holes (open boundaries): plain, with lock_border, and
  * an error-bounded run (until_error, max_error) with prune. */
 static void test_open_boundaries(void **state)
@@ -591,6 +691,7 @@ static void test_locked_vertices(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_compaction_layout),
         cmocka_unit_test(test_large_scan),
         cmocka_unit_test(test_open_boundaries),
         cmocka_unit_test(test_attribute_seams),

@@ -215,8 +215,9 @@ unsigned mr_collapse_apply(mr_collapse_mesh *m, uint32_t u, uint32_t v,
  * validity then still holds after the other. Global state -- refs_size,
  * live_vertices, live_triangles, allocating dead[] -- is left to the
  * caller: this form writes v's merged list at `out` (room for count[u] +
- * count[v] + 1 entries inside refs, handed out by the caller: the merge
- * writes one entry past its end), stores the vertices it removes (u, and
+ * count[v] - 1 entries inside refs, handed out by the caller: the
+ * collapse deletes at least one triangle, which is in both lists, and the
+ * merge writes at most one entry past its end), stores the vertices it removes (u, and
  * an ear's tip) in *removed, and returns the triangles it deletes. The
  * caller zeroes the slots the list leaves unused (no compaction tag may
  * stay behind) and sets refs_size past them. `shared` needs a lazy mesh
