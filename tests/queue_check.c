@@ -337,3 +337,18 @@ void tq_concurrent_run(const tq_queue *t, int threads, unsigned rounds, unsigned
     free((void *)st.removes);
     free((void *)st.written);
 }
+
+void tq_thread_cases(tq_case_fn fn, void *ctx, uint64_t seed)
+{
+    const int threads[] = {2, 3, 8};
+    for (int i = 0; i < 3; i++)
+        for (int overlap = 0; overlap < 2; overlap++)
+            fn(ctx, threads[i], overlap, seed + (uint64_t)(2 * i + overlap));
+}
+
+tq_sizes tq_concurrent_sizes(void)
+{
+    const bool quick = tq_quick();
+    const tq_sizes s = {quick ? 256 : 1024, quick ? 4 : 12, quick ? 300 : 1500};
+    return s;
+}

@@ -51,6 +51,19 @@ void tq_model_run(const tq_queue *t, unsigned ops, bool exact, uint64_t seed);
 void tq_concurrent_run(const tq_queue *t, int threads, unsigned rounds, unsigned ops,
                        bool overlap, uint64_t seed);
 
+/* fn(ctx, threads, overlap, seed) at 2, 3 and 8 threads (8 on 2 cores on
+ * purpose), each with disjoint and with overlapping ids; the seeds differ. */
+typedef void (*tq_case_fn)(void *ctx, int threads, bool overlap, uint64_t seed);
+void tq_thread_cases(tq_case_fn fn, void *ctx, uint64_t seed);
+
+/* Ids, rounds and operations a round for tq_concurrent_run (fewer under
+ * MR_TEST_QUICK). */
+typedef struct tq_sizes {
+    uint32_t ids;
+    unsigned rounds, ops;
+} tq_sizes;
+tq_sizes tq_concurrent_sizes(void);
+
 /* Sorting packed elements. */
 int tq_cmp_u64(const void *a, const void *b);
 

@@ -252,26 +252,29 @@ static void test_model(void **state)
     }
 }
 
+/* Default filter levels for twice the threads (more top nodes than
+ * threads); half the cases pop from the root first, half from a top node of
+ * the thread's own; each as built, then with the test build's yields. */
+static void concurrent_case(void *ctx, int threads, bool overlap, uint64_t seed)
+{
+    (void)ctx;
+    const tq_sizes z = tq_concurrent_sizes();
+    for (int stress = 0; stress < 2; stress++) {
+        mr_fppq q;
+        assert_int_equal(mr_fppq_init(&q, z.ids, mr_fppq_default_levels(2 * threads), NULL),
+                         MR_OK);
+        const tq_queue t = as_queue(&q, (seed + (uint64_t)stress) % 2 == 1);
+        atomic_store(&mr_ppq_stress, stress);
+        tq_concurrent_run(&t, threads, z.rounds, z.ops, overlap, seed + (uint64_t)stress * 100);
+        atomic_store(&mr_ppq_stress, 0);
+        mr_fppq_free(&q);
+    }
+}
+
 static void test_concurrent(void **state)
 {
     (void)state;
-    const bool quick = tq_quick();
-    const int threads[] = {2, 3, 8};
-    for (int i = 0; i < 3; i++) {
-        for (int overlap = 0; overlap < 2; overlap++) {
-            for (int stress = 0; stress < 2; stress++) {
-                const unsigned levels = mr_fppq_default_levels(threads[i] * 2);
-                mr_fppq q;
-                assert_int_equal(mr_fppq_init(&q, quick ? 256 : 1024, levels, NULL), MR_OK);
-                const tq_queue t = as_queue(&q, (i + overlap) % 2 == 1);
-                atomic_store(&mr_ppq_stress, stress);
-                tq_concurrent_run(&t, threads[i], quick ? 4 : 12, quick ? 300 : 1500, overlap,
-                                  200 + (uint64_t)(i * 4 + overlap * 2 + stress));
-                atomic_store(&mr_ppq_stress, 0);
-                mr_fppq_free(&q);
-            }
-        }
-    }
+    tq_thread_cases(concurrent_case, NULL, 200);
 }
 
 /* ---- the top-k guarantee under stress -------------------------------- */

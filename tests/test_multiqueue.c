@@ -44,20 +44,25 @@ static tq_queue as_queue(mr_multiqueue *q)
     return t;
 }
 
-/* One queue (one thread, one queue per thread): pops are mr_heap_pop's. */
-static void test_model_one_queue(void **state)
+static void model_cases(int threads, unsigned per_thread, bool exact, uint64_t seed)
 {
-    (void)state;
     const unsigned scale = tq_quick() ? 1 : 6;
     const uint32_t sizes[] = {300, 5000};
     for (int i = 0; i < 2; i++) {
         mr_multiqueue q;
-        assert_int_equal(mr_multiqueue_init(&q, sizes[i], 1, 1, NULL), MR_OK);
-        assert_int_equal(q.count, 1);
+        assert_int_equal(mr_multiqueue_init(&q, sizes[i], threads, per_thread, NULL), MR_OK);
+        assert_int_equal(q.count, threads * (per_thread ? per_thread : 2));
         const tq_queue t = as_queue(&q);
-        tq_model_run(&t, 25000 * scale, true, 1 + (uint64_t)i);
+        tq_model_run(&t, 25000 * scale, exact, seed + (uint64_t)i);
         mr_multiqueue_free(&q);
     }
+}
+
+/* One queue (one thread, one queue per thread): pops are mr_heap_pop's. */
+static void test_model_one_queue(void **state)
+{
+    (void)state;
+    model_cases(1, 1, true, 1);
 }
 
 /* 8 queues (4 threads' worth, the default 2 each), used by one thread:
@@ -65,34 +70,24 @@ static void test_model_one_queue(void **state)
 static void test_model_many_queues(void **state)
 {
     (void)state;
-    const unsigned scale = tq_quick() ? 1 : 6;
-    const uint32_t sizes[] = {300, 5000};
-    for (int i = 0; i < 2; i++) {
-        mr_multiqueue q;
-        assert_int_equal(mr_multiqueue_init(&q, sizes[i], 4, 0, NULL), MR_OK);
-        assert_int_equal(q.count, 8);
-        const tq_queue t = as_queue(&q);
-        tq_model_run(&t, 25000 * scale, false, 3 + (uint64_t)i);
-        mr_multiqueue_free(&q);
-    }
+    model_cases(4, 0, false, 3);
+}
+
+static void concurrent_case(void *ctx, int threads, bool overlap, uint64_t seed)
+{
+    (void)ctx;
+    const tq_sizes z = tq_concurrent_sizes();
+    mr_multiqueue q;
+    assert_int_equal(mr_multiqueue_init(&q, z.ids, threads, 2, NULL), MR_OK);
+    const tq_queue t = as_queue(&q);
+    tq_concurrent_run(&t, threads, z.rounds, 2 * z.ops, overlap, seed);
+    mr_multiqueue_free(&q);
 }
 
 static void test_concurrent(void **state)
 {
     (void)state;
-    const bool quick = tq_quick();
-    const int threads[] = {2, 3, 8};
-    for (int i = 0; i < 3; i++) {
-        for (int overlap = 0; overlap < 2; overlap++) {
-            mr_multiqueue q;
-            assert_int_equal(mr_multiqueue_init(&q, quick ? 256 : 1024, threads[i], 2, NULL),
-                             MR_OK);
-            const tq_queue t = as_queue(&q);
-            tq_concurrent_run(&t, threads[i], quick ? 4 : 12, quick ? 400 : 2500, overlap,
-                              10 + (uint64_t)(i * 2 + overlap));
-            mr_multiqueue_free(&q);
-        }
-    }
+    tq_thread_cases(concurrent_case, NULL, 10);
 }
 
 /* Every id fits however the inserts fall (the queues' fixed room), and

@@ -97,16 +97,15 @@ static void test_model_relaxed(void **state)
 }
 
 /* Each case twice: as built, then with the test build's yields. */
-static void concurrent_case(bool relaxed, int threads, bool overlap, uint64_t seed)
+static void concurrent_case(void *relaxed, int threads, bool overlap, uint64_t seed)
 {
-    const bool quick = tq_quick();
-    const uint32_t ids = quick ? 256 : 1024;
+    const tq_sizes z = tq_concurrent_sizes();
     for (int stress = 0; stress < 2; stress++) {
         mr_ppq q;
-        assert_int_equal(mr_ppq_init(&q, ids, NULL), MR_OK);
-        const tq_queue t = as_queue(&q, relaxed);
+        assert_int_equal(mr_ppq_init(&q, z.ids, NULL), MR_OK);
+        const tq_queue t = as_queue(&q, relaxed != NULL);
         atomic_store(&mr_ppq_stress, stress);
-        tq_concurrent_run(&t, threads, quick ? 4 : 12, quick ? 300 : 1500, overlap, seed);
+        tq_concurrent_run(&t, threads, z.rounds, z.ops, overlap, seed + (uint64_t)stress * 100);
         atomic_store(&mr_ppq_stress, 0);
         mr_ppq_free(&q);
     }
@@ -115,21 +114,14 @@ static void concurrent_case(bool relaxed, int threads, bool overlap, uint64_t se
 static void test_concurrent(void **state)
 {
     (void)state;
-    const int threads[] = {2, 3, 8};
-    for (int i = 0; i < 3; i++) {
-        concurrent_case(false, threads[i], false, 10 + (uint64_t)i);
-        concurrent_case(false, threads[i], true, 20 + (uint64_t)i);
-    }
+    tq_thread_cases(concurrent_case, NULL, 10);
 }
 
 static void test_concurrent_relaxed(void **state)
 {
     (void)state;
-    const int threads[] = {2, 3, 8};
-    for (int i = 0; i < 3; i++) {
-        concurrent_case(true, threads[i], false, 30 + (uint64_t)i);
-        concurrent_case(true, threads[i], true, 40 + (uint64_t)i);
-    }
+    static int relaxed;
+    tq_thread_cases(concurrent_case, &relaxed, 30);
 }
 
 /* Bulk build, then pops in (key, id) order. */
