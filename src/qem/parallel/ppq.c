@@ -26,6 +26,12 @@ static void stress_point(void)
 /* Slots a bubble-up locks: the path, the path's parents, the last slot. */
 #define MAX_REGION (3 * MAX_PATH + 1)
 
+/* A slot outside the heap holds 0, never a packed element (the smallest
+ * key bits, -inf's, are 0x007fffff): a slot's membership can be read from
+ * the slot itself under its lock, without the count's cache line, which
+ * every insert and removal writes. */
+#define EMPTY UINT64_C(0)
+
 static inline uint64_t pack(uint32_t id, float key)
 {
     return ((uint64_t)mr_heap_key_bits(key) << 32) | id;
@@ -75,8 +81,8 @@ mr_status mr_ppq_init_layout(mr_ppq *q, size_t capacity, unsigned filter_levels,
                              "%u filter levels (at most %d)", filter_levels,
                              MR_FILTER_MAX_LEVELS);
     const size_t n = capacity ? capacity : 1;
-    /* zero bytes: every id absent (pos 0), every lock free; slots zeroed
-     * too, as the walk without locks may read one an insert is filling */
+    /* zero bytes: every slot EMPTY, every id absent (pos 0), every lock
+     * free */
     q->items = mr_calloc_array(n, sizeof *q->items);
     q->pos = mr_calloc_array(n, sizeof *q->pos);
     q->locks = mr_calloc_array(n, sizeof *q->locks);
@@ -107,68 +113,60 @@ void mr_ppq_free(mr_ppq *q)
 
 /* ---- bubble-down ---------------------------------------------------- */
 
-/* Lock the children of s that are in the heap, in increasing slot order;
- * returns how many (their slots in c). A child's membership is checked
- * under its own lock: a slot leaves or joins the heap only under it. */
-static unsigned lock_children(mr_ppq *q, uint32_t s, uint32_t c[2])
+/* The element of a child slot, UINT64_MAX when the slot is outside the
+ * heap (or past the last slot). */
+static inline uint64_t child_item(const mr_ppq *q, uint64_t c)
 {
-    uint64_t a = mr_filter_child1(&q->layout, s), b = mr_filter_child2(&q->layout, s);
-    if (b < a) {
-        const uint64_t t = a;
-        a = b;
-        b = t;
-    }
-    /* slots fill in increasing order: when a is out, so is b */
-    if (a >= load_size(q))
-        return 0;
-    lock(q, (uint32_t)a);
-    if (a >= load_size(q)) {
-        unlock(q, (uint32_t)a);
-        return 0;
-    }
-    c[0] = (uint32_t)a;
-    if (b >= load_size(q))
-        return 1;
-    lock(q, (uint32_t)b);
-    if (b >= load_size(q)) {
-        unlock(q, (uint32_t)b);
-        return 1;
-    }
-    c[1] = (uint32_t)b;
-    return 2;
+    if (c >= q->capacity)
+        return UINT64_MAX;
+    const uint64_t v = item_at(q, (uint32_t)c);
+    return v == EMPTY ? UINT64_MAX : v;
 }
 
-/* Holding the lock of slot s, which holds x (no smaller than s's parents):
- * move x down until no child is smaller. Releases every lock, s's too. */
+/*
+ * Holding the lock of slot s, which is to take x (no smaller than s's
+ * parents, no smaller than what s shows now): move x down until no child is
+ * smaller, then write it. Releases every lock, s's too.
+ *
+ * The slots are written as a hole moving down: each slot on the way gets
+ * its final element once (its smaller child's, or x at the end), and until
+ * then shows the element it had, no larger. So while s is held, what a
+ * child of s shows can only grow -- whatever makes it smaller (a bubble-up
+ * through it, an insert into it, a smaller element moved into its hole)
+ * locks its parents, s among them, first -- or the child leaves the heap
+ * (EMPTY, read as larger than anything). A child read without its lock is
+ * then a lower bound of what it holds: only the smaller child is locked,
+ * read again, and checked against the other one.
+ */
 static void sift_down(mr_ppq *q, uint32_t s, uint64_t x)
 {
+    /* x's lookup entry follows the hole: an operation on x waits there */
+    atomic_store_explicit(&q->pos[(uint32_t)x], s + 1, memory_order_relaxed);
     for (;;) {
-        uint32_t c[2];
-        const unsigned n = lock_children(q, s, c);
+        const uint64_t c1 = mr_filter_child1(&q->layout, s);
+        const uint64_t c2 = mr_filter_child2(&q->layout, s);
+        const uint64_t v1 = child_item(q, c1), v2 = child_item(q, c2);
+        const uint64_t m = v1 < v2 ? c1 : c2, other = v1 < v2 ? c2 : c1;
+        if ((v1 < v2 ? v1 : v2) > x)
+            break; /* no child, or none smaller */
+        lock(q, (uint32_t)m);
         stress_point();
-        uint32_t m = 0;
-        uint64_t mv = UINT64_MAX;
-        for (unsigned i = 0; i < n; i++) {
-            const uint64_t v = item_at(q, c[i]);
-            if (v < mv) {
-                mv = v;
-                m = c[i];
-            }
+        const uint64_t v = child_item(q, m);
+        if (v == UINT64_MAX || child_item(q, other) < v) {
+            unlock(q, (uint32_t)m); /* it left, or the other may be smaller */
+            continue;
         }
-        if (n == 0 || mv > x) {
-            for (unsigned i = 0; i < n; i++)
-                unlock(q, c[i]);
-            unlock(q, s);
-            return;
+        if (v > x) {
+            unlock(q, (uint32_t)m);
+            break;
         }
-        put(q, s, mv);
-        put(q, m, x);
+        put(q, s, v); /* m shows v until its turn comes */
+        atomic_store_explicit(&q->pos[(uint32_t)x], (uint32_t)m + 1, memory_order_relaxed);
         unlock(q, s);
-        for (unsigned i = 0; i < n; i++)
-            if (c[i] != m)
-                unlock(q, c[i]);
-        s = m;
+        s = (uint32_t)m;
     }
+    put(q, s, x);
+    unlock(q, s);
 }
 
 /* ---- bubble-up ------------------------------------------------------ */
@@ -286,7 +284,7 @@ static bool bubble_up(mr_ppq *q, up_kind kind, uint32_t start, uint64_t old, uin
     if (kind == UP_INSERT)
         ok = load_size(q) == start;
     else if (kind == UP_DECREASE)
-        ok = start < load_size(q) && item_at(q, start) == old;
+        ok = item_at(q, start) == old;
     else
         ok = load_size(q) == last + 1 && item_at(q, start) == old && item_at(q, last) == e;
     ok = ok && up_path(q, start, e, path, &len, NULL, &r);
@@ -295,8 +293,10 @@ static bool bubble_up(mr_ppq *q, up_kind kind, uint32_t start, uint64_t old, uin
     else if (ok && kind == UP_REPLACE)
         ok = cas_size(q, last + 1, last);
     if (ok) {
-        if (kind == UP_REPLACE)
+        if (kind == UP_REPLACE) {
             atomic_store_explicit(&q->pos[(uint32_t)old], 0, memory_order_relaxed);
+            atomic_store_explicit(&q->items[last], EMPTY, memory_order_relaxed);
+        }
         for (unsigned j = 1; j < len; j++)
             put(q, path[j - 1], item_at(q, path[j]));
         put(q, path[len - 1], e);
@@ -321,6 +321,7 @@ static bool remove_held(mr_ppq *q, uint32_t t, uint64_t r)
             if (!cas_size(q, n, last))
                 continue; /* an insert grew the heap */
             atomic_store_explicit(&q->pos[(uint32_t)r], 0, memory_order_relaxed);
+            atomic_store_explicit(&q->items[t], EMPTY, memory_order_relaxed);
             unlock(q, t);
             return true;
         }
@@ -338,9 +339,10 @@ static bool remove_held(mr_ppq *q, uint32_t t, uint64_t r)
                 continue;
             }
             atomic_store_explicit(&q->pos[(uint32_t)r], 0, memory_order_relaxed);
-            put(q, t, z);
+            atomic_store_explicit(&q->items[last], EMPTY, memory_order_relaxed);
+            atomic_store_explicit(&q->pos[(uint32_t)z], t + 1, memory_order_relaxed);
             unlock(q, last);
-            sift_down(q, t, z);
+            sift_down(q, t, z); /* t shows r, smaller, until then */
             return true;
         }
         /* z goes up from t: the path above t is locked before t */
@@ -383,13 +385,11 @@ static uint32_t lock_id(mr_ppq *q, uint32_t id, uint64_t *item)
         const uint32_t s = p - 1;
         stress_point();
         lock(q, s);
-        /* a slot past the count may still hold a copy of a removed element */
-        if (s < load_size(q)) {
-            *item = item_at(q, s);
-            if ((uint32_t)*item == id)
-                return s;
-        }
-        unlock(q, s);
+        *item = item_at(q, s);
+        if (*item != EMPTY && (uint32_t)*item == id)
+            return s;
+        unlock(q, s); /* it moved, or went */
+        mr_spin_wait(&spin);
     }
 }
 
@@ -414,7 +414,6 @@ bool mr_ppq_update(mr_ppq *q, uint32_t id, float key)
             return true;
         }
         if (e > old) {
-            put(q, s, e);
             sift_down(q, s, e);
             return false;
         }
@@ -452,11 +451,11 @@ bool mr_ppq_pop(mr_ppq *q, uint32_t *id, float *key)
             return false;
         lock(q, 0);
         /* an insert into an empty heap takes slot 0's lock */
-        if (load_size(q) == 0) {
+        const uint64_t r = item_at(q, 0);
+        if (r == EMPTY) {
             unlock(q, 0);
             return false;
         }
-        const uint64_t r = item_at(q, 0);
         if (remove_held(q, 0, r)) {
             unpack(r, id, key);
             return true;
@@ -478,12 +477,12 @@ bool mr_ppq_pop_relaxed(mr_ppq *q, uint32_t top, uint32_t first, uint32_t *id, f
         for (uint32_t k = 0; k < top; k++, t = t + 1 == top ? 0 : t + 1) {
             if (t >= n || !mr_vlock_try(&q->locks[t]))
                 continue;
-            if (t >= load_size(q)) {
+            const uint64_t r = item_at(q, t);
+            if (r == EMPTY) {
                 unlock(q, t);
                 continue;
             }
             stress_point();
-            const uint64_t r = item_at(q, t);
             if (remove_held(q, t, r)) {
                 unpack(r, id, key);
                 return true;
@@ -514,9 +513,12 @@ bool mr_ppq_check(const mr_ppq *q)
     const uint32_t n = load_size(q);
     if (n > q->capacity)
         return false;
+    for (uint32_t s = n; s < q->capacity; s++)
+        if (item_at(q, s) != EMPTY)
+            return false;
     for (uint32_t s = 0; s < n; s++) {
         const uint64_t v = item_at(q, s);
-        if ((uint32_t)v >= q->capacity ||
+        if (v == EMPTY || (uint32_t)v >= q->capacity ||
             atomic_load_explicit(&q->pos[(uint32_t)v], memory_order_relaxed) != s + 1)
             return false;
         uint32_t p[2];

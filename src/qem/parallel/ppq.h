@@ -37,11 +37,14 @@
  *     The lookup table is changed only under the lock of the slot it names.
  *
  * Read/write sets (all under the slots' locks)
- *   - bubble-down of an element at slot s (a larger key, or the last element
- *     moved into a hole): hand over hand -- s stays locked while its
- *     children are locked and compared, the element moves into the smaller
- *     child, s is released and the child is the next s. Writes s, the
- *     child, and the lookup entries of the two elements.
+ *   - bubble-down of an element x from slot s (a larger key, or the last
+ *     element moved into a hole), hand over hand: s stays locked while the
+ *     smaller child is found, locked and its element moved up into s; then
+ *     s is released and the child is the next s; x is written where it
+ *     stops. The slots on the way are written once each (a hole moving
+ *     down), so while s is held a child of s can only show a larger element
+ *     than before, and the other child is read without its lock. Writes the
+ *     slots on x's way and the lookup entries of the elements moved.
  *   - bubble-up (a smaller key, an insert, the last element moved into a
  *     hole above its place): first a walk without locks finds the path the
  *     element would take (at each step the worse parent, as Fig. 2 of the
@@ -54,17 +57,18 @@
  *   - insert also claims the slot `size` (and the count); remove and pop
  *     the last slot (moved into the hole) and the count.
  *
- * Decision, where the papers leave it open: Tamir et al. bubble up one step
- * at a time (lock parent, lock child, check the element is still there),
- * so an element on its way up stands for a while below a parent it is
- * smaller than, unlocked, where other operations meet it. In a heap with
+ * Decision, where the papers leave it open: a bubble-up one step at a time
+ * (Fig. 2's recursion, each step locking a parent and the element's slot
+ * and checking the element is still there) leaves an element on its way up
+ * standing for a while below a parent it is smaller than, unlocked, where
+ * other operations meet it. In a heap with
  * filter levels a node has two parents, and a bubble-down that passes such
  * an element upward would leave the node's other parent unchecked. Locking
  * the path at once means no element is ever seen out of order but below
- * the one a bubble-down holds locked: at every moment each parent-child
- * pair is in order unless a bubble-down holds the parent (and will compare
- * it with that child before letting it go), which the top-k argument of
- * the filter levels relies on. The path is short (the element moves
+ * the hole of a bubble-down: at every moment each parent-child pair is in
+ * order unless a bubble-down holds the parent (and will compare what it
+ * carries with that child before letting it go), which the top-k argument
+ * of the filter levels relies on. The path is short (the element moves
  * only as far as its key asks) and locked top-down like everything else.
  */
 #ifndef MR_PPQ_H
