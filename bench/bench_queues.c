@@ -4,9 +4,10 @@
  * FPPQ's top nodes, no filter), FPPQ (default filter levels for the thread
  * count) and the MultiQueue (2 queues per thread).
  *
- * The load imitates a decimation step: pop an element, change the keys of
- * 4 random others (up or down), put the popped one back with a larger key;
- * the queue keeps its size. Each thread runs for --seconds; the figure is
+ * The load imitates a decimation step: pop an element, give 4 random others
+ * new keys near the popped one's (up or down: the keys present span about
+ * as much), put the popped one back with a larger key; the queue keeps its
+ * size. Each thread runs for --seconds; the figure is
  * steps (and queue operations: 6 per step) per second over all threads.
  *
  *   bench_queues [--n N] [--seconds S] [--threads T1,T2,...]
@@ -102,8 +103,10 @@ static double run(kind k, uint32_t n, int threads, double seconds)
                 float key;
                 if (!pop(&q, &r, &id, &key))
                     continue;
+                /* new keys near the popped one, as a collapse's
+                 * neighbours get (the keys present span about 1) */
                 for (int j = 0; j < 4; j++)
-                    update(&q, (uint32_t)(next(&r) % n), rkey(&r), &r);
+                    update(&q, (uint32_t)(next(&r) % n), key + rkey(&r), &r);
                 update(&q, id, key + rkey(&r), &r);
                 steps++;
             }
