@@ -37,6 +37,17 @@ mr_status mr_heap_init(mr_heap *h, size_t capacity, mr_error *err)
     return mr_heap_init_sized(h, capacity, capacity, err);
 }
 
+void mr_heap_attach(mr_heap *h, uint64_t *items, size_t max_size, uint8_t *pos,
+                    unsigned pos_bytes, size_t capacity)
+{
+    h->items = items;
+    h->pos = pos;
+    h->pos_bytes = pos_bytes;
+    h->size = 0;
+    h->capacity = (uint32_t)capacity;
+    h->max_size = (uint32_t)max_size;
+}
+
 void mr_heap_free(mr_heap *h)
 {
     if (!h)

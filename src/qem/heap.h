@@ -48,6 +48,13 @@ mr_status mr_heap_init_sized(mr_heap *h, size_t capacity, size_t max_size, mr_er
 mr_status mr_heap_init_width(mr_heap *h, size_t capacity, size_t max_size, unsigned pos_bytes,
                              mr_error *err);
 void mr_heap_free(mr_heap *h);
+/* A heap over arrays the caller owns and frees (never mr_heap_free it):
+ * items of max_size slots, pos of capacity entries of pos_bytes (3 or 4)
+ * bytes, all ones (absent) for every id the heap does not hold. Several
+ * heaps may share one pos table while no id is in two of them at once:
+ * each heap reads and writes only its own ids' entries. */
+void mr_heap_attach(mr_heap *h, uint64_t *items, size_t max_size, uint8_t *pos,
+                    unsigned pos_bytes, size_t capacity);
 
 /* id -> slot, MR_HEAP_NONE when absent. */
 static inline uint32_t mr_heap_slot(const mr_heap *h, uint32_t id)
