@@ -360,7 +360,7 @@ static void test_high_valence(void **state)
     mr_collapse_mesh cm;
     const double centre[3] = {0, 0, 0};
     assert_int_equal(mr_collapse_mesh_init(&cm, m.positions, 0, m.vertex_count, m.indices,
-                                           m.triangle_count, centre, 1.0, 1, NULL),
+                                           m.triangle_count, NULL, centre, 1.0, 1, NULL),
                      MR_OK);
     assert_int_equal(cm.count[1000], 1000);
     assert_int_equal(cm.flags[1000] & (MR_VF_NONMANIFOLD | MR_VF_BOUNDARY), 0);

@@ -134,7 +134,7 @@ enum { W_INVALID = 0, W_VALID = 1 };
  * the blocks are gathered, filtered and compacted independently (in
  * parallel) while the order stays that of one sequential sweep. A
  * constant: the layout must not depend on the thread count. */
-#define BLOCK_TRIANGLES 4096
+#define BLOCK_TRIANGLES MR_BATCH_BLOCK_TRIANGLES
 
 struct mr_batched {
     mr_candidate *cand;  /* cand_cap */
@@ -526,7 +526,7 @@ static void plan_winners(const mr_simplifier *s, mr_winner *w, size_t n, double 
  * together must not depend on the thread count; these keep the error at
  * 1 % on the bunny and the armadillo within 2 % of the sequential
  * sweep's). */
-#define FIRST_SHIFT 2
+#define FIRST_SHIFT MR_BATCH_FIRST_SHIFT
 #define LEVEL_SHIFT 3
 
 /* The block ranges are found anew every this many passes (between, the

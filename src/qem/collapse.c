@@ -197,8 +197,9 @@ void mr_collapse_mesh_free(mr_collapse_mesh *m)
 
 mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, size_t stride,
                                 size_t vertex_count, const uint32_t *indices,
-                                size_t triangle_count, const double centre[3], double scale,
-                                int threads, mr_error *err)
+                                size_t triangle_count, const uint32_t *order,
+                                const double centre[3], double scale, int threads,
+                                mr_error *err)
 {
     memset(m, 0, sizeof *m);
     const size_t vc = vertex_count, tc = triangle_count;
@@ -231,7 +232,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     const ptrdiff_t ntri = (ptrdiff_t)tc;
 #pragma omp parallel for schedule(static) reduction(+ : live_tris) num_threads(threads) if (par)
     for (ptrdiff_t t = 0; t < ntri; t++) {
-        const uint32_t *src = indices + 3 * t;
+        const uint32_t *src = indices + 3 * (order ? (size_t)order[t] : (size_t)t);
         uint32_t *dst = m->tris + 3 * t;
         const bool bad = mr_triangle_is_degenerate(src);
         for (int k = 0; k < 3; k++)

@@ -85,13 +85,15 @@ typedef struct mr_collapse_limits {
 } mr_collapse_limits;
 
 /* Build the working mesh: positions are normalised as (p - centre) *
- * scale and stored as float. Indices must be in range. Positions and
+ * scale and stored as float; triangle t is input triangle order[t]
+ * (order NULL: t). Indices must be in range. Positions and
  * classification run on up to `threads` threads (same result on any
  * number). On failure the mesh is left empty (safe to free). */
 mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, size_t stride,
                                 size_t vertex_count, const uint32_t *indices,
-                                size_t triangle_count, const double centre[3], double scale,
-                                int threads, mr_error *err);
+                                size_t triangle_count, const uint32_t *order,
+                                const double centre[3], double scale, int threads,
+                                mr_error *err);
 void mr_collapse_mesh_free(mr_collapse_mesh *m);
 
 /* v's list: corner ids 3t + j, tris[3t + j] == v. */

@@ -295,6 +295,22 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         free_ctx(&a);
         return st;
     }
+    if (s.order) {
+        /* the corners in the working order of the triangles */
+        uint32_t *corner = mr_alloc_array(3 * tc, sizeof *corner);
+        if (!corner) {
+            mr_simplifier_free(&s);
+            free(geo);
+            free_ctx(&a);
+            return mr_fail_nomem(err, NULL, 3 * tc * sizeof *corner);
+        }
+        for (size_t t = 0; t < tc; t++)
+            memcpy(corner + 3 * t, a.corner + 3 * (size_t)s.order[t], 3 * sizeof *corner);
+        free(a.corner);
+        a.corner = corner;
+        free(s.order);
+        s.order = NULL;
+    }
     s.attr = &a;
     /* Without seams every geometric vertex has one wedge: the attribute
      * rules cannot refuse a collapse, and without attributes the only

@@ -84,6 +84,8 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
                                       triangle_count, options, NULL, err);
     if (st != MR_OK)
         return st;
+    free(s.order); /* the output follows the working order */
+    s.order = NULL;
     st = mr_simplifier_fill_queue(&s, err);
     if (st != MR_OK) {
         mr_simplifier_free(&s);

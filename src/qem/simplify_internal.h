@@ -39,6 +39,11 @@ struct mr_simplifier {
     float lo[3], hi[3];      /* bounding box of the referenced input vertices */
     double box[3];           /* its half extents, normalised: targets stay
                                 inside (|target[k]| <= box[k]) */
+    uint32_t *order;         /* or NULL: working triangle t is input triangle
+                                order[t] (batched: setup.c's spatial_order);
+                                from mr_simplifier_init until the caller
+                                frees it (mr_mesh_simplify reorders its
+                                corners by it) */
     size_t input_vertices;
     size_t blocked_vertices; /* non-manifold or inconsistently wound: locked */
     mr_simplify_stop stop;   /* why mr_simplifier_run stopped */
@@ -49,6 +54,11 @@ struct mr_simplifier {
     void (*attr_apply)(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
     void *attr;              /* the hooks' own state: they write only through it */
 };
+
+/* batched.c's blocks of triangles and the blocks in a group at its first
+ * level (setup.c decides by them whether to reorder the triangles). */
+#define MR_BATCH_BLOCK_TRIANGLES 4096
+#define MR_BATCH_FIRST_SHIFT 2
 
 /* What the run aims at, from the options. */
 typedef struct mr_simplify_goal {
