@@ -81,6 +81,7 @@
  * same decision: the output is greedy.c's half-edge output, byte for byte.
  */
 #include "../simplify_internal.h"
+#include "../vertex_queue.h"
 
 #include "../../core/omp_compat.h"
 #include "fppq.h"
@@ -261,93 +262,40 @@ static bool grab_ring(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t v)
     return true;
 }
 
-/* ---- priorities: greedy.c's rules ------------------------------------------ */
+/* ---- priorities: the vertex queue's rules (vertex_queue.h) ----------------- */
 
-/* u's cheapest collapse (only valid ones when check_valid, each
- * candidate's ring locked before its test; *ok false when a lock was not
- * had). Ties go to the smaller neighbour id. u's ring is locked. */
-static double best_collapse(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u,
-                            bool check_valid, uint32_t *best, bool *ok)
+/* One thread's view for the rules' callbacks. */
+typedef struct qctx {
+    mr_simplifier *s;
+    mr_queued *qd;
+    qthread *t;
+} qctx;
+
+static float vq_key(void *q, uint32_t v) { return ((qctx *)q)->qd->key[v]; }
+static void vq_set(void *q, uint32_t v, float key)
 {
-    double best_cost = INFINITY;
-    uint32_t best_w = NONE;
-    *ok = true;
-    MR_FOR_EACH_NEIGHBOUR(s, u, w, {
-        double c = mr_simplifier_half_cost(s, u, w);
-        if (*ok && (c < best_cost || (c == best_cost && c < INFINITY && w < best_w))) {
-            if (check_valid && !grab_ring(s, qd, t, w)) {
-                *ok = false;
-            } else {
-                if (check_valid)
-                    t->p.checks++;
-                if (!check_valid || mr_simplifier_valid(s, u, w, NULL)) {
-                    best_cost = c;
-                    best_w = w;
-                }
-            }
-        }
-    });
-    *best = best_w;
-    return best_cost;
+    qctx *c = q;
+    set_key(c->qd, c->t, v, key);
 }
-
-/* greedy.c's requeue: false (nothing changed) when a lock was not had. */
-static bool requeue(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u, bool check_valid)
+static void vq_drop(void *q, uint32_t v)
 {
-    uint32_t w;
-    bool ok;
-    const double c = best_collapse(s, qd, t, u, check_valid, &w, &ok);
-    if (!ok)
+    qctx *c = q;
+    drop_key(c->qd, c->t, v);
+}
+/* A candidate's test reads its triangles: its closed ring locked first. */
+static bool vq_prepare(void *q, uint32_t u, uint32_t w)
+{
+    qctx *c = q;
+    (void)u;
+    if (!grab_ring(c->s, c->qd, c->t, w))
         return false;
-    qd->stale[u] = 0;
-    qd->best[u] = w;
-    if (w == NONE)
-        drop_key(qd, t, u);
-    else
-        set_key(qd, t, u, (float)c);
+    c->t->p.checks++;
     return true;
 }
 
-/* greedy.c's update_around (half collapses), with key[] for the heap's
- * keys: writes only k and the vertices of its ring. */
-static void update_around(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t r, uint32_t k)
+static inline mr_vertex_queue vertex_queue(qctx *c)
 {
-    drop_key(qd, t, r);
-    qd->best[r] = NONE;
-    double kbest = INFINITY;
-    uint32_t kw = NONE;
-    const mr_collapse_mesh *m = &s->m;
-    MR_FOR_EACH_NEIGHBOUR(s, k, w, {
-        const double c = mr_simplifier_half_cost(s, k, w);
-        const double cw = mr_simplifier_half_cost(s, w, k);
-        if (c < kbest || (c == kbest && c < INFINITY && w < kw)) {
-            kbest = c;
-            kw = w;
-        }
-        const uint32_t b = qd->best[w];
-        if (m->flags[w] & MR_VF_REMOVED) {
-            /* nothing */
-        } else if (b == NONE) {
-            if (cw < INFINITY) {
-                qd->best[w] = k;
-                qd->stale[w] = 1;
-                set_key(qd, t, w, (float)cw);
-            }
-        } else {
-            const float old = qd->key[w];
-            if ((float)cw < old || ((float)cw == old && k < b)) {
-                qd->best[w] = k;
-                set_key(qd, t, w, (float)cw);
-            } else if (b == r || b == k) {
-                qd->stale[w] = 1;
-            }
-        }
-    });
-    qd->best[k] = kw;
-    if (kw == NONE)
-        drop_key(qd, t, k);
-    else
-        set_key(qd, t, k, (float)kbest);
+    return (mr_vertex_queue){c->qd->best, c->qd->stale, c, vq_key, vq_set, vq_drop, vq_prepare};
 }
 
 /* ---- the kernel ------------------------------------------------------------- */
@@ -417,6 +365,8 @@ static int done(mr_queued *qd, qthread *t)
 static int step(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u)
 {
     mr_collapse_mesh *m = &s->m;
+    qctx ctx = {s, qd, t};
+    const mr_vertex_queue vq = vertex_queue(&ctx);
     mr_spin sp = MR_SPIN_INIT;
     while (!mr_vlock_try(&qd->lock[u])) {
         if (atomic_load_explicit(&qd->sync, memory_order_relaxed))
@@ -433,7 +383,7 @@ static int step(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u)
     if (!grab_ring(s, qd, t, u))
         return retry(qd, t, u);
     if (qd->stale[u]) {
-        requeue(s, qd, t, u, false); /* u's ring only: never fails */
+        mr_vq_requeue(s, &vq, u, false); /* u's ring only: never fails */
         return done(qd, t);
     }
     const uint32_t w = qd->best[u];
@@ -450,7 +400,7 @@ static int step(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u)
         return retry(qd, t, u);
     t->p.checks++;
     if (!mr_simplifier_allowed(s, r, k, target, cost, qd->limit)) {
-        if (!requeue(s, qd, t, u, true))
+        if (!mr_vq_requeue(s, &vq, u, true))
             return retry(qd, t, u);
         return done(qd, t);
     }
@@ -479,7 +429,7 @@ static int step(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u)
     t->worst = cost > t->worst ? cost : t->worst;
     atomic_store_explicit(&t->made, atomic_load_explicit(&t->made, memory_order_relaxed) + 1,
                           memory_order_relaxed);
-    update_around(s, qd, t, r, k);
+    mr_vq_update_around(s, &vq, r, k);
     t->first = 0;
     return done(qd, t);
 }
@@ -631,6 +581,8 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
     const ptrdiff_t n = (ptrdiff_t)nv;
     uint32_t *ids = NULL;
     size_t count = 0;
+    qctx ctx = {s, qd, NULL}; /* without validity tests no callback runs */
+    const mr_vertex_queue vq = vertex_queue(&ctx);
 #pragma omp parallel for schedule(dynamic, 4096) num_threads(qd->threads) \
     if (qd->threads > 1 && n > 65536)
     for (ptrdiff_t v = 0; v < n; v++) {
@@ -639,7 +591,7 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
         if (m->flags[v] & MR_VF_REMOVED)
             continue;
         bool ok;
-        const double c = best_collapse(s, qd, &qd->th[0], (uint32_t)v, false, &qd->best[v], &ok);
+        const double c = mr_vq_best(s, &vq, (uint32_t)v, false, &qd->best[v], &ok);
         qd->key[v] = (float)c;
     }
     for (size_t v = 0; v < nv; v++)
