@@ -377,11 +377,18 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
            "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
            "\"locked_vertices\": %zu, \"pruned_parts\": %zu, "
            "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
-           "\"output\": %.6f, \"write\": %.6f}}\n",
+           "\"output\": %.6f, \"write\": %.6f}",
            s->input_triangles, s->output_vertices, s->output_triangles,
            s->collapses, s->max_error, s->locked_vertices, s->pruned_parts, t->read,
            s->seconds_setup,
            s->seconds_collapse, s->seconds_output, t->write);
+    if (s->queue_pops) /* the concurrent-queue strategies' profile */
+        printf(", \"profile\": {\"pops\": %zu, \"lock_acquisitions\": %zu, "
+               "\"lock_failures\": %zu, \"topology_checks\": %zu, \"collapses\": %zu, "
+               "\"priority_updates\": %zu, \"compactions\": %zu}",
+               s->queue_pops, s->lock_acquisitions, s->lock_failures, s->topology_checks,
+               s->collapses, s->priority_updates, s->compactions);
+    printf("}\n");
 }
 
 static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,

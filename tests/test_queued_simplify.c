@@ -16,6 +16,7 @@
 #include "testutil.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -242,6 +243,46 @@ static void test_targets_exact(void **state)
     mr_mesh_free(&m);
 }
 
+/* Progress: from the calling thread only, rising, ending at 1. */
+typedef struct progress_log {
+    pthread_t caller;
+    size_t calls, foreign;
+    double last;
+    bool falling;
+} progress_log;
+
+static void on_progress(double f, void *user)
+{
+    progress_log *p = user;
+    p->calls++;
+    p->foreign += !pthread_equal(pthread_self(), p->caller);
+    p->falling |= f < p->last;
+    p->last = f;
+}
+
+static void test_progress(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    generate(MR_GEN_SCAN, 200000, &m);
+    for (size_t s = 0; s < NQUEUED; s++) {
+        progress_log log = {pthread_self(), 0, 0, 0, false};
+        mr_simplify_options o;
+        half_options(&o, queued[s], 8);
+        o.target_ratio = 0.1;
+        o.progress = on_progress;
+        o.progress_user = &log;
+        mr_simplified r;
+        run(&m, &o, &r);
+        assert_true(log.calls >= 1);
+        assert_int_equal(log.foreign, 0);
+        assert_false(log.falling);
+        assert_true(log.last == 1.0);
+        mr_simplified_free(&r);
+    }
+    mr_mesh_free(&m);
+}
+
 /* Targets that cannot be reached: the run ends, with greedy's reason. */
 static void test_unreachable(void **state)
 {
@@ -319,6 +360,47 @@ static void test_full_rejected(void **state)
     mr_mesh_free(&m);
 }
 
+/* The command line: the strategies, their options, the profile. */
+static void test_cli(void **state)
+{
+    (void)state;
+    const char *in = tu_tmp_path("sphere.ply"), *out = tu_tmp_path("out.ply");
+    char *text = NULL;
+    assert_int_equal(tu_run_cli(tu_fmt("generate sphere -o %s --triangles 5000 -q", in), NULL), 0);
+    static const char *const names[] = {"ppq", "rppq", "fppq", "multiqueue"};
+    for (size_t i = 0; i < NQUEUED; i++) {
+        assert_int_equal(tu_run_cli(tu_fmt("simplify %s -o %s --strategy %s --collapse half "
+                                           "--ratio 0.2 --threads 2 --filter-levels 2 "
+                                           "--multiqueue-factor 3 --stats",
+                                           in, out, names[i]),
+                                    &text),
+                         0);
+        tu_assert_contains(text, "profile    summed over threads:");
+        tu_assert_contains(text, "lock failures");
+        free(text);
+        assert_int_equal(tu_run_cli(tu_fmt("simplify %s -o %s --strategy %s --collapse half "
+                                           "--ratio 0.2 --json", in, out, names[i]),
+                                    &text),
+                         0);
+        tu_assert_contains(text, "\"profile\": {\"pops\": ");
+        free(text);
+        assert_true(tu_run_cli(tu_fmt("simplify %s -o %s --strategy %s --ratio 0.2", in, out,
+                                      names[i]),
+                               &text) != 0);
+        tu_assert_contains(text, "half-edge collapses only");
+        free(text);
+    }
+    assert_true(tu_run_cli(tu_fmt("simplify %s -o %s --strategy fppq --collapse half "
+                                  "--ratio 0.2 --filter-levels 0", in, out),
+                           &text) != 0);
+    tu_assert_contains(text, "--filter-levels");
+    free(text);
+    assert_int_equal(tu_run_cli("simplify --help", &text), 0);
+    tu_assert_contains(text, "Relaxed: the output may vary");
+    tu_assert_contains(text, "k = L*2^L + 1");
+    free(text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -328,6 +410,8 @@ int main(void)
         cmocka_unit_test(test_attributes),
         cmocka_unit_test(test_targets_exact),
         cmocka_unit_test(test_unreachable),
+        cmocka_unit_test(test_progress),
+        cmocka_unit_test(test_cli),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
