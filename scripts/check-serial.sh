@@ -41,6 +41,20 @@ simplify() {
     done
 }
 
+# The concurrent-queue strategies are relaxed above one thread: the serial
+# output (one thread, whatever --threads says) against the OpenMP build's
+# at one thread only.
+simplify_one() {
+    name=$1
+    in=$2
+    shift 2
+    "$serial" simplify "$in" -o "$tmp/$name.serial.ply" -q "$@"
+    "$serial" --threads 2 simplify "$in" -o "$tmp/$name.serial2.ply" -q "$@"
+    same "$tmp/$name.serial.ply" "$tmp/$name.serial2.ply" "$name (serial, --threads 2)"
+    "$omp" --threads 1 simplify "$in" -o "$tmp/$name.omp1.ply" -q "$@"
+    same "$tmp/$name.serial.ply" "$tmp/$name.omp1.ply" "$name (--threads 1)"
+}
+
 # Generated meshes, above the sizes where the parallel loops start: each
 # build writes its own, and they must agree too.
 for g in "scan 300000" "torus 150000"; do
@@ -53,6 +67,13 @@ simplify scan-batched-full "$tmp/scan.ply" --ratio 0.1
 simplify scan-batched-half "$tmp/scan.ply" --ratio 0.25 --collapse half
 simplify scan-greedy-full "$tmp/scan.ply" --ratio 0.01 --strategy greedy
 simplify torus-lock-border "$tmp/torus.ply" --ratio 0.1 --lock-border
+for st in ppq rppq fppq multiqueue; do
+    simplify_one "scan-$st" "$tmp/scan.ply" --ratio 0.05 --collapse half --strategy "$st"
+done
+# PPQ on one thread is greedy's half-edge run.
+"$omp" --threads 1 simplify "$tmp/scan.ply" -o "$tmp/scan-greedy-half.ply" -q --ratio 0.05 \
+    --collapse half --strategy greedy
+same "$tmp/scan-greedy-half.ply" "$tmp/scan-ppq.serial.ply" "scan ppq (serial) = greedy half"
 
 # Shared data: holes and unreferenced vertices, UV seams, triangle strips.
 for f in stanford-bunny.obj spot.obj igea.ply; do
