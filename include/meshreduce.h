@@ -351,7 +351,11 @@ typedef enum mr_strategy {
      * (the filter-priority-queue paper's kernel). Half-edge collapse only
      * (MR_COLLAPSE_HALF; MR_COLLAPSE_FULL is refused). Relaxed: on more
      * than one thread the output may vary with the thread count and the
-     * timing. */
+     * timing. Every other option applies as for MR_STRATEGY_GREEDY: the
+     * targets (a vertex target is hit exactly at any thread count),
+     * max_error, until_error, lock_border, vertex_lock, boundary_weight,
+     * max_normal_turn, prune, attribute seams (mr_mesh_simplify); progress
+     * is called from the calling thread only. */
     MR_STRATEGY_PPQ,        /* strict pops of the root: on one thread the
                                same output as MR_STRATEGY_GREEDY (half) */
     MR_STRATEGY_RPPQ,       /* pops any unlocked one of the top n_t nodes
