@@ -386,9 +386,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     const size_t output_points = s.m.live_vertices;
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
-    mr_simplify_stats profile;
-    memset(&profile, 0, sizeof profile);
-    mr_simplifier_profile_stats(&s, &profile);
+    const mr_queued_profile profile = s.profile;
     mr_simplifier_free(&s);
     free(geo);
     free_ctx(&a);
@@ -411,12 +409,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         stats->seconds_setup = t1 - t0;
         stats->seconds_collapse = t2 - t1;
         stats->seconds_output = mr_now_seconds() - t2;
-        stats->queue_pops = profile.queue_pops;
-        stats->lock_acquisitions = profile.lock_acquisitions;
-        stats->lock_failures = profile.lock_failures;
-        stats->topology_checks = profile.topology_checks;
-        stats->priority_updates = profile.priority_updates;
-        stats->compactions = profile.compactions;
+        mr_queued_profile_stats(&profile, stats);
     }
     return MR_OK;
 }

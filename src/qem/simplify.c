@@ -107,7 +107,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
-    mr_simplifier_profile_stats(&s, &out->stats);
+    mr_queued_profile_stats(&s.profile, &out->stats);
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;

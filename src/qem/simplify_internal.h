@@ -212,7 +212,7 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err);
 void mr_simplifier_queued_free(mr_simplifier *s);
 size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
                                 double *max_error);
-/* The profile as mr_simplify_stats' fields. */
-void mr_simplifier_profile_stats(const mr_simplifier *s, mr_simplify_stats *stats);
+/* A run's profile as mr_simplify_stats' fields. */
+void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats);
 
 #endif

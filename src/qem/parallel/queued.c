@@ -671,12 +671,12 @@ size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
     return made;
 }
 
-void mr_simplifier_profile_stats(const mr_simplifier *s, mr_simplify_stats *stats)
+void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats)
 {
-    stats->queue_pops = s->profile.pops;
-    stats->lock_acquisitions = s->profile.locks;
-    stats->lock_failures = s->profile.lock_failures;
-    stats->topology_checks = s->profile.checks;
-    stats->priority_updates = s->profile.updates;
-    stats->compactions = s->profile.compactions;
+    stats->queue_pops = p->pops;
+    stats->lock_acquisitions = p->locks;
+    stats->lock_failures = p->lock_failures;
+    stats->topology_checks = p->checks;
+    stats->priority_updates = p->updates;
+    stats->compactions = p->compactions;
 }
