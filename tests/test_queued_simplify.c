@@ -11,6 +11,9 @@
  *   - runs whose target cannot be reached (a locked border, an error
  *     bound) end, with the stop reason greedy's run gives, and locked
  *     vertices stay;
+ *   - the filter levels and heaps per thread apply, the CLI takes the
+ *     strategies and their options, and progress comes from the calling
+ *     thread only;
  *   - full collapses are refused.
  * With MR_TEST_QUICK set (the ThreadSanitizer stage) the meshes shrink. */
 #include "testutil.h"
@@ -283,6 +286,32 @@ static void test_progress(void **state)
     mr_mesh_free(&m);
 }
 
+/* The queues' own options: filter levels (FPPQ, RPPQ) and heaps per
+ * thread (MultiQueue), at 3 threads. */
+static void test_queue_options(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    generate(MR_GEN_SCAN, 100000, &m);
+    const size_t vt = m.vertex_count / 20;
+    for (unsigned c = 1; c <= 4; c++) {
+        const mr_strategy st[] = {MR_STRATEGY_FPPQ, MR_STRATEGY_RPPQ, MR_STRATEGY_MULTIQUEUE};
+        for (size_t i = 0; i < sizeof st / sizeof st[0]; i++) {
+            mr_simplify_options o;
+            half_options(&o, st[i], 3);
+            o.filter_levels = c;
+            o.multiqueue_factor = c;
+            o.target_vertices = vt;
+            mr_simplified r;
+            run(&m, &o, &r);
+            assert_int_equal(r.vertex_count, vt);
+            assert_closed_manifold(&r);
+            mr_simplified_free(&r);
+        }
+    }
+    mr_mesh_free(&m);
+}
+
 /* Targets that cannot be reached: the run ends, with greedy's reason. */
 static void test_unreachable(void **state)
 {
@@ -410,6 +439,7 @@ int main(void)
         cmocka_unit_test(test_attributes),
         cmocka_unit_test(test_targets_exact),
         cmocka_unit_test(test_unreachable),
+        cmocka_unit_test(test_queue_options),
         cmocka_unit_test(test_progress),
         cmocka_unit_test(test_cli),
     };
