@@ -69,7 +69,8 @@
  *
  * Termination (quiescence): `work` counts queued elements plus tickets,
  * never below the true number (raised before an insert, lowered after a
- * removal or when a ticket is dropped); only a ticket holder inserts. So
+ * removal or when a ticket is dropped; a ticket put back into the queue
+ * by its holder just changes form); only a ticket holder inserts. So
  * work == 0 means an empty queue and no ticket, which stays so: nothing
  * valid is left, and a thread seeing it asks for the stop. A vertex whose
  * collapse costs more than the error limit leaves the queue (parked) until
@@ -103,6 +104,9 @@ typedef struct qthread {
     mr_queued_profile p;
     size_t gone, deleted; /* removed since the last safe point */
     double worst;
+    uint32_t ticket;      /* the vertex it took from the queue, or NONE */
+    bool moved;           /* the ticket went back into the queue: it
+                             counts there (work unchanged) */
     _Atomic size_t made;  /* collapses: read by the calling thread */
     char pad[64];
 } qthread;
@@ -183,7 +187,9 @@ static void set_key(mr_queued *qd, qthread *t, uint32_t v, float key)
 {
     qd->key[v] = key;
     const bool present = q_contains(qd, v);
-    if (!present)
+    if (!present && v == t->ticket)
+        t->moved = true; /* the ticket becomes the queued element */
+    else if (!present)
         atomic_fetch_add(&qd->work, 1);
     const bool inserted = q_set(qd, t, v, key);
     if (present && inserted) /* a pop took it meanwhile: its ticket counts
@@ -348,16 +354,18 @@ static void removes(const mr_collapse_mesh *m, uint32_t r, uint32_t k, int64_t *
 /* Put u (locked) back with its key, release everything: another try. */
 static int retry(mr_queued *qd, qthread *t, uint32_t u)
 {
-    set_key(qd, t, u, qd->key[u]);
+    set_key(qd, t, u, qd->key[u]); /* the ticket moves back */
     release_all(qd, t);
-    atomic_fetch_sub(&qd->work, 1); /* the ticket */
     return STEP_RETRY;
 }
 
+/* The ticket resolved: it counts no more, unless it went back into the
+ * queue. */
 static int done(mr_queued *qd, qthread *t)
 {
     release_all(qd, t);
-    atomic_fetch_sub(&qd->work, 1);
+    if (!t->moved)
+        atomic_fetch_sub(&qd->work, 1);
     return STEP_DONE;
 }
 
@@ -368,6 +376,8 @@ static int step(mr_simplifier *s, mr_queued *qd, qthread *t, uint32_t u)
     qctx ctx = {s, qd, t};
     const mr_vertex_queue vq = vertex_queue(&ctx);
     mr_spin sp = MR_SPIN_INIT;
+    t->ticket = u;
+    t->moved = false;
     while (!mr_vlock_try(&qd->lock[u])) {
         if (atomic_load_explicit(&qd->sync, memory_order_relaxed))
             return STEP_SYNC; /* the ticket kept */
@@ -574,8 +584,10 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
         return st;
     }
     qd->top = mr_fppq_top_nodes(levels);
-    for (int i = 0; i < qd->threads; i++)
+    for (int i = 0; i < qd->threads; i++) {
         qd->th[i].rng = mr_multiqueue_seed(0x9e3779b97f4a7c15ull, i);
+        qd->th[i].ticket = NONE;
+    }
     /* Every vertex's best collapse (its ring only: any thread count gives
      * the same), then the queue, in id order. */
     const ptrdiff_t n = (ptrdiff_t)nv;
