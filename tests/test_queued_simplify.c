@@ -211,6 +211,20 @@ static void assert_closed_manifold(const mr_simplified *r)
     assert_true(st.manifold);
 }
 
+/* A closed manifold m simplified to vt vertices with o: exactly vt, closed
+ * and manifold, greedy's stop. */
+static void check_vertex_target(const mr_mesh *m, mr_simplify_options *o, size_t vt)
+{
+    o->target_vertices = vt;
+    mr_simplified r;
+    run(m, o, &r);
+    assert_int_equal(r.vertex_count, vt);
+    assert_int_equal(r.stats.stop, MR_STOP_TARGET);
+    assert_int_equal(r.stats.collapses, m->vertex_count - vt);
+    assert_closed_manifold(&r);
+    mr_simplified_free(&r);
+}
+
 /* Every strategy, every thread count: closed and manifold, targets hit. */
 static void test_targets_exact(void **state)
 {
@@ -227,15 +241,9 @@ static void test_targets_exact(void **state)
         for (size_t i = 0; i < NTHREADS; i++) {
             mr_simplify_options o;
             half_options(&o, queued[s], thread_counts[i]);
-            o.target_vertices = vt;
-            mr_simplified r;
-            run(&m, &o, &r);
-            assert_int_equal(r.vertex_count, vt);
-            assert_int_equal(r.stats.stop, MR_STOP_TARGET);
-            assert_int_equal(r.stats.collapses, m.vertex_count - vt);
-            assert_closed_manifold(&r);
-            mr_simplified_free(&r);
+            check_vertex_target(&m, &o, vt);
             half_options(&o, queued[s], thread_counts[i]);
+            mr_simplified r;
             o.target_triangles = tt;
             run(&m, &o, &r);
             assert_true(r.triangle_count <= tt && r.triangle_count + 2 > tt);
@@ -301,12 +309,7 @@ static void test_queue_options(void **state)
             half_options(&o, st[i], 3);
             o.filter_levels = c;
             o.multiqueue_factor = c;
-            o.target_vertices = vt;
-            mr_simplified r;
-            run(&m, &o, &r);
-            assert_int_equal(r.vertex_count, vt);
-            assert_closed_manifold(&r);
-            mr_simplified_free(&r);
+            check_vertex_target(&m, &o, vt);
         }
     }
     mr_mesh_free(&m);
