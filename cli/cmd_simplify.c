@@ -37,11 +37,25 @@ static const char usage[] =
     "  -o, --output FILE     output file (required)\n"
     "  --collapse full|half  full: both ends move to the optimal position (default);\n"
     "                        half: one end moves onto the other\n"
-    "  --strategy greedy|batched\n"
+    "  --strategy greedy|batched|ppq|rppq|fppq|multiqueue\n"
     "                        batched: passes over all edges, cheapest first, at\n"
     "                        most one collapse per vertex a pass (default);\n"
     "                        greedy: always the single cheapest collapse, from a\n"
-    "                        heap (the reference; about 5x slower)\n"
+    "                        heap (the reference; about 5x slower);\n"
+    "                        ppq, rppq, fppq, multiqueue: greedy's vertex queue on\n"
+    "                        a concurrent priority queue, threads collapsing at\n"
+    "                        once under vertex locks. Relaxed: the output may vary\n"
+    "                        with the thread count and the timing; half-edge\n"
+    "                        collapse only (--collapse half). What each keeps:\n"
+    "                        ppq: strict pops of the root (on one thread the same\n"
+    "                        output as greedy --collapse half); rppq: every pop\n"
+    "                        among the top n_t = 2^(L+1) - 1 nodes of the heap (no\n"
+    "                        rank bound); fppq: every pop among the best\n"
+    "                        k = L*2^L + 1 (L filter levels); multiqueue: none\n"
+    "                        beyond \"usually near the top\"\n"
+    "  --filter-levels L     fppq, rppq: L = 1..12 (default from --threads: 1 up to\n"
+    "                        4 threads, 2 up to 8, 3 up to 16, 4 up to 32)\n"
+    "  --multiqueue-factor C multiqueue: C heaps per thread (default 2)\n"
     "  --lock-border         never move boundary vertices\n"
     "  --prune               drop the disconnected pieces no larger than the error\n"
     "                        bound (--max-error, or the largest collapse error made;\n"
@@ -224,8 +238,25 @@ static int option(int argc, char **argv, int *i, void *user)
             o->strategy = MR_STRATEGY_GREEDY;
         else if (v && !strcmp(v, "batched"))
             o->strategy = MR_STRATEGY_BATCHED;
+        else if (v && !strcmp(v, "ppq"))
+            o->strategy = MR_STRATEGY_PPQ;
+        else if (v && !strcmp(v, "rppq"))
+            o->strategy = MR_STRATEGY_RPPQ;
+        else if (v && !strcmp(v, "fppq"))
+            o->strategy = MR_STRATEGY_FPPQ;
+        else if (v && !strcmp(v, "multiqueue"))
+            o->strategy = MR_STRATEGY_MULTIQUEUE;
         else
-            return cli_usage_error("simplify", "--strategy is greedy or batched");
+            return cli_usage_error("simplify", "--strategy is greedy, batched, ppq, rppq, "
+                                               "fppq or multiqueue");
+    } else if (cli_value(argc, argv, i, "--filter-levels", &v)) {
+        if (!cli_parse_count(v, &n) || n < 1 || n > 12)
+            return cli_usage_error("simplify", "--filter-levels needs a count in 1..12");
+        o->filter_levels = (unsigned)n;
+    } else if (cli_value(argc, argv, i, "--multiqueue-factor", &v)) {
+        if (!cli_parse_count(v, &n) || n < 1 || n > 1024)
+            return cli_usage_error("simplify", "--multiqueue-factor needs a count in 1..1024");
+        o->multiqueue_factor = (unsigned)n;
     } else if (cli_flag(argc, argv, i, "--lock-border")) {
         o->lock_border = 1;
     } else if (cli_flag(argc, argv, i, "--prune")) {
@@ -322,6 +353,13 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
     fprintf(stderr, "time       read %.3f s, setup %.3f s, collapse %.3f s, output %.3f s, "
                     "write %.3f s\n",
             t->read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t->write);
+    if (s->queue_pops) /* the concurrent-queue strategies' profile */
+        fprintf(stderr,
+                "profile    summed over threads: %zu pops, %zu locks taken, %zu lock "
+                "failures, %zu topology checks, %zu collapses, %zu priority updates, "
+                "%zu compactions\n",
+                s->queue_pops, s->lock_acquisitions, s->lock_failures, s->topology_checks,
+                s->collapses, s->priority_updates, s->compactions);
 }
 
 static void print_json(const cli_io *io, const mr_mesh *result, const cli_times *t,
@@ -339,11 +377,18 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
            "\"output_triangles\": %zu, \"collapses\": %zu, \"max_error\": %.9g, "
            "\"locked_vertices\": %zu, \"pruned_parts\": %zu, "
            "\"seconds\": {\"read\": %.6f, \"setup\": %.6f, \"collapse\": %.6f, "
-           "\"output\": %.6f, \"write\": %.6f}}\n",
+           "\"output\": %.6f, \"write\": %.6f}",
            s->input_triangles, s->output_vertices, s->output_triangles,
            s->collapses, s->max_error, s->locked_vertices, s->pruned_parts, t->read,
            s->seconds_setup,
            s->seconds_collapse, s->seconds_output, t->write);
+    if (s->queue_pops) /* the concurrent-queue strategies' profile */
+        printf(", \"profile\": {\"pops\": %zu, \"lock_acquisitions\": %zu, "
+               "\"lock_failures\": %zu, \"topology_checks\": %zu, \"collapses\": %zu, "
+               "\"priority_updates\": %zu, \"compactions\": %zu}",
+               s->queue_pops, s->lock_acquisitions, s->lock_failures, s->topology_checks,
+               s->collapses, s->priority_updates, s->compactions);
+    printf("}\n");
 }
 
 static void print_summary(const cli_io *io, const mr_mesh *result, const cli_times *t,

@@ -342,10 +342,29 @@ typedef enum mr_strategy {
     MR_STRATEGY_GREEDY = 0, /* always the cheapest valid collapse, from an
                                indexed heap with mutable priorities: the
                                sequential reference */
-    MR_STRATEGY_BATCHED     /* passes: every edge's cost, then the cheapest
+    MR_STRATEGY_BATCHED,    /* passes: every edge's cost, then the cheapest
                                ones in order, at most one collapse per
                                vertex per pass (much faster, nearly the
                                same result) */
+    /* The vertex queue of the greedy half-edge strategy on a concurrent
+     * priority queue, threads collapsing at once under per-vertex locks
+     * (the filter-priority-queue paper's kernel). Half-edge collapse only
+     * (MR_COLLAPSE_HALF; MR_COLLAPSE_FULL is refused). Relaxed: on more
+     * than one thread the output may vary with the thread count and the
+     * timing. Every other option applies as for MR_STRATEGY_GREEDY: the
+     * targets (a vertex target is hit exactly at any thread count),
+     * max_error, until_error, lock_border, vertex_lock, boundary_weight,
+     * max_normal_turn, prune, attribute seams (mr_mesh_simplify); progress
+     * is called from the calling thread only. */
+    MR_STRATEGY_PPQ,        /* strict pops of the root: on one thread the
+                               same output as MR_STRATEGY_GREEDY (half) */
+    MR_STRATEGY_RPPQ,       /* pops any unlocked one of the top n_t nodes
+                               of the same heap (n_t = 2^(l+1) - 1 for
+                               l = filter_levels): no rank bound */
+    MR_STRATEGY_FPPQ,       /* the heap with filter_levels l filter levels:
+                               every pop among the best l * 2^l + 1 */
+    MR_STRATEGY_MULTIQUEUE  /* multiqueue_factor * threads locked heaps:
+                               pops usually near the top, no bound */
 } mr_strategy;
 
 typedef void (*mr_progress_fn)(double fraction_done, void *user);
@@ -387,6 +406,11 @@ typedef struct mr_simplify_options {
     int threads;                /* 0 = all cores (parallel algorithms) */
     mr_progress_fn progress;    /* optional, called from the calling thread */
     void *progress_user;
+    unsigned filter_levels;     /* MR_STRATEGY_FPPQ and _RPPQ: filter levels
+                                   l (1 .. 5; 0 = from the thread count,
+                                   mr_fppq_default_levels) */
+    unsigned multiqueue_factor; /* MR_STRATEGY_MULTIQUEUE: heaps per thread
+                                   (0 = 2) */
 } mr_simplify_options;
 
 void mr_simplify_options_default(mr_simplify_options *options);
@@ -433,6 +457,15 @@ typedef struct mr_simplify_stats {
     double seconds_setup;       /* adjacency, quadrics, queue */
     double seconds_collapse;
     double seconds_output;      /* compaction */
+    /* The concurrent-queue strategies' profile (MR_STRATEGY_PPQ .. _MULTIQUEUE;
+     * 0 for the others), summed over the threads: */
+    size_t queue_pops;          /* vertices taken from the queue */
+    size_t lock_acquisitions;   /* vertex locks taken */
+    size_t lock_failures;       /* neighbourhoods not locked: released, the
+                                   vertex put back, another top tried */
+    size_t topology_checks;     /* validity tests of a collapse */
+    size_t priority_updates;    /* queue keys set (re-keys, inserts, removals) */
+    size_t compactions;         /* all threads stopped to compact the lists */
 } mr_simplify_stats;
 
 /* The result of a simplification on flat arrays: malloc'd arrays that

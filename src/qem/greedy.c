@@ -9,25 +9,17 @@
  * mr_simplifier_greedy_init to the end of mr_simplifier_run_greedy; costs,
  * plans, validity and the collapse are the core's (cost.c).
  *
- * The vertex queue holds one entry per VERTEX: its cheapest collapse
- * (best[v], the other end, and its cost as the key). A collapse r -> s (r
- * removed, s kept) changes only the quadric and position of s, so
- * afterwards:
- *   - s's candidates are all evaluated anew;
- *   - for every neighbour w of s only the edge (w, s) changed: when it beats
- *     w's cached best, it becomes w's best; when w's cached best pointed at
- *     r or s (whose cost changed) or w had no valid collapse, w's best is
- *     recomputed over all its edges.
- * Validity is checked lazily, when a vertex reaches the top: if its best
- * collapse is invalid there, its best VALID collapse is looked for and the
- * vertex goes back into the queue with that (higher) cost, or leaves the
- * queue until its neighbourhood changes.
+ * The vertex queue holds one entry per VERTEX, its cheapest collapse; its
+ * rules (the updates after a collapse, lazy validity at the top) are
+ * vertex_queue.h's, shared with the concurrent-queue strategies
+ * (parallel/queued.c).
  *
  * The edge queue is described where it starts, below.
  */
 #include "simplify_internal.h"
 
 #include "heap.h"
+#include "vertex_queue.h"
 
 #include <math.h>
 
@@ -39,126 +31,15 @@ struct mr_greedy {
     uint8_t *stale; /* half: per vertex, key is only a lower bound */
 };
 
-/* Cost of collapsing u along edge (u, w) for u's queue entry. */
-static inline double edge_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
+/* ---- half collapses: the vertex queue's rules (vertex_queue.h) on the heap */
+
+static float heap_key(void *q, uint32_t v) { return mr_heap_key(q, v); }
+static void heap_set(void *q, uint32_t v, float key) { mr_heap_update(q, v, key); }
+static void heap_drop(void *q, uint32_t v) { mr_heap_remove(q, v); }
+
+static inline mr_vertex_queue vertex_queue(mr_greedy *gr)
 {
-    double x[3];
-    return s->half ? mr_simplifier_half_cost(s, u, w) : mr_simplifier_full_cost(s, u, w, x);
-}
-
-/* ---- candidates ------------------------------------------------------------ */
-
-/*
- * Calls visit(w) for every neighbour w of u: the vertex after u in each of
- * its triangles, which covers every inner edge once; plus the vertex before
- * u when both ends are on a boundary (a boundary edge is seen from one
- * side only). Some edges may be visited twice, which is harmless.
- */
-#define FOR_EACH_NEIGHBOUR(s, u, w, ...)                                             \
-    do {                                                                              \
-        const mr_collapse_mesh *m_ = &(s)->m;                                         \
-        const uint32_t *list_ = mr_collapse_vertex_tris(m_, (u));                     \
-        const uint32_t n_ = m_->count[(u)];                                           \
-        const bool ub_ = (m_->flags[(u)] & (MR_VF_BOUNDARY | MR_VF_SEAM)) != 0;       \
-        for (uint32_t i_ = 0; i_ < n_; i_++) {                                        \
-            const uint32_t k_ = list_[i_] % 3;                                        \
-            const uint32_t *t_ = m_->tris + (list_[i_] - k_);                         \
-            {                                                                         \
-                const uint32_t w = t_[k_ == 2 ? 0 : k_ + 1];                          \
-                __VA_ARGS__                                                           \
-            }                                                                         \
-            if (ub_) {                                                                \
-                const uint32_t w = t_[k_ == 0 ? 2 : k_ - 1];                          \
-                if (m_->flags[w] & (MR_VF_BOUNDARY | MR_VF_SEAM)) {                   \
-                    __VA_ARGS__                                                       \
-                }                                                                     \
-            }                                                                         \
-        }                                                                             \
-    } while (0)
-
-/* u's cheapest collapse (only valid ones when check_valid). Ties go to the
- * smaller neighbour id. */
-static double best_collapse(mr_simplifier *s, uint32_t u, bool check_valid, uint32_t *best)
-{
-    double best_cost = INFINITY;
-    uint32_t best_w = NONE;
-    FOR_EACH_NEIGHBOUR(s, u, w, {
-        double c = edge_cost(s, u, w);
-        if (c < best_cost || (c == best_cost && c < INFINITY && w < best_w)) {
-            if (!check_valid || mr_simplifier_valid(s, u, w, NULL)) {
-                best_cost = c;
-                best_w = w;
-            }
-        }
-    });
-    *best = best_w;
-    return best_cost;
-}
-
-static void requeue(mr_simplifier *s, mr_greedy *gr, uint32_t u, bool check_valid)
-{
-    gr->stale[u] = 0;
-    uint32_t w;
-    double c = best_collapse(s, u, check_valid, &w);
-    gr->best[u] = w;
-    if (w == NONE)
-        mr_heap_remove(&gr->heap, u);
-    else
-        mr_heap_update(&gr->heap, u, (float)c);
-}
-
-/* Refresh the queue around k after a collapse of r into it. */
-static void update_around(mr_simplifier *s, mr_greedy *gr, uint32_t r, uint32_t k)
-{
-    mr_heap_remove(&gr->heap, r);
-    gr->best[r] = NONE;
-    double kbest = INFINITY;
-    uint32_t kw = NONE;
-    const mr_collapse_mesh *m = &s->m;
-    FOR_EACH_NEIGHBOUR(s, k, w, {
-        double x[3];
-        double c, cw;
-        if (s->half) {
-            c = mr_simplifier_half_cost(s, k, w);
-            cw = mr_simplifier_half_cost(s, w, k);
-        } else {
-            c = mr_simplifier_full_cost(s, k, w, x);
-            cw = c;
-        }
-        if (c < kbest || (c == kbest && c < INFINITY && w < kw)) {
-            kbest = c;
-            kw = w;
-        }
-        /* w's other edges are unchanged, so its old key is a lower bound
-         * of them: when the new edge (w, k) beats it, it is w's best;
-         * when w's best was r or k and the new edge costs more, w keeps
-         * its old key as a lower bound and is marked stale -- it is
-         * recomputed only if it reaches the top of the queue, which most
-         * never do before their neighbourhood changes again. */
-        const uint32_t b = gr->best[w];
-        if (m->flags[w] & MR_VF_REMOVED) {
-            /* nothing */
-        } else if (b == NONE) {
-            if (cw < INFINITY) {
-                gr->best[w] = k;
-                gr->stale[w] = 1;
-                mr_heap_update(&gr->heap, w, (float)cw);
-            }
-        } else {
-            const float old = mr_heap_key(&gr->heap, w);
-            if ((float)cw < old || ((float)cw == old && k < b)) {
-                gr->best[w] = k;
-                mr_heap_update(&gr->heap, w, (float)cw);
-            } else if (b == r || b == k) {
-                gr->stale[w] = 1;
-            }
-        }
-    });
-    gr->best[k] = kw;
-    if (kw == NONE)
-        mr_heap_remove(&gr->heap, k);
-    else
-        mr_heap_update(&gr->heap, k, (float)kbest);
+    return (mr_vertex_queue){gr->best, gr->stale, &gr->heap, heap_key, heap_set, heap_drop, NULL};
 }
 
 /* ---- full collapses: one queue entry per edge ------------------------------ */
@@ -459,12 +340,14 @@ mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err)
         greedy_free(s);
         return st;
     }
+    const mr_vertex_queue vq = vertex_queue(gr);
     for (size_t v = 0; v < s->m.vertex_count; v++) {
         gr->best[v] = NONE;
         if (s->m.flags[v] & MR_VF_REMOVED)
             continue;
         uint32_t w;
-        double c = best_collapse(s, (uint32_t)v, false, &w);
+        bool ok;
+        double c = mr_vq_best(s, &vq, (uint32_t)v, false, &w, &ok);
         gr->best[v] = w;
         if (w != NONE)
             mr_heap_push(&gr->heap, (uint32_t)v, (float)c);
@@ -482,6 +365,7 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
     const double limit = g.limit;
     size_t next_report = planned / 100 + 1, done = 0;
     double worst = 0;
+    const mr_vertex_queue vq = vertex_queue(gr);
 
     while (!mr_heap_empty(&gr->heap)) {
         if (mr_simplifier_reached(s, &g))
@@ -524,7 +408,7 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
         }
         const uint32_t u = mr_heap_top(&gr->heap);
         if (gr->stale[u]) {
-            requeue(s, gr, u, false);
+            mr_vq_requeue(s, &vq, u, false);
             continue;
         }
         const uint32_t w = gr->best[u];
@@ -534,11 +418,11 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
         if (cost > limit)
             break;
         if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
-            requeue(s, gr, u, true);
+            mr_vq_requeue(s, &vq, u, true);
             continue;
         }
         mr_simplifier_collapse(s, r, k, target);
-        update_around(s, gr, r, k);
+        mr_vq_update_around(s, &vq, r, k);
         worst = cost > worst ? cost : worst;
         done++;
         if (o->progress && done >= next_report) {

@@ -402,6 +402,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     const size_t output_points = s.m.live_vertices;
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
+    const mr_queued_profile profile = s.profile;
     mr_simplifier_free(&s);
     free(geo);
     free_ctx(&a);
@@ -424,6 +425,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         stats->seconds_setup = t1 - t0;
         stats->seconds_collapse = t2 - t1;
         stats->seconds_output = mr_now_seconds() - t2;
+        mr_queued_profile_stats(&profile, stats);
     }
     return MR_OK;
 }

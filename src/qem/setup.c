@@ -15,6 +15,7 @@
 
 #include "../core/omp_compat.h"
 #include "../mesh/adjacency.h"
+#include "parallel/filter_layout.h"
 
 #include <math.h>
 
@@ -155,6 +156,7 @@ void mr_simplifier_free(mr_simplifier *s)
     free(s->q);
     free(s->order);
     mr_simplifier_batched_free(s);
+    mr_simplifier_queued_free(s);
     memset(s, 0, sizeof *s);
 }
 
@@ -302,9 +304,18 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
     if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown collapse kind %d", (int)o->collapse);
-    if (o->strategy != MR_STRATEGY_GREEDY && o->strategy != MR_STRATEGY_BATCHED)
+    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_MULTIQUEUE)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown strategy %d", (int)o->strategy);
+    if (o->strategy >= MR_STRATEGY_PPQ && o->collapse != MR_COLLAPSE_HALF)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: the concurrent-queue strategies (ppq, rppq, fppq, "
+                             "multiqueue) make half-edge collapses only: set "
+                             "MR_COLLAPSE_HALF (--collapse half)");
+    if (o->strategy >= MR_STRATEGY_PPQ && o->filter_levels > MR_FILTER_MAX_LEVELS)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: %u filter levels: at most %d", o->filter_levels,
+                             MR_FILTER_MAX_LEVELS);
     if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
         o->max_error == 0 && !o->until_error)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -423,6 +434,9 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     }
     s->half = o->collapse == MR_COLLAPSE_HALF;
     s->batched = o->strategy == MR_STRATEGY_BATCHED;
+    s->queued = o->strategy >= MR_STRATEGY_PPQ ? (int)o->strategy : 0;
+    s->filter_levels = o->filter_levels;
+    s->multiqueue_factor = o->multiqueue_factor ? o->multiqueue_factor : 2;
     s->limits.half_edge = s->half;
     double c = cos(o->max_normal_turn);
     s->limits.min_cos_turn = c > 0 ? c : 0;

@@ -21,6 +21,8 @@ void mr_simplify_options_default(mr_simplify_options *o)
     o->strategy = MR_STRATEGY_BATCHED;
     o->boundary_weight = 1.0;
     o->max_normal_turn = 60.0 * 3.14159265358979323846 / 180.0;
+    o->filter_levels = 0;     /* from the thread count */
+    o->multiqueue_factor = 2;
 }
 
 void mr_simplified_free(mr_simplified *r)
@@ -44,13 +46,16 @@ mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
 {
     if (s->batched)
         return mr_simplifier_batched_init(s, err);
+    if (s->queued)
+        return mr_simplifier_queued_init(s, err);
     return mr_simplifier_greedy_init(s, err);
 }
 
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
 {
-    size_t done = s->batched ? mr_simplifier_run_batched(s, o, max_error)
-                             : mr_simplifier_run_greedy(s, o, max_error);
+    size_t done = s->batched  ? mr_simplifier_run_batched(s, o, max_error)
+                  : s->queued ? mr_simplifier_run_queued(s, o, max_error)
+                              : mr_simplifier_run_greedy(s, o, max_error);
     mr_simplifier_finish(s, o, *max_error);
     return done;
 }
@@ -104,6 +109,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
+    mr_queued_profile_stats(&s.profile, &out->stats);
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;

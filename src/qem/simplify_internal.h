@@ -24,6 +24,16 @@ typedef struct mr_greedy mr_greedy;
  * mr_simplifier_free. */
 typedef struct mr_batched mr_batched;
 
+/* parallel/queued.c's state (the concurrent-queue strategies), from
+ * mr_simplifier_queued_init to the end of mr_simplifier_run_queued. */
+typedef struct mr_queued mr_queued;
+
+/* What the concurrent-queue strategies count, summed over the threads
+ * (mr_simplify_stats' profile fields). */
+typedef struct mr_queued_profile {
+    size_t pops, locks, lock_failures, checks, updates, compactions;
+} mr_queued_profile;
+
 struct mr_simplifier {
     mr_collapse_mesh m;
     mr_quadricf *q;          /* per vertex, relative to its position */
@@ -32,6 +42,11 @@ struct mr_simplifier {
     int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
     mr_greedy *greedy;       /* else greedy.c's, while it runs */
     mr_batched *bt;          /* else batched.c's */
+    int queued;              /* the strategy when MR_STRATEGY_PPQ ..
+                                _MULTIQUEUE (queued.c), else 0 */
+    unsigned filter_levels, multiqueue_factor; /* its options */
+    mr_queued *qd;           /* its state, while it runs */
+    mr_queued_profile profile; /* its counts, after the run */
     int threads;             /* threads the run may use (options.threads) */
     double centre[3], scale, diagonal;
     double error_base;       /* bounding-box diagonal of all the input's
@@ -100,6 +115,35 @@ static inline double mr_simplifier_normalised(const mr_simplifier *s,
 {
     return (o->error_absolute ? e : e * s->error_base) / s->diagonal;
 }
+
+/* ---- the vertex queues' candidates (greedy.c, parallel/queued.c) */
+/*
+ * Calls visit(w) for every neighbour w of u: the vertex after u in each of
+ * its triangles, which covers every inner edge once; plus the vertex before
+ * u when both ends are on a boundary (a boundary edge is seen from one
+ * side only). Some edges may be visited twice, which is harmless.
+ */
+#define MR_FOR_EACH_NEIGHBOUR(s, u, w, ...)                                           \
+    do {                                                                              \
+        const mr_collapse_mesh *m_ = &(s)->m;                                         \
+        const uint32_t *list_ = mr_collapse_vertex_tris(m_, (u));                     \
+        const uint32_t n_ = m_->count[(u)];                                           \
+        const bool ub_ = (m_->flags[(u)] & (MR_VF_BOUNDARY | MR_VF_SEAM)) != 0;       \
+        for (uint32_t i_ = 0; i_ < n_; i_++) {                                        \
+            const uint32_t k_ = list_[i_] % 3;                                        \
+            const uint32_t *t_ = m_->tris + (list_[i_] - k_);                         \
+            {                                                                         \
+                const uint32_t w = t_[k_ == 2 ? 0 : k_ + 1];                          \
+                __VA_ARGS__                                                           \
+            }                                                                         \
+            if (ub_) {                                                                \
+                const uint32_t w = t_[k_ == 0 ? 2 : k_ - 1];                          \
+                if (m_->flags[w] & (MR_VF_BOUNDARY | MR_VF_SEAM)) {                   \
+                    __VA_ARGS__                                                       \
+                }                                                                     \
+            }                                                                         \
+        }                                                                             \
+    } while (0)
 
 /* ---- setup.c: the set-up, the targets, the release */
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
@@ -174,5 +218,11 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
 void mr_simplifier_batched_free(mr_simplifier *s);
 size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                                  double *max_error);
+mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err);
+void mr_simplifier_queued_free(mr_simplifier *s);
+size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
+                                double *max_error);
+/* A run's profile as mr_simplify_stats' fields. */
+void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats);
 
 #endif
