@@ -96,6 +96,7 @@ fuzz: deps-build deps-fuzz
 bench: build
 	./$(BUILD)/bench/bench_io
 	./$(BUILD)/bench/bench_simplify --csv $(BUILD)/bench/simplify.csv
+	./$(BUILD)/bench/bench_queued --quick
 
 # The benchmark sweep (meshes x targets x algorithms x threads, with the
 # installed peers; several minutes), then bench/REPORT.md with its plots and
