@@ -46,7 +46,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #ifndef MR_SHARED_DATA
 #define MR_SHARED_DATA "../shared/data"
@@ -138,18 +137,6 @@ static double run_once(const mr_mesh *in, const mr_simplify_options *o, mr_simpl
     return bench_now() - t0;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* R runs of one configuration; similarity to ref (when given) per run;
  * quality of the median-similarity run when asked. */
 static void measure(const config *cfg, const mr_mesh *in, const mr_simplify_options *o,
@@ -167,12 +154,12 @@ static void measure(const config *cfg, const mr_mesh *in, const mr_simplify_opti
     }
     double sorted[MAX_RUNS];
     memcpy(sorted, sims, sizeof(double) * (size_t)cfg->runs);
-    f->similarity = median(sorted, cfg->runs);
+    f->similarity = bench_summarize(sorted, cfg->runs).median;
     int pick = 0; /* the run whose similarity is the median (the first such) */
     for (int r = 0; r < cfg->runs; r++)
         if (fabs(sims[r] - f->similarity) < fabs(sims[pick] - f->similarity))
             pick = r;
-    f->seconds = median(secs, cfg->runs);
+    f->seconds = bench_summarize(secs, cfg->runs).median;
     f->vertices = outs[pick].vertex_count;
     f->stats = outs[pick].stats;
     f->mhd = f->hd = f->rms = -1;
@@ -208,27 +195,9 @@ static const mesh_spec specs[] = {
 
 static int load(const config *cfg, const mesh_spec *s, mr_mesh *mesh, mesh_result *m)
 {
-    mr_error err;
-    mr_mesh_init(mesh);
-    if (!s->file) {
-        omp_set_num_threads(cfg->cores);
-        bench_check(mr_generate(MR_GEN_SCAN, s->triangles, 1, mesh, &err), &err);
-    } else {
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", cfg->data, s->file);
-        if (access(path, R_OK) != 0)
-            return 0;
-        mr_read_options ro;
-        mr_read_options_default(&ro);
-        bench_check(mr_mesh_read(path, &ro, mesh, &err), &err);
-    }
-    free(mesh->normals);
-    free(mesh->texcoords);
-    free(mesh->colors);
-    mesh->normals = mesh->texcoords = mesh->colors = NULL;
-    size_t degenerate = 0, unreferenced = 0;
-    bench_check(mr_mesh_remove_degenerate(mesh, 0, &degenerate, &err), &err);
-    bench_check(mr_mesh_remove_unreferenced(mesh, &unreferenced, &err), &err);
+    omp_set_num_threads(cfg->cores);
+    if (!bench_load_mesh(cfg->data, s->file, s->triangles, 0, mesh, NULL, NULL))
+        return 0;
     snprintf(m->name, sizeof m->name, "%s", s->name);
     snprintf(m->desc, sizeof m->desc, "%zu vertices, %zu triangles%s%s", mesh->vertex_count,
              mesh->triangle_count, s->file ? ", " : " (mr_generate scan, seed 1)",

@@ -674,30 +674,13 @@ static const mesh_spec specs[] = {
  * referenced vertices only. Returns 0 when a file is absent. */
 static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh, mesh_result *m)
 {
-    mr_error err;
-    mr_mesh_init(mesh);
-    if (!s->file) {
-        bench_check(mr_generate(MR_GEN_SCAN, s->triangles, 1, mesh, &err), &err);
-    } else {
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", cfg->data, s->file);
-        if (access(path, R_OK) != 0)
-            return 0;
-        mr_read_options ro;
-        mr_read_options_default(&ro);
-        ro.threads = cfg->all_threads;
-        omp_set_num_threads(cfg->all_threads);
-        bench_check(mr_mesh_read(path, &ro, mesh, &err), &err);
-        omp_set_num_threads(1);
-    }
-    free(mesh->normals);
-    free(mesh->texcoords);
-    free(mesh->colors);
-    mesh->normals = mesh->texcoords = NULL;
-    mesh->colors = NULL;
     size_t degenerate = 0, unreferenced = 0;
-    bench_check(mr_mesh_remove_degenerate(mesh, 0, &degenerate, &err), &err);
-    bench_check(mr_mesh_remove_unreferenced(mesh, &unreferenced, &err), &err);
+    omp_set_num_threads(cfg->all_threads);
+    const int found = bench_load_mesh(cfg->data, s->file, s->triangles, cfg->all_threads, mesh,
+                                      &degenerate, &unreferenced);
+    omp_set_num_threads(1);
+    if (!found)
+        return 0;
     int len = snprintf(m->desc, sizeof m->desc, "%zu vertices, %zu triangles", mesh->vertex_count,
                        mesh->triangle_count);
     if (!s->file)

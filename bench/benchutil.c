@@ -161,3 +161,29 @@ void bench_check(mr_status st, const mr_error *err)
         exit(1);
     }
 }
+
+int bench_load_mesh(const char *data_dir, const char *file, size_t triangles, int threads,
+                    mr_mesh *mesh, size_t *degenerate, size_t *unreferenced)
+{
+    mr_error err;
+    mr_mesh_init(mesh);
+    if (!file) {
+        bench_check(mr_generate(MR_GEN_SCAN, triangles, 1, mesh, &err), &err);
+    } else {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", data_dir, file);
+        if (access(path, R_OK) != 0)
+            return 0;
+        mr_read_options ro;
+        mr_read_options_default(&ro);
+        ro.threads = threads;
+        bench_check(mr_mesh_read(path, &ro, mesh, &err), &err);
+    }
+    free(mesh->normals);
+    free(mesh->texcoords);
+    free(mesh->colors);
+    mesh->normals = mesh->texcoords = mesh->colors = NULL;
+    bench_check(mr_mesh_remove_degenerate(mesh, 0, degenerate, &err), &err);
+    bench_check(mr_mesh_remove_unreferenced(mesh, unreferenced, &err), &err);
+    return 1;
+}

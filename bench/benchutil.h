@@ -43,6 +43,15 @@ bool bench_have_open3d(void);
 /* Run a command and return its stdout (malloc'd), or NULL on failure. */
 char *bench_capture(const char *cmd);
 
+/* A benchmark input: the generated scan of about `triangles` triangles
+ * (seed 1) when file is NULL, else data_dir/file read with `threads`
+ * threads (0: all cores); attributes dropped, degenerate triangles and
+ * unreferenced vertices removed (their counts in *degenerate and
+ * *unreferenced, which may be NULL). Returns 0 when the file is absent;
+ * exits with a message when loading fails. */
+int bench_load_mesh(const char *data_dir, const char *file, size_t triangles, int threads,
+                    mr_mesh *mesh, size_t *degenerate, size_t *unreferenced);
+
 /* Exit with a message when a library call failed. */
 void bench_check(mr_status st, const mr_error *err);
 

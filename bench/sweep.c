@@ -191,26 +191,12 @@ static const mesh_spec specs[] = {
 static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh, char *source,
                      size_t source_size)
 {
-    mr_error err;
-    mr_mesh_init(mesh);
-    if (!s->file) {
-        bench_check(mr_generate(MR_GEN_SCAN, s->triangles, 1, mesh, &err), &err);
+    if (!bench_load_mesh(cfg->data, s->file, s->triangles, 0, mesh, NULL, NULL))
+        return 0;
+    if (!s->file)
         snprintf(source, source_size, "generate:scan:%zu:1", s->triangles);
-    } else {
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", cfg->data, s->file);
-        if (access(path, R_OK) != 0)
-            return 0;
-        bench_check(mr_mesh_read(path, NULL, mesh, &err), &err);
-        snprintf(source, source_size, "file:%s", path);
-    }
-    free(mesh->normals);
-    free(mesh->texcoords);
-    free(mesh->colors);
-    mesh->normals = mesh->texcoords = NULL;
-    mesh->colors = NULL;
-    bench_check(mr_mesh_remove_degenerate(mesh, 0, NULL, &err), &err);
-    bench_check(mr_mesh_remove_unreferenced(mesh, NULL, &err), &err);
+    else
+        snprintf(source, source_size, "file:%s/%s", cfg->data, s->file);
     return 1;
 }
 
