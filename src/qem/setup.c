@@ -228,12 +228,12 @@ static bool order_is_coherent(const uint32_t *indices, size_t tc, size_t vc, int
  * triangles are then compact patches whatever order the input came in --
  * a triangle soup, a shuffled or interleaved file -- so that a collapse's
  * triangles lie near each other in memory and most of a round's winners
- * fall in one group of blocks (batched.c); in the input's order, a
- * shuffled 1M-triangle scan ran every collapse on one thread (1.07 s on
- * 1 thread, 0.84 s on 2; reordered, 0.70 and 0.39 s). An order that is
- * coherent already is kept: the vertex ids usually follow it, and the
- * per-vertex arrays are then read in step (Morton-ordered triangles over
- * a row-by-row scan's vertices were 1.3x slower). The same on any number
+ * fall in one group of blocks (batched.c); in the input's order nearly
+ * every collapse of a shuffled scan spans the groups and runs on one
+ * thread. An order that is coherent already is kept: the vertex ids
+ * usually follow it, and the per-vertex arrays are then read in step
+ * (Morton-ordered triangles over a row-by-row scan's vertices read them
+ * out of step, and ran slower). The same on any number
  * of threads. *order: triangle_count input triangle ids.
  */
 static mr_status spatial_order(const float *positions, size_t stride, const uint32_t *indices,
