@@ -25,15 +25,6 @@
 #define MR_UNLIKELY(x) (x)
 #endif
 
-/* A function whose loops vectorise, built also for AVX2 and picked at run
- * time (GCC on x86-64). Without fused multiply-adds (-ffp-contract=off)
- * every build computes the same bits. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(MR_NO_CLONES)
-#define MR_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define MR_VECTOR_CLONES
-#endif
-
 /*
  * Fill `err` (when non-NULL) and return `status`. The message is composed as
  *   "<name>:<line>: <text>"            when line != MR_NO_POSITION

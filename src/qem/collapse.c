@@ -1,5 +1,6 @@
 /* The working mesh of the edge-collapse simplifiers: see collapse.h. */
 #include "collapse.h"
+#include "kernels.h"
 
 #include "../core/omp_compat.h"
 #include "../mesh/adjacency.h"
@@ -319,41 +320,10 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
 
 /* ---- validity -------------------------------------------------------------- */
 
-/*
- * Condition (2) for n triangles (o, a, b) of the fans, o the vertex that
- * moves to t: in[k * RING + i] holds, for triangle i, the coordinates of
- * o (k = 0..2), a (3..5) and b (6..8). Each normal may turn by an angle
- * whose cosine is at least min_cos (never flip) and the area may not
- * collapse (ratio 1e-6). Unnormalised normals (twice the area): the tests
- * are the unit normals' cos > min_cos and the area ratio, squared, without
- * a square root or a division; a degenerate normal is 0 and fails. A
- * branch-free loop, vectorised.
- */
+/* fan_ok's rows: room for the fans of two vertices of the largest degree
+ * the stack arrays take. */
 #define RING (2 * MR_COLLAPSE_MAX_DEGREE)
-
-MR_VECTOR_CLONES static bool fan_ok(const double *in, size_t n, const double t[3],
-                                    double min_cos)
-{
-    const double mc2 = min_cos * min_cos;
-    int bad = 0;
-#pragma omp simd reduction(| : bad)
-    for (size_t i = 0; i < n; i++) {
-        const double ox = in[i], oy = in[RING + i], oz = in[2 * RING + i];
-        const double ax = in[3 * RING + i], ay = in[4 * RING + i], az = in[5 * RING + i];
-        const double bx = in[6 * RING + i], by = in[7 * RING + i], bz = in[8 * RING + i];
-        const double u0 = ax - ox, u1 = ay - oy, u2 = az - oz;
-        const double v0 = bx - ox, v1 = by - oy, v2 = bz - oz;
-        const double n00 = u1 * v2 - u2 * v1, n01 = u2 * v0 - u0 * v2, n02 = u0 * v1 - u1 * v0;
-        const double s0 = ax - t[0], s1 = ay - t[1], s2 = az - t[2];
-        const double w0 = bx - t[0], w1 = by - t[1], w2 = bz - t[2];
-        const double n10 = s1 * w2 - s2 * w1, n11 = s2 * w0 - s0 * w2, n12 = s0 * w1 - s1 * w0;
-        const double d = n00 * n10 + n01 * n11 + n02 * n12;
-        const double l0 = n00 * n00 + n01 * n01 + n02 * n02;
-        const double l1 = n10 * n10 + n11 * n11 + n12 * n12;
-        bad |= !((d > 0) & (d * d > mc2 * l0 * l1) & (l1 > 1e-12 * l0));
-    }
-    return !bad;
-}
+_Static_assert(RING == MR_FAN_ROW, "fan rows");
 
 /* Appends triangle (o, a, b) to fan_ok's input. */
 static inline void fan_add(const mr_collapse_mesh *m, double *in, size_t i, uint32_t o,
@@ -506,7 +476,7 @@ static bool valid_large(const mr_collapse_mesh *m, uint32_t u, uint32_t v, const
         for (size_t i = nf; i < nf4; i++)
             for (int k = 0; k < 9; k++)
                 fan[k * RING + i] = fan[k * RING];
-        if (!fan_ok(fan, nf4, t, limits->min_cos_turn))
+        if (!mr_kernels_get()->fan_ok(fan, nf4, t, limits->min_cos_turn))
             goto done;
     }
     ok = true;
@@ -660,7 +630,7 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
     for (size_t i = nf; i < nf4 && nf; i++)
         for (int k = 0; k < 9; k++)
             fan[k * RING + i] = fan[k * RING];
-    return fan_ok(fan, nf4, t, limits->min_cos_turn);
+    return mr_kernels_get()->fan_ok(fan, nf4, t, limits->min_cos_turn);
 }
 
 /* ---- apply ------------------------------------------------------------------ */

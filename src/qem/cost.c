@@ -12,6 +12,7 @@
  * mr_simplifier_collapse.
  */
 #include "simplify_internal.h"
+#include "kernels.h"
 
 #include <math.h>
 #if defined(__SSE2__)
@@ -23,99 +24,6 @@
 static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *q)
 {
     mr_quadric_load(q, &s->q[v]);
-}
-
-/*
- * The full collapse of an edge (u, w) with no pinned end: u's quadric moved
- * to w's origin and added to w's, the target x (relative to w) at the
- * optimum of the sum or, where the system is ill-conditioned or its optimum
- * lies far from the edge, at the best point of the edge; returns the cost.
- * Input k of the edge (FREE_*) is in[k * st], x[k] is x[k * xst]. Written
- * without branches (every quotient is computed, then selected), so that a
- * loop over edges vectorises (mr_simplifier_plan_edges); the scalar path
- * calls the same code, so both give the same bits.
- */
-enum { FREE_QU = 0, FREE_QW = 11, FREE_PU = 22, FREE_PW = 25, FREE_INPUTS = 28 };
-
-static inline __attribute__((always_inline)) double free_cost(const float *in, size_t st,
-                                                              double *x, size_t xst,
-                                                              const double box[3])
-{
-#define IN(k) ((double)in[(size_t)(k) * st])
-    const double d0 = IN(FREE_PU) - IN(FREE_PW);
-    const double d1 = IN(FREE_PU + 1) - IN(FREE_PW + 1);
-    const double d2 = IN(FREE_PU + 2) - IN(FREE_PW + 2);
-    const double k0 = -d0, k1 = -d1, k2 = -d2; /* u's origin seen from w */
-    double a00 = IN(0), a01 = IN(1), a02 = IN(2), a11 = IN(3), a12 = IN(4), a22 = IN(5);
-    double b0 = IN(6), b1 = IN(7), b2 = IN(8), c = IN(9), w = IN(10);
-    /* shift u's quadric by k (mr_quadric_shift) */
-    const double ad0 = a00 * k0 + a01 * k1 + a02 * k2;
-    const double ad1 = a01 * k0 + a11 * k1 + a12 * k2;
-    const double ad2 = a02 * k0 + a12 * k1 + a22 * k2;
-    c += k0 * ad0 + k1 * ad1 + k2 * ad2 + 2 * (b0 * k0 + b1 * k1 + b2 * k2);
-    b0 += ad0;
-    b1 += ad1;
-    b2 += ad2;
-    /* add w's (mr_quadric_add) */
-    a00 += IN(FREE_QW + 0); a01 += IN(FREE_QW + 1); a02 += IN(FREE_QW + 2);
-    a11 += IN(FREE_QW + 3); a12 += IN(FREE_QW + 4); a22 += IN(FREE_QW + 5);
-    b0 += IN(FREE_QW + 6); b1 += IN(FREE_QW + 7); b2 += IN(FREE_QW + 8);
-    c += IN(FREE_QW + 9);
-    w += IN(FREE_QW + 10);
-#undef IN
-    /* the optimum (mr_quadric_optimum) */
-    const double c00 = a11 * a22 - a12 * a12;
-    const double c01 = a02 * a12 - a01 * a22;
-    const double c02 = a01 * a12 - a02 * a11;
-    const double det = a00 * c00 + a01 * c01 + a02 * c02;
-    const double diag = a00 * a11 * a22;
-    const double c11 = a00 * a22 - a02 * a02;
-    const double c12 = a01 * a02 - a00 * a12;
-    const double c22 = a00 * a11 - a01 * a01;
-    const double inv = -1.0 / det;
-    const double o0 = inv * (c00 * b0 + c01 * b1 + c02 * b2);
-    const double o1 = inv * (c01 * b0 + c11 * b1 + c12 * b2);
-    const double o2 = inv * (c02 * b0 + c12 * b1 + c22 * b2);
-    /* an optimum far from the edge comes from a barely conditioned system;
-     * one outside the mesh's bounding box (box: its half extents, w at
-     * IN(FREE_PW)) is no place for a vertex, and might leave the float
-     * range of the input */
-    const double len2 = d0 * d0 + d1 * d1 + d2 * d2;
-    const double e0 = o0 - 0.5 * d0, e1 = o1 - 0.5 * d1, e2 = o2 - 0.5 * d2;
-    const bool inside = (fabs(o0 + (double)in[(size_t)FREE_PW * st]) <= box[0]) &
-                        (fabs(o1 + (double)in[(size_t)(FREE_PW + 1) * st]) <= box[1]) &
-                        (fabs(o2 + (double)in[(size_t)(FREE_PW + 2) * st]) <= box[2]);
-    const bool ok = (fabs(det) > MR_QUADRIC_DET_EPS * diag) & (diag > 0) &
-                    (e0 * e0 + e1 * e1 + e2 * e2 <= 4 * len2) & inside;
-    /* the best point of the edge from w (0) to u (d):
-     * mr_quadric_segment_optimum */
-    const double z = 0;
-    const double sd0 = d0 - z, sd1 = d1 - z, sd2 = d2 - z;
-    const double sa0 = a00 * sd0 + a01 * sd1 + a02 * sd2;
-    const double sa1 = a01 * sd0 + a11 * sd1 + a12 * sd2;
-    const double sa2 = a02 * sd0 + a12 * sd1 + a22 * sd2;
-    const double dad = sd0 * sa0 + sd1 * sa1 + sd2 * sa2;
-    const double g = z * sa0 + z * sa1 + z * sa2 + b0 * sd0 + b1 * sd1 + b2 * sd2;
-    const double sq = -g / dad;
-    const double s0 = sq < 0 ? 0 : sq;
-    const double sc = s0 > 1 ? 1 : s0;
-    const double sg0 = g < 0 ? 1 : 0.5;
-    const double sg = g > 0 ? 0 : sg0;
-    const double s = dad > 0 ? sc : sg;
-    const double x0 = ok ? o0 : z + s * sd0;
-    const double x1 = ok ? o1 : z + s * sd1;
-    const double x2 = ok ? o2 : z + s * sd2;
-    x[0] = x0;
-    x[xst] = x1;
-    x[2 * xst] = x2;
-    /* its cost (mr_quadric_eval) */
-    const double ax = a00 * x0 + a01 * x1 + a02 * x2;
-    const double ay = a01 * x0 + a11 * x1 + a12 * x2;
-    const double az = a02 * x0 + a12 * x1 + a22 * x2;
-    const double q = x0 * ax + x1 * ay + x2 * az + 2 * (b0 * x0 + b1 * x1 + b2 * x2) + c;
-    const double qn = q / w;
-    const double err = w > 0 ? qn : 0;
-    return err > 0 ? err : 0;
 }
 
 /* Gathers free_cost's inputs for edge (u, w) into in[k * st]. */
@@ -178,7 +86,7 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
     if (!((fu | fw) & PINNING)) {
         float in[FREE_INPUTS];
         free_cost_inputs(s, u, w, in, 1);
-        return free_cost(in, 1, x, 1, s->box);
+        return mr_free_cost(in, 1, x, 1, s->box);
     }
     const bool gu = may_go_onto(fu, fw), gw = may_go_onto(fw, fu);
     if (!gu && !gw) {
@@ -319,19 +227,7 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
 
 /* ---- many edges at once --------------------------------------------------- */
 
-/* Edges per batch of mr_simplifier_plan_edges' vector loop. */
-#define COST_BATCH 64
-
-/* The vector loop: costs of n <= COST_BATCH free edges whose inputs are in
- * in[k * COST_BATCH + i]. */
-MR_VECTOR_CLONES static void free_costs(const float *in, size_t n, double *cost, double *x,
-                                        const double box[3])
-{
-    const double bx[3] = {box[0], box[1], box[2]};
-#pragma omp simd
-    for (size_t i = 0; i < n; i++)
-        cost[i] = free_cost(in + i, COST_BATCH, x + i, COST_BATCH, bx);
-}
+#define COST_BATCH MR_COST_BATCH
 
 /*
  * free_cost's inputs of the edges (u[l], w[l]), l < n, into the batch's
@@ -406,6 +302,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
         return;
     }
     const uint8_t pin = PINNING;
+    const mr_kernels *kern = mr_kernels_get();
     float in[FREE_INPUTS * COST_BATCH];
     double out[COST_BATCH], x[3 * COST_BATCH];
     uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];
@@ -423,7 +320,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
                 lk[l] = ea < eb ? ea : eb;
             }
             pack_inputs(s, lr, lk, nl, in);
-            free_costs(in, nl, cost + i0, x, s->box);
+            kern->free_costs(in, nl, cost + i0, x, s->box);
             if (r) {
                 for (size_t l = 0; l < nl; l++) {
                     const size_t i = i0 + l;
@@ -451,7 +348,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
             lane[nl++] = (uint32_t)(i - i0);
         }
         pack_inputs(s, lr, lk, nl, in);
-        free_costs(in, nl, out, x, s->box);
+        kern->free_costs(in, nl, out, x, s->box);
         for (size_t l = 0; l < nl; l++) {
             const size_t i = i0 + lane[l];
             cost[i] = out[l];
@@ -494,19 +391,13 @@ bool mr_simplifier_valid(const mr_simplifier *s, uint32_t u, uint32_t w, double 
 static void merge_quadrics(mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
 {
     const mr_collapse_mesh *m = &s->m;
-    mr_quadric qr, qk;
-    load_quadric(s, r, &qr);
-    load_quadric(s, k, &qk);
     /* Stored positions are floats: measure from the target as stored. */
     const double t[3] = {(float)target[0], (float)target[1], (float)target[2]};
     const double dr[3] = {t[0] - m->pos[3 * r], t[1] - m->pos[3 * r + 1],
                           t[2] - m->pos[3 * r + 2]};
     const double dk[3] = {t[0] - m->pos[3 * k], t[1] - m->pos[3 * k + 1],
                           t[2] - m->pos[3 * k + 2]};
-    mr_quadric_shift(&qr, dr);
-    mr_quadric_shift(&qk, dk);
-    mr_quadric_add(&qk, &qr);
-    mr_quadric_store(&s->q[k], &qk);
+    mr_kernels_get()->merge(&s->q[k], &s->q[r], dk, dr);
 }
 
 unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,

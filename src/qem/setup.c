@@ -12,6 +12,7 @@
  * `meshreduce info` prints: unreferenced vertices may widen it).
  */
 #include "simplify_internal.h"
+#include "kernels.h"
 
 #include "../core/omp_compat.h"
 #include "../mesh/adjacency.h"
@@ -23,34 +24,8 @@
 
 /* Triangles of one vertex that inner_quadric takes at once, and the
  * length of its rows (room for three lanes of padding). */
-#define INNER_FAN 32
-#define INNER_ROW (INNER_FAN + 4)
-
-/* Each triangle's area-weighted plane term c c^T / (2 |c|) (6 entries)
- * and area |c| / 2 for the cross products c of the edges (u, w) in
- * in[k * INNER_ROW + i] (u: k = 0..2, w: 3..5); zero for a triangle
- * without area. The same expressions as initial_quadric's scalar loop,
- * so the same bits. */
-MR_VECTOR_CLONES static void plane_terms(double *in, size_t n, double *out)
-{
-#pragma omp simd
-    for (size_t i = 0; i < n; i++) {
-        const double u0 = in[i], u1 = in[INNER_ROW + i], u2 = in[2 * INNER_ROW + i];
-        const double w0 = in[3 * INNER_ROW + i], w1 = in[4 * INNER_ROW + i],
-                     w2 = in[5 * INNER_ROW + i];
-        const double c0 = u1 * w2 - u2 * w1, c1 = u2 * w0 - u0 * w2, c2 = u0 * w1 - u1 * w0;
-        const double len = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
-        const bool area = len > 0;
-        const double f = 0.5 / (area ? len : 1.0);
-        out[i] = area ? f * c0 * c0 : 0;
-        out[INNER_ROW + i] = area ? f * c0 * c1 : 0;
-        out[2 * INNER_ROW + i] = area ? f * c0 * c2 : 0;
-        out[3 * INNER_ROW + i] = area ? f * c1 * c1 : 0;
-        out[4 * INNER_ROW + i] = area ? f * c1 * c2 : 0;
-        out[5 * INNER_ROW + i] = area ? f * c2 * c2 : 0;
-        out[6 * INNER_ROW + i] = area ? 0.5 * len : 0;
-    }
-}
+#define INNER_FAN MR_PLANE_FAN
+#define INNER_ROW MR_PLANE_ROW
 
 /* initial_quadric of a vertex with no constraint planes and at most
  * INNER_FAN triangles: the plane terms computed in one vector loop, then
@@ -77,7 +52,7 @@ static void inner_quadric(mr_simplifier *s, uint32_t v)
         double *row = in + k * INNER_ROW + n;
         row[0] = row[1] = row[2] = 0;
     }
-    plane_terms(in, (n + 3) & ~3u, t);
+    mr_kernels_get()->plane_terms(in, (n + 3) & ~3u, t);
     mr_quadric q;
     mr_quadric_zero(&q);
     for (uint32_t i = 0; i < n; i++) {
