@@ -39,7 +39,9 @@
  * --data DIR     the test meshes (default: ../shared/data beside the checkout)
  * --dir DIR      temporary files: the input for the memory measurement and
  *                the OpenMesh driver (default out/bench)
- * --mesh NAME    only this mesh (repeatable): scan-1M, scan-4M, bunny, ...
+ * --mesh NAME    only this mesh (repeatable): scan-1M, scan-4M,
+ *                scan-1M-shuffled (its triangles in a fixed random order:
+ *                an input without spatial order), bunny, ...
  * --others       our other simplifiers too (the default without --quick);
  *                --no-others: only the default simplifier and the peers
  * --keep         keep the temporary files
@@ -654,21 +656,41 @@ typedef struct mesh_spec {
     const char *file;       /* in the data folder, or NULL: generated */
     size_t triangles;       /* generated */
     unsigned quick;         /* the targets (bit ti) of --quick */
+    int shuffled;           /* triangles in a random order (seeded): an
+                               input whose order is not spatially coherent */
 } mesh_spec;
 
 #define Q10 (1u << 1)
 #define Q1 (1u << 2)
 static const mesh_spec specs[] = {
-    {"scan-1M", NULL, 1000000, Q10},
-    {"scan-4M", NULL, 4000000, Q1},
-    {"bunny", "stanford-bunny.obj", 0, Q10 | Q1},
-    {"armadillo", "armadillo.obj", 0, Q10 | Q1},
-    {"nefertiti", "nefertiti.obj", 0, 0},
-    {"ogre", "ogre.obj", 0, 0},
-    {"fandisk", "fandisk.obj", 0, 0},
-    {"homer", "homer.obj", 0, 0},
-    {"igea", "igea.ply", 0, 0},
+    {"scan-1M", NULL, 1000000, Q10, 0},
+    {"scan-4M", NULL, 4000000, Q1, 0},
+    {"scan-1M-shuffled", NULL, 1000000, 0, 1},
+    {"bunny", "stanford-bunny.obj", 0, Q10 | Q1, 0},
+    {"armadillo", "armadillo.obj", 0, Q10 | Q1, 0},
+    {"nefertiti", "nefertiti.obj", 0, 0, 0},
+    {"ogre", "ogre.obj", 0, 0, 0},
+    {"fandisk", "fandisk.obj", 0, 0, 0},
+    {"homer", "homer.obj", 0, 0, 0},
+    {"igea", "igea.ply", 0, 0, 0},
 };
+
+/* Triangles in a random order, the same every run (Fisher-Yates with a
+ * fixed xorshift seed): as a file exported without spatial order. */
+static void shuffle_triangles(mr_mesh *mesh)
+{
+    uint64_t x = 0x853C49E6748FEA9Bull;
+    for (size_t i = mesh->triangle_count; i > 1; i--) {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        const size_t j = (size_t)(x % i);
+        uint32_t t[3];
+        memcpy(t, mesh->indices + 3 * (i - 1), sizeof t);
+        memcpy(mesh->indices + 3 * (i - 1), mesh->indices + 3 * j, sizeof t);
+        memcpy(mesh->indices + 3 * j, t, sizeof t);
+    }
+}
 
 /* Load or generate, then keep positions and non-degenerate triangles over
  * referenced vertices only. Returns 0 when a file is absent. */
@@ -681,10 +703,13 @@ static int load_mesh(const config *cfg, const mesh_spec *s, mr_mesh *mesh, mesh_
     omp_set_num_threads(1);
     if (!found)
         return 0;
+    if (s->shuffled)
+        shuffle_triangles(mesh);
     int len = snprintf(m->desc, sizeof m->desc, "%zu vertices, %zu triangles", mesh->vertex_count,
                        mesh->triangle_count);
     if (!s->file)
-        snprintf(m->desc + len, sizeof m->desc - (size_t)len, " (mr_generate scan, seed 1)");
+        snprintf(m->desc + len, sizeof m->desc - (size_t)len, " (mr_generate scan, seed 1%s)",
+                 s->shuffled ? ", triangles shuffled" : "");
     else if (degenerate || unreferenced)
         snprintf(m->desc + len, sizeof m->desc - (size_t)len,
                  " (%s; removed %zu degenerate triangles, %zu unreferenced vertices)", s->file,
