@@ -94,6 +94,7 @@ fuzz: deps-build deps-fuzz
 # I/O throughput, then sequential simplification against the installed peers
 # (a few minutes; bench_simplify --quick for a short subset).
 bench: build
+	$(CMAKE) --build $(BUILD) -j $(JOBS) --target bench_peers
 	./$(BUILD)/bench/bench_io
 	./$(BUILD)/bench/bench_simplify --csv $(BUILD)/bench/simplify.csv
 	./$(BUILD)/bench/bench_queued --quick
@@ -102,6 +103,7 @@ bench: build
 # installed peers; several minutes), then bench/REPORT.md with its plots and
 # comparison sheets in bench/report/.
 report: build
+	$(CMAKE) --build $(BUILD) -j $(JOBS) --target bench_peers
 	./$(BUILD)/bench/sweep --csv bench/report/sweep.csv
 	./$(BUILD)/bench/report bench/report/sweep.csv --out bench
 

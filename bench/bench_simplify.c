@@ -15,6 +15,13 @@
  *                   the vertex count our 1-thread run reached; its repeated
  *                   runs stop after 20 s in all (at least one run; the table
  *                   then names the run count: "openmesh (1)").
+ *   cgal-lt, cgal-gh CGAL's Surface_mesh_simplification edge collapse with
+ *                   the Lindstrom-Turk policy (its default) and the
+ *                   Garland-Heckbert plane policies, via the driver
+ *                   cgal_decimate (built by make bench where libcgal-dev
+ *                   and libeigen3-dev are installed), asked for the edge
+ *                   count of our 1-thread output (the same triangle count
+ *                   on a closed mesh); the same 20 s budget as OpenMesh.
  * Without --quick (or with --others), also our other simplifiers on one
  * thread: meshreduce-half (batched, half collapse), mr-greedy-full and
  * mr-greedy-half (the sequential greedy reference).
@@ -104,8 +111,8 @@
  *   cpu_model,physical_cores,nproc
  * mesh: scan-1M, scan-4M, bunny, armadillo, ...; algorithm: meshreduce-full
  * (the default simplifier: one row per thread count), meshreduce-half,
- * mr-greedy-full, mr-greedy-half, meshopt, meshopt-sloppy, openmesh (those
- * at threads 1); target: the fraction of referenced input vertices asked
+ * mr-greedy-full, mr-greedy-half, meshopt, meshopt-sloppy, openmesh, cgal-lt,
+ * cgal-gh (those at threads 1); target: the fraction of referenced input vertices asked
  * for (0.25, 0.1, 0.01); times in seconds; time_min, time_max: over the
  * runs made (runs; openmesh's may be fewer, see above);
  * triangles_per_second: input triangles / time_median;
@@ -137,11 +144,14 @@ enum {
     ALG_GREEDY_FULL,
     ALG_GREEDY_HALF,
     ALG_OPENMESH,
+    ALG_CGAL_LT,
+    ALG_CGAL_GH,
     ALG_COUNT
 };
 static const char *const alg_name[ALG_COUNT] = {
     "meshreduce-full", "meshopt",        "meshopt-sloppy", "meshreduce-half",
-    "mr-greedy-full",  "mr-greedy-half", "openmesh"};
+    "mr-greedy-full",  "mr-greedy-half", "openmesh",       "cgal-lt",
+    "cgal-gh"};
 
 #define TARGET_COUNT 3
 static const double target_ratio[TARGET_COUNT] = {0.25, 0.10, 0.01};
@@ -165,6 +175,7 @@ typedef struct mesh_result {
     char name[32];
     char desc[160];     /* "501762 vertices, 1003520 triangles (...)" */
     size_t input_triangles;
+    size_t out_edges[TARGET_COUNT]; /* of our 1-thread output: CGAL's target */
     /* [target][algorithm][thread index]; only ALG_FULL uses index > 0 */
     row rows[TARGET_COUNT][ALG_COUNT][MAX_THREADS];
 } mesh_result;
@@ -350,6 +361,7 @@ static void run_block(const config *cfg, const mr_mesh *in, const char *raw, mes
             times[(size_t)j * (size_t)runs + (size_t)k] = simplify_once(in, &opt, &out);
             if (k == 0 && j == 0) {
                 ref = out;
+                m->out_edges[ti] = bench_edge_count(ref.indices, ref.triangle_count);
                 continue;
             }
             char buf[160];
@@ -459,6 +471,25 @@ static void run_openmesh(const config *cfg, const mr_mesh *in, const char *in_pa
     int ok = bench_run_openmesh(in, in_path, out_path, target_vertices, cfg->runs,
                                 OPENMESH_BUDGET, cfg->keep, &r->time, &r->runs, &r->peak_bytes,
                                 &out);
+    if (ok) {
+        r->out_vertices = out.vertex_count;
+        r->out_triangles = out.triangle_count;
+        measure_quality(cfg, in, out.positions, out.vertex_count, out.indices,
+                        out.triangle_count, r);
+        r->done = 1;
+    }
+    bench_output_free(&out);
+}
+
+/* CGAL's Lindstrom-Turk (policy "lt") or Garland-Heckbert (policy "gh")
+ * edge collapse to the edge count of our output, with OpenMesh's budget. */
+static void run_cgal(const config *cfg, const mr_mesh *in, const char *in_path,
+                     const char *out_path, const char *policy, size_t target_edges, row *r)
+{
+    bench_output out = {0};
+    r->threads = 1;
+    int ok = bench_run_cgal(policy, in, in_path, out_path, target_edges, cfg->runs,
+                            OPENMESH_BUDGET, cfg->keep, &r->time, &r->runs, &r->peak_bytes, &out);
     if (ok) {
         r->out_vertices = out.vertex_count;
         r->out_triangles = out.triangle_count;
@@ -1099,13 +1130,18 @@ int main(int argc, char **argv)
            "mr_compare with %zu samples per mesh, %% of the input's bounding-box diagonal; "
            "t/H/R/ours: this row / meshreduce-full on 1 thread\n",
            cfg.runs, cfg.runs == 1 ? "" : "s", cfg.samples);
-    printf("peers: meshopt %s; OpenMesh %s\n",
+    printf("peers: meshopt %s; OpenMesh %s; CGAL %s\n",
            bench_have_meshopt()
                ? "0.18-style C API, meshopt_simplify (options 0, target_error FLT_MAX, same "
                  "triangle count) and meshopt_simplifySloppy"
                : "not built in (meshoptimizer not found at configure time)",
            bench_have_openmesh() ? "Decimater + ModQuadric (same vertex count), subprocess"
-                                 : "not built in (OpenMesh or C++ not found at configure time)");
+                                 : "not built in (OpenMesh or C++ not found at configure time)",
+           bench_have_cgal() ? "Surface_mesh_simplification edge_collapse, Lindstrom-Turk "
+                               "(cgal-lt) and Garland-Heckbert plane (cgal-gh) policies (same "
+                               "edge count), subprocess"
+                             : "not built (libcgal-dev and libeigen3-dev absent, or the driver "
+                               "not built: make bench builds it)");
     if (access(cfg.data, R_OK) != 0)
         printf("data folder %s absent: only the generated meshes\n", cfg.data);
 
@@ -1155,7 +1191,7 @@ int main(int argc, char **argv)
                     print_row(m, ti, a, 0);
                     fflush(stdout);
                 }
-            if (!cfg.others || !bench_have_openmesh())
+            if (!cfg.others || (!bench_have_openmesh() && !bench_have_cgal()))
                 continue;
             if (!om_ready) {
                 mr_write_options wo;
@@ -1166,10 +1202,19 @@ int main(int argc, char **argv)
                 bench_check(mr_mesh_write(om_in, &mesh, &wo, &err), &err);
                 om_ready = 1;
             }
-            run_openmesh(&cfg, &mesh, om_in, om_out, m->rows[ti][ALG_FULL][0].out_vertices,
-                         &m->rows[ti][ALG_OPENMESH][0]);
-            print_row(m, ti, ALG_OPENMESH, 0);
-            fflush(stdout);
+            if (bench_have_openmesh()) {
+                run_openmesh(&cfg, &mesh, om_in, om_out,
+                             m->rows[ti][ALG_FULL][0].out_vertices,
+                             &m->rows[ti][ALG_OPENMESH][0]);
+                print_row(m, ti, ALG_OPENMESH, 0);
+                fflush(stdout);
+            }
+            for (int a = ALG_CGAL_LT; a <= ALG_CGAL_GH && bench_have_cgal(); a++) {
+                run_cgal(&cfg, &mesh, om_in, om_out, a == ALG_CGAL_LT ? "lt" : "gh",
+                         m->out_edges[ti], &m->rows[ti][a][0]);
+                print_row(m, ti, a, 0);
+                fflush(stdout);
+            }
         }
         if (om_ready && !cfg.keep)
             unlink(om_in);

@@ -392,18 +392,17 @@ int bench_have_openmesh(void)
 #endif
 }
 
-int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_path,
-                       size_t target_vertices, int runs, double budget, int keep_output,
-                       bench_summary *timing, int *runs_done, double *peak_bytes,
-                       bench_output *out)
+#if defined(MR_OPENMESH_DRIVER) || defined(MR_CGAL_DRIVER)
+/* Run a peer driver (the openmesh_decimate / cgal_decimate protocol: lines
+ * "input V F", "seconds S" per run, "peak_bytes B", the result in
+ * out_path) and read its result back. */
+static int run_driver(const char *what, const char *cmd, const mr_mesh *in,
+                      const char *out_path, int runs, int keep_output, bench_summary *timing,
+                      int *runs_done, double *peak_bytes, bench_output *out)
 {
-#ifdef MR_OPENMESH_DRIVER
-    char cmd[3 * 4096 + 64];
-    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' %zu %d %g", MR_OPENMESH_DRIVER, in_path, out_path,
-             target_vertices, runs, budget);
     char *text = bench_capture(cmd);
     if (!text) {
-        fprintf(stderr, "bench: the OpenMesh driver failed: %s\n", cmd);
+        fprintf(stderr, "bench: the %s driver failed: %s\n", what, cmd);
         return 0;
     }
     double *times = malloc(sizeof(double) * (size_t)runs);
@@ -423,18 +422,18 @@ int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_p
     *runs_done = nt;
     if (nt == 0) {
         free(times);
-        fprintf(stderr, "bench: no timing from the OpenMesh driver\n");
+        fprintf(stderr, "bench: no timing from the %s driver\n", what);
         return 0;
     }
     *timing = bench_summarize(times, nt);
     free(times);
     if (in_v != in->vertex_count || in_f != in->triangle_count)
-        fprintf(stderr, "bench: note: OpenMesh read %zu vertices, %zu faces (ours: %zu, %zu)\n",
+        fprintf(stderr, "bench: note: %s read %zu vertices, %zu faces (ours: %zu, %zu)\n", what,
                 in_v, in_f, in->vertex_count, in->triangle_count);
     mr_mesh m;
     mr_error err;
     if (mr_mesh_read(out_path, NULL, &m, &err) != MR_OK) {
-        fprintf(stderr, "bench: reading OpenMesh's output: %s\n", err.message);
+        fprintf(stderr, "bench: reading %s's output: %s\n", what, err.message);
         return 0;
     }
     mr_mesh_remove_unreferenced(&m, NULL, &err);
@@ -448,9 +447,77 @@ int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_p
     if (!keep_output)
         unlink(out_path);
     return 1;
+}
+#endif
+
+int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_path,
+                       size_t target_vertices, int runs, double budget, int keep_output,
+                       bench_summary *timing, int *runs_done, double *peak_bytes,
+                       bench_output *out)
+{
+#ifdef MR_OPENMESH_DRIVER
+    char cmd[3 * 4096 + 64];
+    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' %zu %d %g", MR_OPENMESH_DRIVER, in_path, out_path,
+             target_vertices, runs, budget);
+    return run_driver("OpenMesh", cmd, in, out_path, runs, keep_output, timing, runs_done,
+                      peak_bytes, out);
 #else
     (void)in, (void)in_path, (void)out_path, (void)target_vertices, (void)runs, (void)budget,
         (void)keep_output, (void)timing, (void)runs_done, (void)peak_bytes, (void)out;
     return 0;
 #endif
+}
+
+int bench_have_cgal(void)
+{
+#ifdef MR_CGAL_DRIVER
+    return access(MR_CGAL_DRIVER, X_OK) == 0;
+#else
+    return 0;
+#endif
+}
+
+int bench_run_cgal(const char *policy, const mr_mesh *in, const char *in_path,
+                   const char *out_path, size_t target_edges, int runs, double budget,
+                   int keep_output, bench_summary *timing, int *runs_done, double *peak_bytes,
+                   bench_output *out)
+{
+#ifdef MR_CGAL_DRIVER
+    if (!bench_have_cgal())
+        return 0;
+    char cmd[3 * 4096 + 64];
+    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' %s %zu %d %g", MR_CGAL_DRIVER, in_path, out_path,
+             policy, target_edges, runs, budget);
+    return run_driver("CGAL", cmd, in, out_path, runs, keep_output, timing, runs_done,
+                      peak_bytes, out);
+#else
+    (void)policy, (void)in, (void)in_path, (void)out_path, (void)target_edges, (void)runs,
+        (void)budget, (void)keep_output, (void)timing, (void)runs_done, (void)peak_bytes,
+        (void)out;
+    return 0;
+#endif
+}
+
+static int u64_cmp(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+size_t bench_edge_count(const uint32_t *indices, size_t triangle_count)
+{
+    uint64_t *e = malloc(sizeof *e * 3 * (triangle_count ? triangle_count : 1));
+    if (!e)
+        return 0;
+    for (size_t t = 0; t < triangle_count; t++)
+        for (int j = 0; j < 3; j++) {
+            const uint64_t a = indices[3 * t + j], b = indices[3 * t + (j + 1) % 3];
+            e[3 * t + (size_t)j] = a < b ? a << 32 | b : b << 32 | a;
+        }
+    qsort(e, 3 * triangle_count, sizeof *e, u64_cmp);
+    size_t n = 0;
+    for (size_t i = 0; i < 3 * triangle_count; i++)
+        n += i == 0 || e[i] != e[i - 1];
+    free(e);
+    return n;
 }

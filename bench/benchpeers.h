@@ -94,4 +94,17 @@ int bench_run_openmesh(const mr_mesh *in, const char *in_path, const char *out_p
                        bench_summary *timing, int *runs_done, double *peak_bytes,
                        bench_output *out);
 
+/* CGAL's Surface_mesh_simplification through the driver cgal_decimate
+ * (built by `make bench` where libcgal-dev is installed): policy "lt"
+ * (Lindstrom-Turk, CGAL's default) or "gh" (Garland-Heckbert plane
+ * policies), down to target_edges edges; otherwise as bench_run_openmesh. */
+int bench_have_cgal(void);
+int bench_run_cgal(const char *policy, const mr_mesh *in, const char *in_path,
+                   const char *out_path, size_t target_edges, int runs, double budget,
+                   int keep_output, bench_summary *timing, int *runs_done, double *peak_bytes,
+                   bench_output *out);
+
+/* Distinct edges of a triangle list (the CGAL driver's target). */
+size_t bench_edge_count(const uint32_t *indices, size_t triangle_count);
+
 #endif
