@@ -28,8 +28,10 @@
  * mr_vertex_similarity of the output against the sequential greedy
  * reference of the same collapse kind at the same target (the filter-queue
  * paper's measure); empty for the references themselves and the peers.
- * Peers (single-threaded) are asked for the triangle count (meshopt) or
- * vertex count (OpenMesh) the greedy full-collapse reference reached.
+ * Peers (single-threaded) are asked for the triangle count (meshopt),
+ * vertex count (OpenMesh) or edge count (CGAL's Lindstrom-Turk and
+ * Garland-Heckbert policies, cgal-lt and cgal-gh, when make bench or make
+ * report built their driver) the greedy full-collapse reference reached.
  *
  * CSV: comment lines first ("# machine: ...", "# date: ...", "# mesh NAME
  * SOURCE" where SOURCE is "generate:scan:TRIANGLES:SEED" or "file:PATH"),
@@ -159,6 +161,23 @@ static int run_openmesh(const algorithm *alg, target_state *ts, int threads, res
                               &r->peak_bytes, &r->out);
 }
 
+/* CGAL's edge collapse (policy in the algorithm's name: cgal-lt,
+ * cgal-gh) to the edge count of the greedy full reference's output. */
+static int run_cgal(const algorithm *alg, target_state *ts, int threads, result *r)
+{
+    (void)threads;
+    if (!bench_have_cgal() || !ts->ply_path)
+        return 0;
+    size_t edges = ts->have_ref[0] ? bench_edge_count(ts->ref[0].out.indices,
+                                                      ts->ref[0].out.triangle_count)
+                                   : (size_t)(ts->ratio * 1.5 * (double)ts->in->triangle_count);
+    char out_path[4200];
+    snprintf(out_path, sizeof out_path, "%s/sweep-cgal-out.ply", ts->cfg->dir);
+    return bench_run_cgal(alg->name + 5, ts->in, ts->ply_path, out_path, edges, ts->cfg->runs,
+                          ts->cfg->quick ? 2.0 : OPENMESH_BUDGET, 0, &r->time, &r->runs,
+                          &r->peak_bytes, &r->out);
+}
+
 /* The algorithms, in run order: the greedy references first (the others
  * compare with them). */
 static const algorithm algorithms[] = {
@@ -169,6 +188,8 @@ static const algorithm algorithms[] = {
     {"meshopt", run_meshopt, 0, 0, 0, 0, 0},
     {"meshopt-sloppy", run_meshopt, 0, 0, 0, 0, 1},
     {"openmesh", run_openmesh, 0, 0, 0, 0, 0},
+    {"cgal-lt", run_cgal, 0, 0, 0, 0, 0},
+    {"cgal-gh", run_cgal, 0, 0, 0, 0, 0},
 };
 enum { N_ALGORITHMS = sizeof algorithms / sizeof *algorithms };
 
@@ -360,9 +381,9 @@ int main(int argc, char **argv)
     char date[32];
     strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&now));
     fprintf(csv, "# date: %s\n", date);
-    fprintf(csv, "# runs: %d; samples: %zu; peers: meshopt %s, openmesh %s\n", cfg.runs,
-            cfg.samples, bench_have_meshopt() ? "yes" : "no",
-            bench_have_openmesh() ? "yes" : "no");
+    fprintf(csv, "# runs: %d; samples: %zu; peers: meshopt %s, openmesh %s, cgal %s\n",
+            cfg.runs, cfg.samples, bench_have_meshopt() ? "yes" : "no",
+            bench_have_openmesh() ? "yes" : "no", bench_have_cgal() ? "yes" : "no");
 
     /* The mesh lines first, so the report knows every source. */
     mr_mesh meshes[sizeof specs / sizeof *specs];
@@ -391,7 +412,7 @@ int main(int argc, char **argv)
         mr_mesh *in = &meshes[si];
         char ply[4200];
         const char *ply_path = NULL;
-        if (bench_have_openmesh()) {
+        if (bench_have_openmesh() || bench_have_cgal()) {
             snprintf(ply, sizeof ply, "%s/sweep-%s.ply", cfg.dir, s->name);
             mr_write_options wo;
             mr_write_options_default(&wo);
