@@ -53,6 +53,13 @@ static const char usage[] =
     "                        rank bound); fppq: every pop among the best\n"
     "                        k = L*2^L + 1 (L filter levels); multiqueue: none\n"
     "                        beyond \"usually near the top\"\n"
+    "  --quality default|best\n"
+    "                        best: full collapse only; each survivor also keeps the\n"
+    "                        volume around it (Lindstrom-Turk placement) and at the\n"
+    "                        end the vertices are fitted to the input's surface\n"
+    "                        (least squares, no triangle flips): lower RMS\n"
+    "                        distance, several times the time; boundary, seam and\n"
+    "                        locked vertices stay where the collapses put them\n"
     "  --filter-levels L     fppq, rppq: L = 1..12 (default from --threads: 1 up to\n"
     "                        4 threads, 2 up to 8, 3 up to 16, 4 up to 32)\n"
     "  --multiqueue-factor C multiqueue: C heaps per thread (default 2)\n"
@@ -249,6 +256,13 @@ static int option(int argc, char **argv, int *i, void *user)
         else
             return cli_usage_error("simplify", "--strategy is greedy, batched, ppq, rppq, "
                                                "fppq or multiqueue");
+    } else if (cli_value(argc, argv, i, "--quality", &v)) {
+        if (v && !strcmp(v, "default"))
+            o->quality = MR_QUALITY_DEFAULT;
+        else if (v && !strcmp(v, "best"))
+            o->quality = MR_QUALITY_BEST;
+        else
+            return cli_usage_error("simplify", "--quality is default or best");
     } else if (cli_value(argc, argv, i, "--filter-levels", &v)) {
         if (!cli_parse_count(v, &n) || n < 1 || n > 12)
             return cli_usage_error("simplify", "--filter-levels needs a count in 1..12");

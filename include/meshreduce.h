@@ -369,6 +369,17 @@ typedef enum mr_strategy {
 
 typedef void (*mr_progress_fn)(double fraction_done, void *user);
 
+/* How hard the simplifier works for closeness to the input's surface. */
+typedef enum mr_simplify_quality {
+    MR_QUALITY_DEFAULT = 0, /* each survivor at its quadric's optimum */
+    MR_QUALITY_BEST         /* full collapse only: each survivor also keeps the
+                               volume its neighbourhood encloses (Lindstrom
+                               and Turk's placement), and at the end the
+                               output's vertices are fitted to the input's
+                               surface (least squares, no triangle flips);
+                               lower RMS distance, several times the time */
+} mr_simplify_quality;
+
 typedef struct mr_simplify_options {
     /* Targets: simplification stops at the first one reached. 0 = unused.
      * At least one target (or max_error) must be set. Vertex counts and
@@ -411,6 +422,7 @@ typedef struct mr_simplify_options {
                                    mr_fppq_default_levels) */
     unsigned multiqueue_factor; /* MR_STRATEGY_MULTIQUEUE: heaps per thread
                                    (0 = 2) */
+    mr_simplify_quality quality; /* MR_QUALITY_DEFAULT by default */
 } mr_simplify_options;
 
 void mr_simplify_options_default(mr_simplify_options *options);

@@ -549,6 +549,8 @@ static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t 
     mr_collapse_mesh *m = &s->m;
     mr_collapse_clean(m, x->r); /* its ends: no one else reads their lists */
     mr_collapse_clean(m, x->k);
+    if (s->keep_volume)
+        mr_simplifier_keep_volume(s, x->r, x->k, x->target, &x->cost);
     if (!mr_simplifier_allowed(s, x->r, x->k, x->target, x->cost, limit)) {
         bt->cand[x->at].key = DEAD_KEY; /* leaves the candidates */
         x->state = W_INVALID;

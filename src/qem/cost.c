@@ -365,6 +365,102 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
     }
 }
 
+/* ---- volume-preserving placement ------------------------------------------ */
+
+/* The farthest the volume constraint moves a target, in lengths of the
+ * edge: farther moves come from directions the quadric hardly constrains
+ * and raised the Hausdorff distance (the armadillo at 1 %: 0.97 % of the
+ * diagonal without the constraint, 2.57 % with no limit, 1.11 % at a
+ * quarter). */
+#define VOLUME_REACH 0.25
+
+/*
+ * Move a free full collapse's target to the point that keeps the volume the
+ * surface encloses (Lindstrom and Turk's first constraint): the volume a
+ * collapse of r into k at x changes by g.(x - o) - h for the triangles
+ * around both ends (o: k's position), a linear function of x, so the
+ * least-cost point on the plane g.(x - o) = h is the quadric's optimum x*
+ * moved by A^-1 g (h - g.(x* - o)) / (g.A^-1 g), and its cost grows by
+ * (h - g.(x* - o))^2 / (g.A^-1 g) over the weight. Reads r's and k's
+ * (clean) lists, their triangles and positions: what the validity test
+ * reads next. Leaves the target alone for a pinned end, an ill-conditioned
+ * quadric, or a fan whose g vanishes (a flat or closed-up neighbourhood).
+ */
+void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
+                               double *cost)
+{
+    const mr_collapse_mesh *m = &s->m;
+    if ((m->flags[r] | m->flags[k]) & PINNING || s->half)
+        return;
+    const double o[3] = {m->pos[3 * k], m->pos[3 * k + 1], m->pos[3 * k + 2]};
+    double g[3] = {0, 0, 0}, h = 0;
+    const uint32_t ends[2] = {r, k};
+    for (int e = 0; e < 2; e++) {
+        const uint32_t w = ends[e], other = ends[1 - e];
+        const uint32_t *l = mr_collapse_vertex_tris(m, w);
+        for (uint32_t i = 0; i < m->count[w]; i++) {
+            const uint32_t c = l[i], j = c % 3, *tri = m->tris + (c - j);
+            const uint32_t a = tri[mr_local_next(j)], b = tri[mr_local_prev(j)];
+            const float *pa = m->pos + 3 * (size_t)a, *pb = m->pos + 3 * (size_t)b,
+                        *pw = m->pos + 3 * (size_t)w;
+            const double ua[3] = {pa[0] - o[0], pa[1] - o[1], pa[2] - o[2]};
+            const double ub[3] = {pb[0] - o[0], pb[1] - o[1], pb[2] - o[2]};
+            const double uw[3] = {pw[0] - o[0], pw[1] - o[1], pw[2] - o[2]};
+            const double n[3] = {ua[1] * ub[2] - ua[2] * ub[1], ua[2] * ub[0] - ua[0] * ub[2],
+                                 ua[0] * ub[1] - ua[1] * ub[0]};
+            const double vol = uw[0] * n[0] + uw[1] * n[1] + uw[2] * n[2];
+            if (a == other || b == other) {
+                /* an edge triangle: it goes, and its volume with it (once) */
+                if (e == 0)
+                    h += vol;
+                continue;
+            }
+            g[0] += n[0];
+            g[1] += n[1];
+            g[2] += n[2];
+            h += vol;
+        }
+    }
+    mr_quadric qr, qk;
+    load_quadric(s, r, &qr);
+    load_quadric(s, k, &qk);
+    const double a00 = qr.a00 + qk.a00, a01 = qr.a01 + qk.a01, a02 = qr.a02 + qk.a02,
+                 a11 = qr.a11 + qk.a11, a12 = qr.a12 + qk.a12, a22 = qr.a22 + qk.a22;
+    const double c00 = a11 * a22 - a12 * a12, c01 = a02 * a12 - a01 * a22,
+                 c02 = a01 * a12 - a02 * a11, c11 = a00 * a22 - a02 * a02,
+                 c12 = a01 * a02 - a00 * a12, c22 = a00 * a11 - a01 * a01;
+    const double det = a00 * c00 + a01 * c01 + a02 * c02, diag = a00 * a11 * a22;
+    if (!(fabs(det) > MR_QUADRIC_DET_EPS * diag) || !(diag > 0))
+        return;
+    /* y = A^-1 g */
+    const double y[3] = {(c00 * g[0] + c01 * g[1] + c02 * g[2]) / det,
+                         (c01 * g[0] + c11 * g[1] + c12 * g[2]) / det,
+                         (c02 * g[0] + c12 * g[1] + c22 * g[2]) / det};
+    const double gy = g[0] * y[0] + g[1] * y[1] + g[2] * y[2];
+    if (!(gy > 0))
+        return;
+    const double t[3] = {target[0] - o[0], target[1] - o[1], target[2] - o[2]};
+    const double miss = h - (g[0] * t[0] + g[1] * t[1] + g[2] * t[2]);
+    const double lam = miss / gy;
+    /* no move past VOLUME_REACH edge lengths */
+    const double el2 = (m->pos[3 * r] - o[0]) * (m->pos[3 * r] - o[0]) +
+                       (m->pos[3 * r + 1] - o[1]) * (m->pos[3 * r + 1] - o[1]) +
+                       (m->pos[3 * r + 2] - o[2]) * (m->pos[3 * r + 2] - o[2]);
+    const double mv2 = lam * lam * (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+    if (mv2 > VOLUME_REACH * VOLUME_REACH * el2)
+        return;
+    double x[3];
+    for (int i = 0; i < 3; i++) {
+        x[i] = target[i] + lam * y[i];
+        if (!(fabs(x[i]) <= s->box[i]))
+            return; /* outside the box: no place for a vertex */
+    }
+    const double w = qr.w + qk.w;
+    memcpy(target, x, sizeof x);
+    if (cost && w > 0)
+        *cost += miss * lam / w;
+}
+
 /* ---- validity and the collapse -------------------------------------------- */
 
 bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],

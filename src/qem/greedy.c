@@ -375,9 +375,11 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
             const uint32_t a = m->tris[h], b = he_dst(m, h);
             uint32_t r, k;
             double target[3];
-            const double cost = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
+            double cost = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
             if (cost > limit)
                 break;
+            if (s->keep_volume)
+                mr_simplifier_keep_volume(s, r, k, target, &cost);
             if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
                 mr_heap_remove(&gr->heap, h);
                 m->flags[a] |= MR_VF_BLOCKED;

@@ -289,7 +289,10 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     mr_simplifier s;
     st = mr_simplifier_init(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, lock, err);
     free(lock);
-    free(gidx);
+    if (st != MR_OK || o.quality != MR_QUALITY_BEST) {
+        free(gidx); /* else the last step's samples come from it */
+        gidx = NULL;
+    }
     if (st != MR_OK) {
         free(geo);
         free_ctx(&a);
@@ -301,6 +304,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         if (!corner) {
             mr_simplifier_free(&s);
             free(geo);
+            free(gidx);
             free_ctx(&a);
             return mr_fail_nomem(err, NULL, 3 * tc * sizeof *corner);
         }
@@ -331,12 +335,25 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     if (st != MR_OK) {
         mr_simplifier_free(&s);
         free(geo);
+        free(gidx);
         free_ctx(&a);
         return st;
     }
     const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, &o, &max_error);
+    if (o.quality == MR_QUALITY_BEST) {
+        st = mr_simplifier_refine(&s, in->positions, 0, gidx, tc, err);
+        free(gidx);
+        gidx = NULL;
+        if (st != MR_OK) {
+            mr_simplifier_free(&s);
+            free(geo);
+            free(gidx);
+            free_ctx(&a);
+            return st;
+        }
+    }
     const double t2 = mr_now_seconds();
 
     /* Output: one vertex per surviving wedge, in input order. */

@@ -287,6 +287,14 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
                              "simplify: the concurrent-queue strategies (ppq, rppq, fppq, "
                              "multiqueue) make half-edge collapses only: set "
                              "MR_COLLAPSE_HALF (--collapse half)");
+    if (o->quality != MR_QUALITY_DEFAULT && o->quality != MR_QUALITY_BEST)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: unknown quality %d", (int)o->quality);
+    if (o->quality == MR_QUALITY_BEST && o->collapse != MR_COLLAPSE_FULL)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: the best quality moves the output's vertices off the "
+                             "input's; half-edge collapse keeps them: use MR_COLLAPSE_FULL "
+                             "(--collapse full)");
     if (o->strategy >= MR_STRATEGY_PPQ && o->filter_levels > MR_FILTER_MAX_LEVELS)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: %u filter levels: at most %d", o->filter_levels,
@@ -408,6 +416,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         return st;
     }
     s->half = o->collapse == MR_COLLAPSE_HALF;
+    s->keep_volume = o->quality == MR_QUALITY_BEST;
     s->batched = o->strategy == MR_STRATEGY_BATCHED;
     s->queued = o->strategy >= MR_STRATEGY_PPQ ? (int)o->strategy : 0;
     s->filter_levels = o->filter_levels;

@@ -99,6 +99,13 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, options, &max_error);
+    if (options->quality == MR_QUALITY_BEST) {
+        st = mr_simplifier_refine(&s, positions, stride, indices, triangle_count, err);
+        if (st != MR_OK) {
+            mr_simplifier_free(&s);
+            return st;
+        }
+    }
     const double t2 = mr_now_seconds();
     /* Only the mesh is needed from here: release the rest before the
      * output is allocated (it would set the peak). The greedy strategy's

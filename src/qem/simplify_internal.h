@@ -39,6 +39,8 @@ struct mr_simplifier {
     mr_quadricf *q;          /* per vertex, relative to its position */
     mr_collapse_limits limits;
     int half;
+    int keep_volume;         /* MR_QUALITY_BEST: volume-preserving targets
+                                (mr_simplifier_keep_volume) */
     int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
     mr_greedy *greedy;       /* else greedy.c's, while it runs */
     mr_batched *bt;          /* else batched.c's */
@@ -183,6 +185,16 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
 /* May the planned collapse r -> k (to target, at cost) happen now: its
  * cost finite and within limit, the mesh's tests (mr_collapse_valid) and
  * the attribute hook's? The one test every strategy makes. */
+/* Move a planned full collapse's target to keep the enclosed volume
+ * (MR_QUALITY_BEST; cost.c), its cost to that point's. */
+void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
+                               double *cost);
+
+/* Fit the output's vertices to the input's surface (MR_QUALITY_BEST's last
+ * step, after the strategy; refine.c): the input as mr_simplifier_init got
+ * it. */
+mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
+                               const uint32_t *indices, size_t triangle_count, mr_error *err);
 bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
                            double cost, double limit);
 /* Is u's queue entry (u, w) allowed (mr_simplifier_plan, then

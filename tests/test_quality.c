@@ -1,0 +1,490 @@
+/*
+ * MR_QUALITY_BEST (--quality best): the volume-preserving placement and the
+ * final fit of the output to the input's surface.
+ *   - flat parts stay flat: every output vertex of a subdivided box lies on
+ *     the box, and a box with bevels keeps its 8 corners;
+ *   - the fit never flips a triangle: a closed manifold input stays closed,
+ *     manifold and consistently oriented, every triangle of a sphere faces
+ *     outwards;
+ *   - it is closer to the surface: lower RMS distance than the default on a
+ *     generated scan and a sphere (and the bunny when ../shared/data is
+ *     there), the Hausdorff distance within bounds;
+ *   - the same bytes at 1, 2, 3 and 8 threads, through mr_simplify and
+ *     through mr_mesh_simplify with attributes;
+ *   - half-edge collapse is refused with one clear error, and the CLI
+ *     takes --quality default|best.
+ */
+#include "testutil.h"
+#include "core/omp_compat.h"
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static bool quick(void)
+{
+    const char *q = getenv("MR_TEST_QUICK");
+    return q && *q && strcmp(q, "0") != 0;
+}
+
+/* A box [-1, 1]^3, each face an n x n grid of squares, two triangles each,
+ * wound outwards (vertices shared after mr_mesh_weld_exact). */
+static void make_box(int n, mr_mesh *m)
+{
+    mr_mesh_init(m);
+    const int per = (n + 1) * (n + 1);
+    float *pos = malloc(sizeof *pos * 3 * (size_t)(6 * per));
+    uint32_t *idx = malloc(sizeof *idx * 3 * (size_t)(6 * 2 * n * n));
+    assert_non_null(pos);
+    assert_non_null(idx);
+    size_t nv = 0, nt = 0;
+    for (int f = 0; f < 6; f++) {
+        const int axis = f / 2;
+        const double side = f % 2 ? 1 : -1;
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (int i = 0; i <= n; i++)
+            for (int j = 0; j <= n; j++) {
+                double p[3];
+                p[axis] = side;
+                p[u] = -1 + 2.0 * i / n;
+                p[v] = -1 + 2.0 * j / n;
+                for (int k = 0; k < 3; k++)
+                    pos[3 * nv + (size_t)k] = (float)p[k];
+                nv++;
+            }
+        const uint32_t base = (uint32_t)(f * per);
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) {
+                const uint32_t a = base + (uint32_t)(i * (n + 1) + j), b = a + (uint32_t)(n + 1),
+                               c = b + 1, d = a + 1;
+                /* (u, v, axis) is right-handed: this order faces +axis */
+                const uint32_t t0[3] = {a, b, c}, t1[3] = {a, c, d};
+                for (int k = 0; k < 3; k++) {
+                    idx[3 * nt + (size_t)k] = side > 0 ? t0[k] : t0[2 - k];
+                    idx[3 * nt + 3 + (size_t)k] = side > 0 ? t1[k] : t1[2 - k];
+                }
+                nt += 2;
+            }
+    }
+    m->positions = pos;
+    m->vertex_count = nv;
+    m->indices = idx;
+    m->triangle_count = nt;
+    mr_error err;
+    assert_int_equal(mr_mesh_weld_exact(m, 0, NULL, &err), MR_OK);
+    assert_int_equal(mr_mesh_remove_unreferenced(m, NULL, &err), MR_OK);
+}
+
+/* A bevelled cube: the convex hull of the 24 points (+-e, +-e, +-1) and
+ * permutations, as 6 squares, 12 bevel rectangles and 8 corner triangles,
+ * each face subdivided n x n (triangles: squares and rectangles) or into
+ * n^2 triangles (corners). Shared vertices (welded by exact position),
+ * wound outwards by mr_mesh_orient. */
+static void add_quad(float *pos, size_t *nv, uint32_t *idx, size_t *nt, const double p[4][3],
+                     int n)
+{
+    const size_t base = *nv;
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++) {
+            const double s = (double)i / n, t = (double)j / n;
+            for (int k = 0; k < 3; k++)
+                pos[3 * *nv + (size_t)k] =
+                    (float)((1 - s) * (1 - t) * p[0][k] + s * (1 - t) * p[1][k] +
+                            s * t * p[2][k] + (1 - s) * t * p[3][k]);
+            (*nv)++;
+        }
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            const uint32_t a = (uint32_t)(base + (size_t)(i * (n + 1) + j)),
+                           b = a + (uint32_t)(n + 1), c = b + 1, d = a + 1;
+            const uint32_t t[6] = {a, b, c, a, c, d};
+            memcpy(idx + 3 * *nt, t, sizeof t);
+            *nt += 2;
+        }
+}
+
+static void make_bevel_cube(int n, double e, mr_mesh *m)
+{
+    mr_mesh_init(m);
+    float *pos = malloc(sizeof *pos * 3 * 26 * (size_t)((n + 1) * (n + 1)));
+    /* e and n powers of two over small integers: every point is exact, so
+     * the faces' shared edges weld */
+    uint32_t *idx = malloc(sizeof *idx * 3 * 26 * (size_t)(2 * n * n));
+    assert_non_null(pos);
+    assert_non_null(idx);
+    size_t nv = 0, nt = 0;
+    /* corners of the 6 squares: on face axis a, side s */
+    for (int a = 0; a < 3; a++)
+        for (int sd = -1; sd <= 1; sd += 2) {
+            const int u = (a + 1) % 3, v = (a + 2) % 3;
+            double q[4][3];
+            const double uv[4][2] = {{-e, -e}, {e, -e}, {e, e}, {-e, e}};
+            for (int c = 0; c < 4; c++) {
+                const int cc = sd > 0 ? c : 3 - c;
+                q[c][a] = sd;
+                q[c][u] = uv[cc][0];
+                q[c][v] = uv[cc][1];
+            }
+            add_quad(pos, &nv, idx, &nt, q, n);
+        }
+    /* the 12 bevel rectangles: between face (a, sa) and face (b, sb) */
+    for (int a = 0; a < 3; a++)
+        for (int b = a + 1; b < 3; b++)
+            for (int sa = -1; sa <= 1; sa += 2)
+                for (int sb = -1; sb <= 1; sb += 2) {
+                    const int c = 3 - a - b;
+                    double q[4][3];
+                    /* along axis c from -e to e */
+                    const double ends[2] = {-e, e};
+                    for (int k = 0; k < 2; k++) {
+                        q[k == 0 ? 0 : 1][a] = sa;
+                        q[k == 0 ? 0 : 1][b] = sb * e;
+                        q[k == 0 ? 0 : 1][c] = ends[k];
+                        q[k == 0 ? 3 : 2][a] = sa * e;
+                        q[k == 0 ? 3 : 2][b] = sb;
+                        q[k == 0 ? 3 : 2][c] = ends[k];
+                    }
+                    add_quad(pos, &nv, idx, &nt, q, n);
+                }
+    /* the 8 corner triangles, each edge cut in n as the rectangles' */
+    for (int sx = -1; sx <= 1; sx += 2)
+        for (int sy = -1; sy <= 1; sy += 2)
+            for (int sz = -1; sz <= 1; sz += 2) {
+                const double p[3][3] = {{sx, sy * e, sz * e}, {sx * e, sy, sz * e},
+                                        {sx * e, sy * e, sz}};
+                const size_t base = nv;
+                for (int i = 0; i <= n; i++)
+                    for (int j = 0; j <= n - i; j++) {
+                        for (int k = 0; k < 3; k++)
+                            pos[3 * nv + (size_t)k] =
+                                (float)(p[0][k] + (double)i / n * (p[1][k] - p[0][k]) +
+                                        (double)j / n * (p[2][k] - p[0][k]));
+                        nv++;
+                    }
+                /* vertex (i, j) of this triangle */
+#define AT(i, j) ((uint32_t)(base + (size_t)((i) * (2 * n + 3 - (i)) / 2 + (j))))
+                for (int i = 0; i < n; i++)
+                    for (int j = 0; j < n - i; j++) {
+                        const uint32_t t0[3] = {AT(i, j), AT(i + 1, j), AT(i, j + 1)};
+                        memcpy(idx + 3 * nt, t0, sizeof t0);
+                        nt++;
+                        if (j + 1 < n - i) {
+                            const uint32_t t1[3] = {AT(i + 1, j), AT(i + 1, j + 1), AT(i, j + 1)};
+                            memcpy(idx + 3 * nt, t1, sizeof t1);
+                            nt++;
+                        }
+                    }
+#undef AT
+            }
+    m->positions = pos;
+    m->vertex_count = nv;
+    m->indices = idx;
+    m->triangle_count = nt;
+    mr_error err;
+    assert_int_equal(mr_mesh_weld_exact(m, 0, NULL, &err), MR_OK);
+    assert_int_equal(mr_mesh_remove_unreferenced(m, NULL, &err), MR_OK);
+    assert_int_equal(mr_mesh_orient(m, NULL, NULL, &err), MR_OK);
+}
+
+static void simplify(const mr_mesh *in, double ratio, mr_simplify_quality q, int threads,
+                     mr_mesh *out)
+{
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = ratio;
+    o.quality = q;
+    o.threads = threads;
+    const int saved = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    mr_simplified s;
+    mr_error err;
+    const mr_status st = mr_simplify(in->positions, 0, in->vertex_count, in->indices,
+                                     in->triangle_count, &o, &s, &err);
+    omp_set_num_threads(saved);
+    if (st != MR_OK) {
+        print_error("%s\n", err.message);
+        fail();
+    }
+    mr_mesh_init(out);
+    out->positions = s.positions;
+    out->vertex_count = s.vertex_count;
+    out->indices = s.indices;
+    out->triangle_count = s.triangle_count;
+    free(s.origin);
+}
+
+static mr_compare_result distance(const mr_mesh *ref, const mr_mesh *test)
+{
+    mr_compare_options co;
+    mr_compare_options_default(&co);
+    co.samples = 200000;
+    mr_compare_result r;
+    mr_error err;
+    assert_int_equal(mr_compare(ref->positions, ref->vertex_count, ref->indices,
+                                ref->triangle_count, test->positions, test->vertex_count,
+                                test->indices, test->triangle_count, &co, &r, &err),
+                     MR_OK);
+    return r;
+}
+
+static void assert_closed_oriented(const mr_mesh *m)
+{
+    mr_stats st;
+    mr_error err;
+    assert_int_equal(mr_stats_compute(m->positions, 0, m->vertex_count, m->indices,
+                                      m->triangle_count, &st, &err),
+                     MR_OK);
+    assert_true(st.closed);
+    assert_true(st.oriented);
+    assert_int_equal(st.nonmanifold_vertices, 0);
+}
+
+static void test_flat_stays_flat(void **state)
+{
+    (void)state;
+    mr_mesh box, out;
+    make_box(quick() ? 16 : 40, &box);
+    const double ratios[2] = {0.1, 0.02};
+    for (int r = 0; r < 2; r++) {
+        simplify(&box, ratios[r], MR_QUALITY_BEST, 2, &out);
+        for (size_t v = 0; v < out.vertex_count; v++) {
+            double far = 0;
+            for (int k = 0; k < 3; k++)
+                far = fmax(far, fabs((double)out.positions[3 * v + (size_t)k]));
+            if (fabs(far - 1) > 1e-6) {
+                print_error("vertex %zu at (%g, %g, %g): off the box\n", v,
+                            (double)out.positions[3 * v], (double)out.positions[3 * v + 1],
+                            (double)out.positions[3 * v + 2]);
+                fail();
+            }
+        }
+        assert_closed_oriented(&out);
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&box);
+}
+
+/* How far p lies outside the bevelled cube (0 on its surface, < 0
+ * inside): the largest of its 26 planes' values. */
+static double bevel_outside(const float *p, double e)
+{
+    const double x = fabs((double)p[0]), y = fabs((double)p[1]), z = fabs((double)p[2]);
+    double f = fmax(fmax(x, y), z) - 1;
+    f = fmax(f, (fmax(fmax(x + y, y + z), x + z) - 1 - e) / sqrt(2.0));
+    return fmax(f, (x + y + z - 1 - 2 * e) / sqrt(3.0));
+}
+
+static void test_bevel_corners(void **state)
+{
+    (void)state;
+    const double e = 0.75;
+    mr_mesh cube;
+    make_bevel_cube(quick() ? 8 : 16, e, &cube);
+    for (int qi = 0; qi < 2; qi++) {
+        const mr_simplify_quality quality = qi ? MR_QUALITY_BEST : MR_QUALITY_DEFAULT;
+        mr_mesh out;
+        simplify(&cube, 0.1, quality, 2, &out);
+        assert_closed_oriented(&out);
+        /* every output vertex on the surface: faces flat, creases straight */
+        for (size_t w = 0; w < out.vertex_count; w++)
+            if (fabs(bevel_outside(out.positions + 3 * w, e)) > 1e-5) {
+                print_error("vertex %zu off the bevelled cube by %g\n", w,
+                            bevel_outside(out.positions + 3 * w, e));
+                fail();
+            }
+        /* the 24 points where a square, two bevels and a corner meet are
+         * still vertices: the 8 corners and 12 crease lines are kept */
+        size_t kept = 0;
+        for (size_t v = 0; v < cube.vertex_count; v++) {
+            const float *p = cube.positions + 3 * v;
+            int ones = 0, es = 0;
+            for (int k = 0; k < 3; k++) {
+                ones += fabsf(p[k]) == 1.0f;
+                es += fabsf(p[k]) == (float)e;
+            }
+            if (ones != 1 || es != 2)
+                continue;
+            for (size_t w = 0; w < out.vertex_count; w++) {
+                const float *q = out.positions + 3 * w;
+                if (fabsf(q[0] - p[0]) + fabsf(q[1] - p[1]) + fabsf(q[2] - p[2]) < 1e-5f) {
+                    kept++;
+                    break;
+                }
+            }
+        }
+        assert_int_equal(kept, 24);
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&cube);
+}
+
+static void test_closer_and_sound(void **state)
+{
+    (void)state;
+    mr_mesh in[3];
+    const char *name[3] = {"scan", "sphere", "bunny"};
+    mr_error err;
+    mr_mesh_init(&in[0]);
+    mr_mesh_init(&in[1]);
+    assert_int_equal(mr_generate(MR_GEN_SCAN, quick() ? 20000 : 80000, 3, &in[0], &err), MR_OK);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, quick() ? 5000 : 20000, 0, &in[1], &err), MR_OK);
+    int n = 2;
+    const char *bunny = tu_shared_data("stanford-bunny.obj");
+    mr_mesh_init(&in[2]);
+    if (bunny && mr_mesh_read(bunny, NULL, &in[2], &err) == MR_OK)
+        n = 3;
+    for (int i = 0; i < n; i++) {
+        const double ratios[2] = {0.1, 0.01};
+        for (int r = 0; r < 2; r++) {
+            mr_mesh a, b;
+            simplify(&in[i], ratios[r], MR_QUALITY_DEFAULT, 2, &a);
+            simplify(&in[i], ratios[r], MR_QUALITY_BEST, 2, &b);
+            assert_int_equal(a.triangle_count, b.triangle_count);
+            const mr_compare_result da = distance(&in[i], &a), db = distance(&in[i], &b);
+            print_message("%s %.0f %%: RMS %.5f %% -> %.5f %%, Hausdorff %.4f %% -> %.4f %%\n",
+                          name[i], 100 * ratios[r], 100 * da.rms_rel, 100 * db.rms_rel,
+                          100 * da.hausdorff_rel, 100 * db.hausdorff_rel);
+            assert_true(db.rms_rel < 0.95 * da.rms_rel);
+            assert_true(db.hausdorff_rel < 3 * da.hausdorff_rel);
+            if (i < 2)
+                assert_closed_oriented(&b);
+            if (i == 1) /* a sphere's triangles all face outwards */
+                for (size_t t = 0; t < b.triangle_count; t++) {
+                    const float *p0 = b.positions + 3 * (size_t)b.indices[3 * t],
+                                *p1 = b.positions + 3 * (size_t)b.indices[3 * t + 1],
+                                *p2 = b.positions + 3 * (size_t)b.indices[3 * t + 2];
+                    const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+                    const double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+                    const double nn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                                          u[0] * v[1] - u[1] * v[0]};
+                    assert_true(nn[0] * p0[0] + nn[1] * p0[1] + nn[2] * p0[2] > 0);
+                }
+            mr_mesh_free(&a);
+            mr_mesh_free(&b);
+        }
+        mr_mesh_free(&in[i]);
+    }
+    if (n < 3)
+        print_message("../shared/data absent: the bunny skipped\n");
+}
+
+static void test_threads(void **state)
+{
+    (void)state;
+    mr_mesh scan;
+    mr_error err;
+    mr_mesh_init(&scan);
+    /* above the parallel loops' thresholds */
+    assert_int_equal(mr_generate(MR_GEN_SCAN, quick() ? 140000 : 300000, 5, &scan, &err), MR_OK);
+    const int threads[4] = {1, 2, 3, 8};
+    mr_mesh ref;
+    simplify(&scan, 0.05, MR_QUALITY_BEST, 1, &ref);
+    for (int t = 1; t < 4; t++) {
+        mr_mesh out;
+        simplify(&scan, 0.05, MR_QUALITY_BEST, threads[t], &out);
+        tu_assert_mesh_equal(&ref, &out);
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&ref);
+    mr_mesh_free(&scan);
+
+    /* with attributes and seams (mr_mesh_simplify): a sphere with texture
+     * coordinates split along a seam */
+    mr_mesh sph;
+    mr_mesh_init(&sph);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, quick() ? 20000 : 80000, 0, &sph, &err), MR_OK);
+    sph.texcoords = malloc(sizeof *sph.texcoords * 2 * sph.vertex_count);
+    assert_non_null(sph.texcoords);
+    for (size_t v = 0; v < sph.vertex_count; v++) {
+        const float *p = sph.positions + 3 * v;
+        sph.texcoords[2 * v] = (float)(atan2(p[1], p[0]) / 6.283185307179586 + 0.5);
+        sph.texcoords[2 * v + 1] = (float)(p[2] * 0.5 + 0.5);
+    }
+    mr_mesh wref;
+    for (int t = 0; t < 4; t++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = 0.05;
+        o.quality = MR_QUALITY_BEST;
+        o.threads = threads[t];
+        const int saved = omp_get_max_threads();
+        omp_set_num_threads(threads[t]);
+        mr_mesh out;
+        mr_mesh_init(&out);
+        assert_int_equal(mr_mesh_simplify(&sph, &o, &out, NULL, NULL, &err), MR_OK);
+        omp_set_num_threads(saved);
+        if (t == 0) {
+            wref = out;
+            continue;
+        }
+        tu_assert_mesh_equal(&wref, &out);
+        mr_mesh_free(&out);
+    }
+    mr_mesh_free(&wref);
+    mr_mesh_free(&sph);
+}
+
+static void test_options(void **state)
+{
+    (void)state;
+    mr_mesh sph;
+    mr_error err;
+    mr_mesh_init(&sph);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 2000, 0, &sph, &err), MR_OK);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    assert_int_equal(o.quality, MR_QUALITY_DEFAULT);
+    o.target_ratio = 0.5;
+    o.quality = MR_QUALITY_BEST;
+    o.collapse = MR_COLLAPSE_HALF;
+    mr_simplified s;
+    assert_int_equal(mr_simplify(sph.positions, 0, sph.vertex_count, sph.indices,
+                                 sph.triangle_count, &o, &s, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "half-edge collapse");
+    o.collapse = MR_COLLAPSE_FULL;
+    o.quality = (mr_simplify_quality)7;
+    assert_int_equal(mr_simplify(sph.positions, 0, sph.vertex_count, sph.indices,
+                                 sph.triangle_count, &o, &s, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "unknown quality");
+
+    const char *in = tu_tmp_path("quality-in.ply"), *out = tu_tmp_path("quality-out.ply");
+    mr_write_options wo;
+    mr_write_options_default(&wo);
+    assert_int_equal(mr_mesh_write(in, &sph, &wo, &err), MR_OK);
+    char *text = NULL;
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.2 --quality best -q", in,
+                                       out),
+                                NULL),
+                     0);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.2 --quality great", in,
+                                       out),
+                                &text),
+                     2);
+    tu_assert_contains(text, "--quality is default or best");
+    free(text);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 0.2 --quality best "
+                                       "--collapse half",
+                                       in, out),
+                                &text),
+                     1);
+    tu_assert_contains(text, "half-edge collapse");
+    free(text);
+    assert_int_equal(tu_run_cli("simplify --help", &text), 0);
+    tu_assert_contains(text, "--quality default|best");
+    free(text);
+    mr_mesh_free(&sph);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_options),         cmocka_unit_test(test_flat_stays_flat),
+        cmocka_unit_test(test_bevel_corners),   cmocka_unit_test(test_closer_and_sound),
+        cmocka_unit_test(test_threads),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
