@@ -156,13 +156,14 @@ int bench_raw_write(const mr_mesh *m, const char *path)
 
 double bench_exec_peak(const char *self, const char *raw_path, const mr_simplify_options *opt)
 {
-    char threads[32], ratio[64], collapse[16], strategy[16];
+    char threads[32], ratio[64], collapse[16], strategy[16], quality[16];
     snprintf(threads, sizeof threads, "%d", opt->threads);
     snprintf(ratio, sizeof ratio, "%.17g", opt->target_ratio);
     snprintf(collapse, sizeof collapse, "%d", (int)opt->collapse);
     snprintf(strategy, sizeof strategy, "%d", (int)opt->strategy);
+    snprintf(quality, sizeof quality, "%d", (int)opt->quality);
     char *args[] = {(char *)self, "--peak-child", (char *)raw_path, threads, ratio, collapse,
-                    strategy, NULL};
+                    strategy, quality, NULL};
     int fd[2];
     if (pipe(fd) != 0)
         return -1;
@@ -206,8 +207,8 @@ double bench_exec_peak(const char *self, const char *raw_path, const mr_simplify
 
 int bench_peak_child_main(int argc, char **argv)
 {
-    if (argc != 7 || strcmp(argv[1], "--peak-child") != 0) {
-        fprintf(stderr, "bench: --peak-child RAW THREADS RATIO COLLAPSE STRATEGY\n");
+    if (argc != 8 || strcmp(argv[1], "--peak-child") != 0) {
+        fprintf(stderr, "bench: --peak-child RAW THREADS RATIO COLLAPSE STRATEGY QUALITY\n");
         return 2;
     }
     FILE *f = fopen(argv[2], "rb");
@@ -234,6 +235,7 @@ int bench_peak_child_main(int argc, char **argv)
     opt.target_ratio = strtod(argv[4], NULL);
     opt.collapse = (mr_collapse_kind)atoi(argv[5]);
     opt.strategy = (mr_strategy)atoi(argv[6]);
+    opt.quality = (mr_simplify_quality)atoi(argv[7]);
     omp_set_num_threads(opt.threads > 0 ? opt.threads : omp_get_max_threads());
 #ifdef __GLIBC__
     malloc_trim(0);

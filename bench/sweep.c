@@ -93,6 +93,7 @@ struct algorithm {
     mr_strategy strategy;
     int reference;              /* 1: the greedy reference of its collapse kind */
     int sloppy;                 /* meshopt_simplifySloppy */
+    mr_simplify_quality quality; /* ours: MR_QUALITY_BEST for meshreduce-best */
 };
 
 /* ---- ours ------------------------------------------------------------------ */
@@ -104,6 +105,7 @@ static int run_simplify(const algorithm *alg, target_state *ts, int threads, res
     opt.target_ratio = ts->ratio;
     opt.collapse = alg->collapse;
     opt.strategy = alg->strategy;
+    opt.quality = alg->quality;
     opt.threads = threads;
     omp_set_num_threads(threads);
     mr_simplified out;
@@ -181,15 +183,21 @@ static int run_cgal(const algorithm *alg, target_state *ts, int threads, result 
 /* The algorithms, in run order: the greedy references first (the others
  * compare with them). */
 static const algorithm algorithms[] = {
-    {"mr-greedy-full", run_simplify, 0, MR_COLLAPSE_FULL, MR_STRATEGY_GREEDY, 1, 0},
-    {"mr-greedy-half", run_simplify, 0, MR_COLLAPSE_HALF, MR_STRATEGY_GREEDY, 1, 0},
-    {"meshreduce-full", run_simplify, 1, MR_COLLAPSE_FULL, MR_STRATEGY_BATCHED, 0, 0},
-    {"meshreduce-half", run_simplify, 1, MR_COLLAPSE_HALF, MR_STRATEGY_BATCHED, 0, 0},
-    {"meshopt", run_meshopt, 0, 0, 0, 0, 0},
-    {"meshopt-sloppy", run_meshopt, 0, 0, 0, 0, 1},
-    {"openmesh", run_openmesh, 0, 0, 0, 0, 0},
-    {"cgal-lt", run_cgal, 0, 0, 0, 0, 0},
-    {"cgal-gh", run_cgal, 0, 0, 0, 0, 0},
+    {"mr-greedy-full", run_simplify, 0, MR_COLLAPSE_FULL, MR_STRATEGY_GREEDY, 1, 0,
+     MR_QUALITY_DEFAULT},
+    {"mr-greedy-half", run_simplify, 0, MR_COLLAPSE_HALF, MR_STRATEGY_GREEDY, 1, 0,
+     MR_QUALITY_DEFAULT},
+    {"meshreduce-full", run_simplify, 1, MR_COLLAPSE_FULL, MR_STRATEGY_BATCHED, 0, 0,
+     MR_QUALITY_DEFAULT},
+    {"meshreduce-half", run_simplify, 1, MR_COLLAPSE_HALF, MR_STRATEGY_BATCHED, 0, 0,
+     MR_QUALITY_DEFAULT},
+    {"meshreduce-best", run_simplify, 0, MR_COLLAPSE_FULL, MR_STRATEGY_BATCHED, 0, 0,
+     MR_QUALITY_BEST},
+    {"meshopt", run_meshopt, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
+    {"meshopt-sloppy", run_meshopt, 0, 0, 0, 0, 1, MR_QUALITY_DEFAULT},
+    {"openmesh", run_openmesh, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
+    {"cgal-lt", run_cgal, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
+    {"cgal-gh", run_cgal, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
 };
 enum { N_ALGORITHMS = sizeof algorithms / sizeof *algorithms };
 
