@@ -22,9 +22,10 @@
  * it carries, with DAMPING times the trace added to the diagonal (samples
  * that pin only one direction leave the others as they are: flat parts
  * stay flat). All vertices move at once (Jacobi); a triangle that would
- * flip or lose its area puts its vertices back, until none does.
- * ITERATIONS sweeps. Boundary, seam, locked and non-manifold vertices stay
- * where the collapses left them.
+ * flip, turn by more than max_normal_turn in one sweep or lose its area
+ * puts its vertices back, until none does. ITERATIONS sweeps. Boundary,
+ * seam, locked and non-manifold vertices stay where the collapses left
+ * them.
  *
  * Measured on the bunny, the armadillo, the nefertiti and the homer at
  * 10 % and 1 % (with the volume-preserving placement): RMS distance 14-40
@@ -83,14 +84,15 @@ static void tri_normal(const float *pos, const uint32_t *tri, double n[3], doubl
               len2);
 }
 
-/* Would triangle tri flip or lose its area from positions p0 to p1? */
-static bool turns_bad(const float *p0, const float *p1, const uint32_t *tri)
+/* Would triangle tri flip, turn by more than the collapses' limit (cosine
+ * min_cos) or lose its area from positions p0 to p1? */
+static bool turns_bad(const float *p0, const float *p1, const uint32_t *tri, double min_cos)
 {
     double n0[3], n1[3], l0, l1;
     tri_normal(p0, tri, n0, &l0);
     tri_normal(p1, tri, n1, &l1);
     const double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
-    return !(d > 0) || !(l1 > 1e-12 * l0);
+    return !(d > 0) || !(d * d > min_cos * min_cos * l0 * l1) || !(l1 > 1e-12 * l0);
 }
 
 /* Lists of (item, corner) by vertex, in item order: start[v] .. start[v +
@@ -336,7 +338,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             for (size_t t = 0; t < nlive; t++) {
                 const uint32_t *tv = live + 3 * t;
                 if (!(moved[tv[0]] | moved[tv[1]] | moved[tv[2]]) ||
-                    !turns_bad(m->pos, next, tv))
+                    !turns_bad(m->pos, next, tv, s->limits.min_cos_turn))
                     continue;
                 for (int j = 0; j < 3; j++) {
                     memcpy(next + 3 * (size_t)tv[j], m->pos + 3 * (size_t)tv[j],
