@@ -8,7 +8,7 @@ FUZZ_SECONDS ?= 60
 
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
 BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
-TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
+TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest
 FUZZ_PKGS  = clang libclang-rt-14-dev
 # ThreadSanitizer: clang's TSan runtime, LLVM's OpenMP runtime with its
 # Archer tool (libomp-14-dev: libomp.so, omp.h, libarcher.so) and

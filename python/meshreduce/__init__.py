@@ -1,0 +1,89 @@
+"""meshreduce: simplify triangle meshes and point clouds, fast, on every core.
+
+The functions are the C library's, through a C extension (meshreduce._core)
+on the CPython and NumPy C APIs: arrays go in without a copy where they can
+(float32 (N, 3) positions, uint32 or non-negative int32 (M, 3) indices,
+C-contiguous), the GIL is released while the library works, and a library
+error raises a meshreduce.Error subclass carrying the library's message.
+Results match the command-line tool's for the same input and options.
+
+    import meshreduce
+    mesh = meshreduce.read("bunny.obj")
+    r = meshreduce.simplify(mesh.vertices, mesh.triangles, ratio=0.1)
+    print(len(r.triangles), r.error, r.target_reached)
+    meshreduce.write("bunny-10.ply", r)
+"""
+
+from . import _core
+from ._core import (  # noqa: F401  (re-exported)
+    EmptyMeshError,
+    Error,
+    InvalidArgumentError,
+    MeshIOError,
+    NoMemoryError,
+    ParseError,
+    TooLargeError,
+    UnsupportedError,
+    __version__,
+    compare,
+    generate,
+    info,
+    library_version,
+    read,
+    simplify,
+    write,
+)
+
+__all__ = [
+    "Mesh", "Result", "simplify", "read", "write", "compare", "info", "generate",
+    "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
+    "EmptyMeshError", "TooLargeError", "NoMemoryError", "__version__", "library_version",
+]
+
+
+def _shape(a):
+    return "None" if a is None else "%s %s" % (tuple(getattr(a, "shape", ())), getattr(a, "dtype", ""))
+
+
+class Mesh:
+    """A mesh or point cloud as arrays: vertices (N, 3), triangles (M, 3)
+    ((0, 3) or None for a point cloud), and optional per-vertex normals
+    (N, 3), texcoords (N, 2) and colors (N, 4, RGBA in [0, 1]).
+
+    read() and generate() return one (float32 and uint32 arrays); write()
+    accepts one, or any object with the same attributes."""
+
+    __slots__ = ("vertices", "triangles", "normals", "texcoords", "colors")
+
+    def __init__(self, vertices, triangles=None, normals=None, texcoords=None, colors=None):
+        self.vertices = vertices
+        self.triangles = triangles
+        self.normals = normals
+        self.texcoords = texcoords
+        self.colors = colors
+
+    def __repr__(self):
+        return "Mesh(vertices=%s, triangles=%s, normals=%s, texcoords=%s, colors=%s)" % (
+            _shape(self.vertices), _shape(self.triangles), _shape(self.normals),
+            _shape(self.texcoords), _shape(self.colors))
+
+
+class Result:
+    """What an operation returned: arrays (vertices, triangles, normals,
+    texcoords, colors, origin, ...) and figures (error, target_reached,
+    collapses, ...) as attributes; `stats` holds the figures as a dict, as the
+    CLI's --json prints them. A Result is a mesh for write()."""
+
+    def __init__(self, **fields):
+        self.__dict__.update(fields)
+
+    def __repr__(self):
+        parts = []
+        for k, v in self.__dict__.items():
+            if k == "stats":
+                continue
+            parts.append("%s=%s" % (k, _shape(v) if hasattr(v, "shape") else repr(v)))
+        return "Result(%s)" % ", ".join(parts)
+
+
+_core._register(Mesh, Result)
