@@ -22,7 +22,12 @@
 
 #include "meshreduce.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -468,17 +473,42 @@ static int progress_finish(py_progress *p)
 }
 
 /* ------------------------------------------------------------------------ */
-/* Option helpers                                                           */
+/* Threads and fork                                                         */
 /* ------------------------------------------------------------------------ */
 
-static int check_threads(int threads)
+/*
+ * GCC's OpenMP runtime (libgomp) does not survive fork(): a child whose
+ * parent has run a parallel region waits forever for the parent's worker
+ * threads, which the child does not have, at its first parallel region with
+ * more than one thread. multiprocessing forks by default on Linux. So in a
+ * child forked after the module was imported, every call runs on one thread
+ * (the same results: the library is deterministic at any thread count).
+ */
+static volatile int forked_child;
+
+static void on_fork_child(void)
 {
-    if (threads < 0) {
-        PyErr_Format(PyExc_ValueError, "threads must be >= 0 (0 = all cores), got %d", threads);
+    forked_child = 1;
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+}
+
+/* Check a threads argument (0 = all cores) and give the count to use. */
+static int check_threads(int *threads)
+{
+    if (*threads < 0) {
+        PyErr_Format(PyExc_ValueError, "threads must be >= 0 (0 = all cores), got %d", *threads);
         return -1;
     }
+    if (forked_child)
+        *threads = 1;
     return 0;
 }
+
+/* ------------------------------------------------------------------------ */
+/* Option helpers                                                           */
+/* ------------------------------------------------------------------------ */
 
 /* The name among names[] (NULL-terminated) that s equals: its index; else
  * -1 with a ValueError listing them. */
@@ -729,7 +759,7 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
         o.max_normal_turn = max_normal_turn * 3.14159265358979323846 / 180.0;
     o.lock_border = lock_border;
     o.prune = prune;
-    if (check_threads(threads) < 0)
+    if (check_threads(&threads) < 0)
         return NULL;
     o.threads = threads;
     if (filter_levels > 12)
@@ -856,7 +886,7 @@ static PyObject *py_read(PyObject *self, PyObject *args, PyObject *kw)
         }
         ro.format = (mr_format)k;
     }
-    if (check_threads(threads) < 0) {
+    if (check_threads(&threads) < 0) {
         Py_DECREF(path);
         return NULL;
     }
@@ -1102,7 +1132,7 @@ static PyObject *py_compare(PyObject *self, PyObject *args, PyObject *kw)
             return NULL;
         co.seed = v;
     }
-    if (check_threads(threads) < 0)
+    if (check_threads(&threads) < 0)
         return NULL;
     co.threads = threads;
     py_mesh a, b;
@@ -1190,6 +1220,14 @@ static int add_error(PyObject *m, const char *name, mr_status status, PyObject *
 PyMODINIT_FUNC PyInit__core(void)
 {
     import_array();
+    static int atfork_done;
+    if (!atfork_done) {
+        if (pthread_atfork(NULL, NULL, on_fork_child) != 0) {
+            PyErr_SetString(PyExc_ImportError, "meshreduce: pthread_atfork failed");
+            return NULL;
+        }
+        atfork_done = 1;
+    }
     PyObject *m = PyModule_Create(&module);
     if (!m)
         return NULL;
