@@ -25,17 +25,22 @@ from ._core import (  # noqa: F401  (re-exported)
     TooLargeError,
     UnsupportedError,
     __version__,
+    cluster,
     compare,
     generate,
     info,
     library_version,
     read,
+    render,
     simplify,
+    weld,
     write,
+    write_png,
 )
 
 __all__ = [
     "Mesh", "Result", "simplify", "read", "write", "compare", "info", "generate",
+    "weld", "cluster", "render", "write_png",
     "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
     "EmptyMeshError", "TooLargeError", "NoMemoryError", "__version__", "library_version",
 ]

@@ -1168,6 +1168,471 @@ static PyObject *py_compare(PyObject *self, PyObject *args, PyObject *kw)
 }
 
 /* ------------------------------------------------------------------------ */
+/* weld / cluster                                                           */
+/* ------------------------------------------------------------------------ */
+
+/* The bounding-box diagonal of all the vertices, as the CLI's --eps-rel and
+ * --cell-rel take it (cli_bbox_diagonal). */
+static int bbox_diagonal(const mr_mesh *m, double *diagonal)
+{
+    mr_stats st;
+    mr_error err;
+    mr_status rc;
+    Py_BEGIN_ALLOW_THREADS
+    rc = mr_stats_compute(m->positions, 0, m->vertex_count, NULL, 0, &st, &err);
+    Py_END_ALLOW_THREADS
+    if (rc != MR_OK) {
+        raise_mr_error(&err);
+        return -1;
+    }
+    *diagonal = st.bbox_diagonal;
+    return 0;
+}
+
+static const char *const weld_algorithm_names[] = {"auto", "serial", "pweld", "pweld-async",
+                                                   NULL};
+
+PyDoc_STRVAR(weld_doc,
+"weld(points, triangles=None, *, eps=None, eps_rel=None, reduce=None, strict=False,\n"
+"     algorithm='auto', order='index', drop_degenerate=False, normals=None,\n"
+"     texcoords=None, colors=None, threads=0) -> Result\n"
+"--\n"
+"\n"
+"Exact epsilon welding, as `meshreduce weld` (mr_mesh_weld): vertices are visited\n"
+"in order (order='index', or 'grade': by visual importance); an unclustered one\n"
+"starts a cluster with its unclustered neighbours within eps (strict=True: < eps,\n"
+"as Open3D's merge_close_vertices), represented by their mean (attributes\n"
+"averaged too); triangles are remapped. The same output for every algorithm\n"
+"('auto', 'serial', 'pweld', 'pweld-async') and thread count.\n"
+"\n"
+"The radius, exactly one of: eps (absolute), eps_rel (a fraction of the\n"
+"bounding-box diagonal), reduce (remove at least this fraction of the vertices,\n"
+"in [0, 1): the smallest such eps is searched for). points: (N, 3); triangles:\n"
+"(M, 3) or None for a point cloud. drop_degenerate removes collapsed triangles.\n"
+"\n"
+"Returns a Result with vertices, triangles, normals, texcoords, colors, remap\n"
+"(uint32 (N,): the output vertex of each input vertex), eps, algorithm,\n"
+"threads, input/output vertex and triangle counts, graph_edges, rounds, seconds\n"
+"and stats (a dict of those figures).");
+
+static PyObject *py_weld(PyObject *self, PyObject *args, PyObject *kw)
+{
+    static char *kwlist[] = {"points",  "triangles", "eps",       "eps_rel",   "reduce",
+                             "strict",  "algorithm", "order",     "drop_degenerate",
+                             "normals", "texcoords", "colors",    "threads",   NULL};
+    static const char *const orders[] = {"index", "grade", NULL};
+    PyObject *points, *triangles = Py_None, *eps = Py_None, *eps_rel = Py_None,
+                      *reduce = Py_None, *normals = Py_None, *texcoords = Py_None,
+                      *colors = Py_None;
+    int strict = 0, drop = 0, threads = 0;
+    const char *algorithm = "auto", *order = "index";
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|O$OOOpsspOOOi", kwlist, &points, &triangles,
+                                     &eps, &eps_rel, &reduce, &strict, &algorithm, &order, &drop,
+                                     &normals, &texcoords, &colors, &threads))
+        return NULL;
+    mr_weld_options o;
+    mr_weld_options_default(&o);
+    const int given = (eps != Py_None) + (eps_rel != Py_None) + (reduce != Py_None);
+    if (given != 1)
+        return PyErr_Format(PyExc_ValueError, "weld: give exactly one radius: eps, eps_rel or "
+                                              "reduce (got %d)",
+                            given);
+    double radius;
+    PyObject *r_obj = eps != Py_None ? eps : eps_rel != Py_None ? eps_rel : reduce;
+    const char *r_name = eps != Py_None ? "eps" : eps_rel != Py_None ? "eps_rel" : "reduce";
+    if (to_double(r_obj, r_name, &radius) < 0)
+        return NULL;
+    if (reduce != Py_None ? !(radius >= 0 && radius < 1) : !(radius >= 0))
+        return PyErr_Format(PyExc_ValueError, "%s must be %s, got %R", r_name,
+                            reduce != Py_None ? "a fraction in [0, 1)" : ">= 0", r_obj);
+    int k;
+    if ((k = choose("algorithm", algorithm, weld_algorithm_names)) < 0)
+        return NULL;
+    o.algorithm = (mr_weld_algorithm)k;
+    if ((k = choose("order", order, orders)) < 0)
+        return NULL;
+    o.order = (mr_weld_order)k;
+    o.strict = strict;
+    o.drop_degenerate = drop;
+    if (check_threads(&threads) < 0)
+        return NULL;
+    o.threads = threads;
+    py_mesh in;
+    if (py_mesh_from(&in, points, triangles, normals, texcoords, colors, 0, "points",
+                     "triangles") < 0)
+        return NULL;
+    mr_error err;
+    mr_status st = MR_OK;
+    if (eps != Py_None) {
+        o.eps = radius;
+    } else if (eps_rel != Py_None) {
+        double diagonal;
+        if (bbox_diagonal(&in.m, &diagonal) < 0) {
+            py_mesh_release(&in);
+            return NULL;
+        }
+        o.eps = radius * diagonal;
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        st = mr_weld_find_eps(in.m.positions, 0, in.m.vertex_count, radius, &o, &o.eps, NULL,
+                              &err);
+        Py_END_ALLOW_THREADS
+    }
+    mr_mesh out;
+    mr_mesh_init(&out);
+    uint32_t *remap = NULL;
+    mr_weld_stats ws;
+    memset(&ws, 0, sizeof ws);
+    if (st == MR_OK) {
+        Py_BEGIN_ALLOW_THREADS
+        st = mr_mesh_weld(&in.m, &o, &out, &remap, &ws, &err);
+        Py_END_ALLOW_THREADS
+    }
+    const size_t nin = in.m.vertex_count;
+    py_mesh_release(&in);
+    if (st != MR_OK)
+        return raise_mr_error(&err);
+    PyObject *d = PyDict_New();
+    if (!d) {
+        mr_mesh_free(&out);
+        free(remap);
+        return NULL;
+    }
+    static const char *const algorithm_names[] = {"auto", "serial", "pweld", "pweld-async"};
+    int rc = move_mesh_arrays(d, &out);
+    rc |= set_item(d, "remap", take_array(remap, nin, 0, NPY_UINT32));
+    PyObject *stats = Py_BuildValue(
+        "{s:s,s:i,s:d,s:n,s:n,s:n,s:n,s:n,s:I,s:n,s:{s:d,s:d,s:d,s:d,s:d,s:d}}", "algorithm",
+        algorithm_names[ws.algorithm <= MR_WELD_PWELD_ASYNC ? ws.algorithm : 0], "threads",
+        ws.threads, "eps", ws.eps, "input_vertices", (Py_ssize_t)ws.input_vertices,
+        "input_triangles", (Py_ssize_t)ws.input_triangles, "output_vertices",
+        (Py_ssize_t)ws.output_vertices, "output_triangles", (Py_ssize_t)ws.output_triangles,
+        "graph_edges", (Py_ssize_t)ws.graph_edges, "rounds", ws.rounds, "peak_bytes",
+        (Py_ssize_t)ws.peak_bytes, "seconds", "order", ws.seconds_order, "graph",
+        ws.seconds_graph, "mapping", ws.seconds_mapping, "reduction", ws.seconds_reduction,
+        "retriangulation", ws.seconds_retriangulation, "total", ws.seconds_total);
+    if (!stats || rc || PyDict_Update(d, stats) < 0 || set_item(d, "stats", stats) < 0) {
+        Py_DECREF(d);
+        return NULL;
+    }
+    return make(result_class, d);
+}
+
+PyDoc_STRVAR(cluster_doc,
+"cluster(vertices, triangles=None, *, cell=None, cell_rel=None, vertex_count=None,\n"
+"        normals=None, texcoords=None, colors=None, threads=0) -> Result\n"
+"--\n"
+"\n"
+"Grid vertex clustering, as `meshreduce cluster` (mr_mesh_cluster): each occupied\n"
+"cubic cell becomes one vertex at its quadric-optimal point (kept in the cell),\n"
+"collapsed and duplicate triangles are removed. The cell size, exactly one of:\n"
+"cell (absolute), cell_rel (a fraction of the bounding-box diagonal), or\n"
+"vertex_count (the cell size whose grid has about this many occupied cells).\n"
+"Returns a Result with vertices, triangles, attributes, cell, cells, counts,\n"
+"seconds and stats.");
+
+static PyObject *py_cluster(PyObject *self, PyObject *args, PyObject *kw)
+{
+    static char *kwlist[] = {"vertices", "triangles", "cell",   "cell_rel", "vertex_count",
+                             "normals",  "texcoords", "colors", "threads",  NULL};
+    PyObject *vertices, *triangles = Py_None, *cell = Py_None, *cell_rel = Py_None,
+                        *vcount = Py_None, *normals = Py_None, *texcoords = Py_None,
+                        *colors = Py_None;
+    int threads = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|O$OOOOOOi", kwlist, &vertices, &triangles,
+                                     &cell, &cell_rel, &vcount, &normals, &texcoords, &colors,
+                                     &threads))
+        return NULL;
+    mr_cluster_options o;
+    mr_cluster_options_default(&o);
+    const int given = (cell != Py_None) + (cell_rel != Py_None) + (vcount != Py_None);
+    if (given != 1)
+        return PyErr_Format(PyExc_ValueError, "cluster: give exactly one of cell, cell_rel or "
+                                              "vertex_count (got %d)",
+                            given);
+    double x = 0;
+    if (cell != Py_None || cell_rel != Py_None) {
+        const char *name = cell != Py_None ? "cell" : "cell_rel";
+        if (to_double(cell != Py_None ? cell : cell_rel, name, &x) < 0)
+            return NULL;
+        if (!(x > 0))
+            return PyErr_Format(PyExc_ValueError, "%s must be positive", name);
+    } else {
+        if (to_size(vcount, "vertex_count", &o.target_vertices) < 0)
+            return NULL;
+        if (o.target_vertices == 0)
+            return PyErr_Format(PyExc_ValueError, "vertex_count must be positive");
+    }
+    if (check_threads(&threads) < 0)
+        return NULL;
+    o.threads = threads;
+    py_mesh in;
+    if (py_mesh_from(&in, vertices, triangles, normals, texcoords, colors, 0, "vertices",
+                     "triangles") < 0)
+        return NULL;
+    if (cell != Py_None) {
+        o.cell = x;
+    } else if (cell_rel != Py_None) {
+        double diagonal;
+        if (bbox_diagonal(&in.m, &diagonal) < 0) {
+            py_mesh_release(&in);
+            return NULL;
+        }
+        o.cell = x * diagonal;
+        if (!(o.cell > 0) || isinf(o.cell)) {
+            py_mesh_release(&in);
+            return PyErr_Format(PyExc_ValueError, "cell_rel %g of the bounding-box diagonal %g "
+                                                  "is no usable cell size",
+                                x, diagonal);
+        }
+    }
+    mr_mesh out;
+    mr_mesh_init(&out);
+    mr_cluster_stats cs;
+    memset(&cs, 0, sizeof cs);
+    mr_error err;
+    mr_status st;
+    Py_BEGIN_ALLOW_THREADS
+    st = mr_mesh_cluster(&in.m, &o, &out, &cs, &err);
+    Py_END_ALLOW_THREADS
+    py_mesh_release(&in);
+    if (st != MR_OK)
+        return raise_mr_error(&err);
+    PyObject *d = PyDict_New();
+    if (!d) {
+        mr_mesh_free(&out);
+        return NULL;
+    }
+    int rc = move_mesh_arrays(d, &out);
+    PyObject *stats = Py_BuildValue(
+        "{s:d,s:n,s:n,s:n,s:n,s:n,s:{s:d,s:d,s:d,s:d}}", "cell", cs.cell, "cells",
+        (Py_ssize_t)cs.cells, "input_vertices", (Py_ssize_t)cs.input_vertices, "input_triangles",
+        (Py_ssize_t)cs.input_triangles, "output_vertices", (Py_ssize_t)cs.output_vertices,
+        "output_triangles", (Py_ssize_t)cs.output_triangles, "seconds", "cells",
+        cs.seconds_cells, "representatives", cs.seconds_representatives, "triangles",
+        cs.seconds_triangles, "total", cs.seconds_total);
+    if (!stats || rc || PyDict_Update(d, stats) < 0 || set_item(d, "stats", stats) < 0) {
+        Py_DECREF(d);
+        return NULL;
+    }
+    return make(result_class, d);
+}
+
+/* ------------------------------------------------------------------------ */
+/* render / write_png                                                       */
+/* ------------------------------------------------------------------------ */
+
+/* A 0xRRGGBB colour from an int or an (r, g, b) sequence of 0..255. */
+static int to_rgb(PyObject *o, const char *name, uint32_t *out)
+{
+    if (PyLong_Check(o)) {
+        long v = PyLong_AsLong(o);
+        if (v == -1 && PyErr_Occurred())
+            return -1;
+        if (v < 0 || v > 0xFFFFFF) {
+            PyErr_Format(PyExc_ValueError, "%s must be 0xRRGGBB or (r, g, b)", name);
+            return -1;
+        }
+        *out = (uint32_t)v;
+        return 0;
+    }
+    int r, g, b;
+    if (!PyArg_ParseTuple(o, "iii", &r, &g, &b) || r < 0 || r > 255 || g < 0 || g > 255 ||
+        b < 0 || b > 255) {
+        PyErr_Clear();
+        PyErr_Format(PyExc_ValueError, "%s must be 0xRRGGBB or (r, g, b) with 0..255", name);
+        return -1;
+    }
+    *out = (uint32_t)r << 16 | (uint32_t)g << 8 | (uint32_t)b;
+    return 0;
+}
+
+/* A 1-D float32 array of n finite values. */
+static PyArrayObject *scalar_array(PyObject *o, npy_intp n, const char *name, const char *per)
+{
+    PyArrayObject *a = (PyArrayObject *)PyArray_FROMANY(o, NPY_FLOAT32, 1, 1,
+                                                        NPY_ARRAY_IN_ARRAY | NPY_ARRAY_FORCECAST);
+    if (!a)
+        return NULL;
+    if (PyArray_DIM(a, 0) != n) {
+        PyErr_Format(PyExc_ValueError, "%s needs one value per %s (%lld), got %lld", name, per,
+                     (long long)n, (long long)PyArray_DIM(a, 0));
+        Py_DECREF(a);
+        return NULL;
+    }
+    return a;
+}
+
+PyDoc_STRVAR(render_doc,
+"render(vertices, triangles=None, *, width=1024, height=768, view='iso', yaw=None,\n"
+"       pitch=None, supersample=3, wire=False, background=0xFFFFFF, color=None,\n"
+"       wire_color=None, point_radius=0.0, margin=0.04, face_scalar=None,\n"
+"       vertex_scalar=None, scalar_min=None, scalar_max=None, threads=0)\n"
+"       -> numpy.ndarray\n"
+"--\n"
+"\n"
+"Render a mesh (flat-shaded, z-buffered, headlight) or a point cloud\n"
+"(triangles None or empty: splats) with the library's software rasterizer, as\n"
+"`meshreduce render` draws one panel. Returns an (height, width, 4) uint8 RGBA\n"
+"image (alpha 255). view: 'iso', 'front', 'side', 'top', or yaw and pitch in\n"
+"degrees. Colours: 0xRRGGBB or (r, g, b). face_scalar (one value per triangle)\n"
+"or vertex_scalar (per vertex) colour the surface by a heat map over\n"
+"[scalar_min, scalar_max] (default: the values' range). The same image at any\n"
+"thread count. write_png(path, image) saves it.");
+
+static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
+{
+    static char *kwlist[] = {"vertices",   "triangles",    "width",         "height",
+                             "view",       "yaw",          "pitch",         "supersample",
+                             "wire",       "background",   "color",         "wire_color",
+                             "point_radius", "margin",     "face_scalar",   "vertex_scalar",
+                             "scalar_min", "scalar_max",   "threads",       NULL};
+    PyObject *vertices, *triangles = Py_None, *yaw = Py_None, *pitch = Py_None,
+                        *background = Py_None, *color = Py_None, *wire_color = Py_None,
+                        *face_scalar = Py_None, *vertex_scalar = Py_None, *smin = Py_None,
+                        *smax = Py_None;
+    mr_render_options o;
+    mr_render_options_default(&o);
+    const char *view = "iso";
+    int wire = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|O$iisOOipOOOddOOOOi", kwlist, &vertices,
+                                     &triangles, &o.width, &o.height, &view, &yaw, &pitch,
+                                     &o.supersample, &wire, &background, &color, &wire_color,
+                                     &o.point_radius, &o.margin, &face_scalar, &vertex_scalar,
+                                     &smin, &smax, &o.threads))
+        return NULL;
+    o.wire = wire;
+    if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
+        return PyErr_Format(PyExc_ValueError, "width and height must be in 1..16384");
+    if (o.supersample < 1 || o.supersample > 8)
+        return PyErr_Format(PyExc_ValueError, "supersample must be in 1..8");
+    if (yaw != Py_None || pitch != Py_None) {
+        if (strcmp(view, "iso") != 0)
+            return PyErr_Format(PyExc_ValueError, "one camera: view, or yaw and pitch");
+        o.view = MR_VIEW_CUSTOM;
+        o.yaw = o.pitch = 0;
+        if (yaw != Py_None && to_double(yaw, "yaw", &o.yaw) < 0)
+            return NULL;
+        if (pitch != Py_None && to_double(pitch, "pitch", &o.pitch) < 0)
+            return NULL;
+    } else if (mr_view_from_name(view, &o.view) != 0) {
+        return PyErr_Format(PyExc_ValueError, "view must be one of 'iso', 'front', 'side', "
+                                              "'top', got '%s'",
+                            view);
+    }
+    if ((background != Py_None && to_rgb(background, "background", &o.background) < 0) ||
+        (color != Py_None && to_rgb(color, "color", &o.color) < 0) ||
+        (wire_color != Py_None && to_rgb(wire_color, "wire_color", &o.wire_color) < 0))
+        return NULL;
+    if (!(o.point_radius >= 0) || !(o.margin >= 0 && o.margin < 0.5))
+        return PyErr_Format(PyExc_ValueError, "point_radius must be >= 0 and margin in [0, 0.5)");
+    if (check_threads(&o.threads) < 0)
+        return NULL;
+    if (face_scalar != Py_None && vertex_scalar != Py_None)
+        return PyErr_Format(PyExc_ValueError, "give face_scalar or vertex_scalar, not both");
+    py_mesh in;
+    if (py_mesh_from(&in, vertices, triangles, NULL, NULL, NULL, 0, "vertices", "triangles") < 0)
+        return NULL;
+    PyArrayObject *sc = NULL;
+    if (face_scalar != Py_None || vertex_scalar != Py_None) {
+        const int face = face_scalar != Py_None;
+        if (face && in.m.triangle_count == 0) {
+            py_mesh_release(&in);
+            return PyErr_Format(PyExc_ValueError, "face_scalar needs triangles");
+        }
+        sc = scalar_array(face ? face_scalar : vertex_scalar,
+                          (npy_intp)(face ? in.m.triangle_count : in.m.vertex_count),
+                          face ? "face_scalar" : "vertex_scalar", face ? "triangle" : "vertex");
+        if (!sc) {
+            py_mesh_release(&in);
+            return NULL;
+        }
+        const float *v = PyArray_DATA(sc);
+        double lo = INFINITY, hi = -INFINITY;
+        for (npy_intp i = 0; i < PyArray_DIM(sc, 0); i++) {
+            if (v[i] < lo)
+                lo = v[i];
+            if (v[i] > hi)
+                hi = v[i];
+        }
+        o.scalar_min = lo;
+        o.scalar_max = hi > lo ? hi : lo + 1;
+        if ((smin != Py_None && to_double(smin, "scalar_min", &o.scalar_min) < 0) ||
+            (smax != Py_None && to_double(smax, "scalar_max", &o.scalar_max) < 0)) {
+            Py_DECREF(sc);
+            py_mesh_release(&in);
+            return NULL;
+        }
+        if (face)
+            o.face_scalar = v;
+        else
+            o.vertex_scalar = v;
+    }
+    npy_intp dims[3] = {o.height, o.width, 4};
+    PyArrayObject *img = (PyArrayObject *)PyArray_SimpleNew(3, dims, NPY_UINT8);
+    if (!img) {
+        Py_XDECREF(sc);
+        py_mesh_release(&in);
+        return NULL;
+    }
+    mr_error err;
+    mr_status st;
+    uint8_t *px = PyArray_DATA(img);
+    Py_BEGIN_ALLOW_THREADS
+    st = mr_render(in.m.positions, in.m.vertex_count, in.m.indices, in.m.triangle_count, &o, px,
+                   0, &err);
+    Py_END_ALLOW_THREADS
+    Py_XDECREF(sc);
+    py_mesh_release(&in);
+    if (st != MR_OK) {
+        Py_DECREF(img);
+        return raise_mr_error(&err);
+    }
+    return (PyObject *)img;
+}
+
+PyDoc_STRVAR(write_png_doc,
+"write_png(path, image) -> None\n"
+"--\n"
+"\n"
+"Write an (H, W, 4) uint8 RGBA image (render's output) as an RGB PNG (alpha\n"
+"dropped), completely or not at all. Raises meshreduce.UnsupportedError when the\n"
+"library was built without libpng.");
+
+static PyObject *py_write_png(PyObject *self, PyObject *args, PyObject *kw)
+{
+    static char *kwlist[] = {"path", "image", NULL};
+    PyObject *path = NULL, *image;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O", kwlist, path_arg, &path, &image))
+        return NULL;
+    PyArrayObject *a = (PyArrayObject *)PyArray_FROMANY(image, NPY_UINT8, 3, 3,
+                                                        NPY_ARRAY_IN_ARRAY);
+    if (!a) {
+        Py_DECREF(path);
+        return NULL;
+    }
+    if (PyArray_DIM(a, 2) != 4 || PyArray_DIM(a, 0) < 1 || PyArray_DIM(a, 1) < 1 ||
+        PyArray_DIM(a, 0) > (1 << 20) || PyArray_DIM(a, 1) > (1 << 20)) {
+        Py_DECREF(a);
+        Py_DECREF(path);
+        return PyErr_Format(PyExc_ValueError, "image must have shape (H, W, 4) (RGBA)");
+    }
+    mr_error err;
+    mr_status st;
+    const char *p = PyBytes_AS_STRING(path);
+    const uint8_t *px = PyArray_DATA(a);
+    const int h = (int)PyArray_DIM(a, 0), w = (int)PyArray_DIM(a, 1);
+    Py_BEGIN_ALLOW_THREADS
+    st = mr_png_write(p, px, w, h, &err);
+    Py_END_ALLOW_THREADS
+    Py_DECREF(a);
+    Py_DECREF(path);
+    if (st != MR_OK)
+        return raise_mr_error(&err);
+    Py_RETURN_NONE;
+}
+
+/* ------------------------------------------------------------------------ */
 /* Module                                                                   */
 /* ------------------------------------------------------------------------ */
 
@@ -1191,6 +1656,12 @@ static PyMethodDef methods[] = {
     {"info", (PyCFunction)(void (*)(void))py_info, METH_VARARGS | METH_KEYWORDS, info_doc},
     {"compare", (PyCFunction)(void (*)(void))py_compare, METH_VARARGS | METH_KEYWORDS,
      compare_doc},
+    {"weld", (PyCFunction)(void (*)(void))py_weld, METH_VARARGS | METH_KEYWORDS, weld_doc},
+    {"cluster", (PyCFunction)(void (*)(void))py_cluster, METH_VARARGS | METH_KEYWORDS,
+     cluster_doc},
+    {"render", (PyCFunction)(void (*)(void))py_render, METH_VARARGS | METH_KEYWORDS, render_doc},
+    {"write_png", (PyCFunction)(void (*)(void))py_write_png, METH_VARARGS | METH_KEYWORDS,
+     write_png_doc},
     {"_register", py_register, METH_VARARGS,
      "_register(Mesh, Result): the classes the functions return (meshreduce/__init__.py)."},
     {NULL, NULL, 0, NULL}};

@@ -462,3 +462,98 @@ def test_docstrings():
             assert obj.__doc__ and len(obj.__doc__) >= 30, name
     stub = os.path.join(os.path.dirname(meshreduce.__file__), "__init__.pyi")
     assert os.path.exists(stub)
+
+
+# ---- weld, cluster, render ---------------------------------------------------
+
+
+@needs_cli
+@pytest.mark.parametrize("cli_args, kwargs", [
+    (["--eps-rel", "0.01"], {"eps_rel": 0.01}),
+    (["--eps", "0.05", "--strict", "--order", "grade", "--algorithm", "serial",
+      "--drop-degenerate"],
+     {"eps": 0.05, "strict": True, "order": "grade", "algorithm": "serial",
+      "drop_degenerate": True}),
+    (["--reduce", "30"], {"reduce": 0.3}),
+])
+def test_weld_matches_cli(tmp_path, cli_args, kwargs):
+    src = tmp_path / "scan.ply"
+    cli("generate", "scan", "--triangles", 20000, "-o", src, "-q")
+    out = json.loads(cli("weld", src, "-o", tmp_path / "cli.ply", "--json", "-q", *cli_args))
+    m = meshreduce.read(src)
+    r = meshreduce.weld(m.vertices, m.triangles, **kwargs)
+    meshreduce.write(tmp_path / "py.ply", r)
+    assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
+    for k in ("algorithm", "eps", "input_vertices", "output_vertices", "output_triangles",
+              "graph_edges"):
+        assert out[k] == getattr(r, k), k
+    assert r.remap.shape == (len(m.vertices),) and r.remap.max() == len(r.vertices) - 1
+
+
+def test_weld_point_cloud_and_threads():
+    rng = np.random.default_rng(5)
+    pts = rng.random((3000, 3)).astype(np.float32)
+    pts = np.concatenate([pts, pts + 1e-4])
+    r = meshreduce.weld(pts, eps=1e-3)
+    assert len(r.vertices) == 3000 and r.output_triangles == 0
+    assert np.array_equal(r.remap[:3000], r.remap[3000:])
+    # threads=0: all the cores OpenMP may use (OMP_NUM_THREADS, else the
+    # CPUs this process may run on)
+    cores = int(os.environ.get("OMP_NUM_THREADS") or len(os.sched_getaffinity(0)))
+    assert meshreduce.weld(pts, eps=1e-3, threads=0).threads == cores
+    assert meshreduce.weld(pts, eps=1e-3, threads=1).threads == 1
+    for kw in ({}, {"eps": 1, "eps_rel": 1}, {"eps": -1}, {"reduce": 1.0}):
+        with pytest.raises(ValueError):
+            meshreduce.weld(pts, **kw)
+    with pytest.raises(ValueError, match="algorithm must be one of"):
+        meshreduce.weld(pts, eps=0, algorithm="fast")
+
+
+@needs_cli
+def test_cluster_matches_cli(tmp_path):
+    src = tmp_path / "torus.ply"
+    cli("generate", "torus", "--triangles", 20000, "-o", src, "-q")
+    m = meshreduce.read(src)
+    for cli_args, kwargs in ((["--cell-rel", "0.02"], {"cell_rel": 0.02}),
+                             (["--target-vertices", "1500"], {"vertex_count": 1500})):
+        out = json.loads(cli("cluster", src, "-o", tmp_path / "cli.ply", "--json", "-q",
+                             *cli_args))
+        r = meshreduce.cluster(m.vertices, m.triangles, **kwargs)
+        meshreduce.write(tmp_path / "py.ply", r)
+        assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
+        assert out["cell"] == r.cell and out["cells"] == r.cells
+    with pytest.raises(ValueError, match="exactly one of"):
+        meshreduce.cluster(m.vertices, m.triangles)
+
+
+@needs_cli
+def test_render_matches_cli(tmp_path, torus):
+    meshreduce.write(tmp_path / "t.ply", torus)
+    cli("render", tmp_path / "t.ply", "-o", tmp_path / "cli.png", "--size", "96x64", "--view",
+        "front", "--wire", "-q")
+    img = meshreduce.render(torus.vertices, torus.triangles, width=96, height=64, view="front",
+                            wire=True)
+    assert img.shape == (64, 96, 4) and img.dtype == np.uint8 and (img[..., 3] == 255).all()
+    assert len(np.unique(img.reshape(-1, 4), axis=0)) > 10
+    try:
+        meshreduce.write_png(tmp_path / "py.png", img)
+    except meshreduce.UnsupportedError as e:  # built without libpng
+        assert "PNG output: support was not built" in str(e)
+        return
+    assert (tmp_path / "cli.png").read_bytes() == (tmp_path / "py.png").read_bytes()
+
+
+def test_render_options(torus):
+    v, t = torus.vertices, torus.triangles
+    a = meshreduce.render(v, t, width=40, height=30, threads=1)
+    assert np.array_equal(a, meshreduce.render(v, t, width=40, height=30, threads=2))
+    heat = meshreduce.render(v, t, width=40, height=30, face_scalar=np.arange(len(t)))
+    assert not np.array_equal(a, heat)
+    pts = meshreduce.render(v, None, width=40, height=30, background=(0, 0, 0))
+    assert (pts[0, 0, :3] == 0).all()
+    with pytest.raises(ValueError, match="one value per triangle"):
+        meshreduce.render(v, t, face_scalar=[1.0, 2.0])
+    with pytest.raises(ValueError, match="view must be one of"):
+        meshreduce.render(v, t, view="below")
+    with pytest.raises(ValueError, match="width and height"):
+        meshreduce.render(v, t, width=0)
