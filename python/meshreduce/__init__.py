@@ -14,7 +14,40 @@ Results match the command-line tool's for the same input and options.
     meshreduce.write("bunny-10.ply", r)
 """
 
-from . import _core
+import os as _os
+
+
+def _load_core():
+    """Import the extension with a short OpenMP spin, as the CLI runs.
+
+    The parallel simplifier meets at a barrier a few thousand times a run;
+    libgomp's threads wait there by spinning, by default for long (300,000
+    turns), and on cores busy with other work a spinning thread holds the
+    core its partner needs (a 1M-triangle simplification took 2-4x longer).
+    libgomp reads GOMP_SPINCOUNT once, when it is loaded, which importing the
+    extension does: unless the user chose (GOMP_SPINCOUNT or OMP_WAIT_POLICY
+    set) or libgomp is already loaded, it is set for that moment only, to
+    the CLI's value (cli/main.c), and removed again.
+    """
+    env = _os.environ
+    short_spin = "GOMP_SPINCOUNT" not in env and "OMP_WAIT_POLICY" not in env
+    if short_spin:
+        try:
+            with open("/proc/self/maps") as maps:
+                short_spin = "libgomp" not in maps.read()
+        except OSError:
+            pass
+    if short_spin:
+        env["GOMP_SPINCOUNT"] = "10000"
+    try:
+        from . import _core
+    finally:
+        if short_spin:
+            env.pop("GOMP_SPINCOUNT", None)
+    return _core
+
+
+_core = _load_core()
 from ._core import (  # noqa: F401  (re-exported)
     EmptyMeshError,
     Error,
