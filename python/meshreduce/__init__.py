@@ -49,6 +49,7 @@ def _load_core():
 
 _core = _load_core()
 from ._core import (  # noqa: F401  (re-exported)
+    CancelledError,
     EmptyMeshError,
     Error,
     InvalidArgumentError,
@@ -75,7 +76,7 @@ __all__ = [
     "Mesh", "Result", "simplify", "read", "write", "compare", "info", "generate",
     "weld", "cluster", "render", "write_png",
     "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
-    "EmptyMeshError", "TooLargeError", "NoMemoryError", "__version__", "library_version",
+    "EmptyMeshError", "TooLargeError", "NoMemoryError", "CancelledError", "__version__", "library_version",
 ]
 
 

@@ -38,7 +38,7 @@ static PyObject *result_class; /* Result(**fields) */
 
 /* Exceptions: meshreduce.Error and one subclass per mr_status. */
 static PyObject *error_base;
-static PyObject *error_types[MR_ERR_NO_MEMORY + 1];
+static PyObject *error_types[MR_ERR_CANCELLED + 1];
 
 /* ------------------------------------------------------------------------ */
 /* Errors                                                                   */
@@ -50,7 +50,7 @@ static PyObject *error_types[MR_ERR_NO_MEMORY + 1];
 static PyObject *raise_mr_error(const mr_error *err)
 {
     int s = (int)err->status;
-    PyObject *type = (s >= 1 && s <= MR_ERR_NO_MEMORY) ? error_types[s] : error_base;
+    PyObject *type = (s >= 1 && s <= MR_ERR_CANCELLED) ? error_types[s] : error_base;
     PyObject *exc = PyObject_CallFunction(type, "s", err->message[0] ? err->message
                                                                      : mr_status_string(err->status));
     if (!exc)
@@ -437,15 +437,16 @@ static PyObject *make(PyObject *cls, PyObject *kwargs)
 /* ------------------------------------------------------------------------ */
 
 /* The library calls progress from the calling thread with the GIL
- * released: take it, call the Python callable, and check for Ctrl-C. The
- * first exception (from the callable, or KeyboardInterrupt) is kept and
- * raised when the call returns; the callable is not called again. */
+ * released (about every 1 % of the collapses): take it, call the Python
+ * callable, and check for Ctrl-C. The first exception (from the callable,
+ * or KeyboardInterrupt) is kept, the library is asked to stop (it returns
+ * MR_ERR_CANCELLED), and the exception is raised in its place. */
 typedef struct py_progress {
     PyObject *callable; /* or NULL: only signals are checked */
     PyObject *exc_type, *exc_value, *exc_tb;
 } py_progress;
 
-static void on_progress(double fraction, void *user)
+static int on_progress(double fraction, void *user)
 {
     py_progress *p = user;
     PyGILState_STATE g = PyGILState_Ensure();
@@ -459,7 +460,9 @@ static void on_progress(double fraction, void *user)
         if (PyErr_Occurred())
             PyErr_Fetch(&p->exc_type, &p->exc_value, &p->exc_tb);
     }
+    const int stop = p->exc_type != NULL;
     PyGILState_Release(g);
+    return stop; /* nonzero: the library stops (MR_ERR_CANCELLED) */
 }
 
 /* After the call: raise the kept exception (returns -1), else 0. */
@@ -671,9 +674,10 @@ PyDoc_STRVAR(simplify_doc,
 "boolean mask of length N or an array of vertex indices. boundary_weight: weight\n"
 "of the quadrics holding boundaries and seams. max_normal_turn: degrees in\n"
 "(0, 180]. prune: drop small disconnected pieces. threads: 0 = all cores.\n"
-"progress: a callable taking the fraction done (0..1), called from this thread;\n"
-"an exception it raises, or Ctrl-C, is raised when the simplification ends (the\n"
-"library cannot stop midway).\n"
+"progress: a callable taking the fraction done (0..1), called from this thread\n"
+"about every 1 % of the work; an exception it raises, or Ctrl-C (checked at the\n"
+"same moments, with or without progress), stops the simplification there and is\n"
+"raised.\n"
 "\n"
 "Returns a Result with vertices (float32), triangles (uint32), normals,\n"
 "texcoords, colors (or None), origin (uint32: for each output vertex, the input\n"
@@ -1722,6 +1726,9 @@ PyMODINIT_FUNC PyInit__core(void)
                   "Counts beyond what 32-bit indices address (MR_ERR_TOO_LARGE).") < 0 ||
         add_error(m, "NoMemoryError", MR_ERR_NO_MEMORY, PyExc_MemoryError,
                   "An allocation failed (MR_ERR_NO_MEMORY).") < 0 ||
+        add_error(m, "CancelledError", MR_ERR_CANCELLED, NULL,
+                  "The work was cancelled (MR_ERR_CANCELLED); simplify raises the exception "
+                  "that cancelled it instead.") < 0 ||
         PyModule_AddStringConstant(m, "__version__", MR_VERSION_STRING) < 0 ||
         PyModule_AddStringConstant(m, "library_version", mr_version()) < 0) {
         Py_DECREF(m);

@@ -9,6 +9,7 @@ import gc
 import json
 import multiprocessing
 import os
+import signal
 import subprocess
 import sys
 
@@ -375,6 +376,37 @@ def test_progress(sphere):
 
     with pytest.raises(Stop, match="from progress"):
         meshreduce.simplify(sphere.vertices, sphere.triangles, ratio=0.1, progress=stop)
+
+
+@pytest.mark.parametrize("strategy, collapse", [("batched", "full"), ("greedy", "half"),
+                                                ("fppq", "half")])
+def test_progress_cancels(strategy, collapse):
+    # An exception from progress stops the library there (MR_ERR_CANCELLED
+    # inside): progress is not called again, and the exception is raised.
+    m = meshreduce.generate("scan", 40000)
+    seen = []
+
+    def stop_at_third(fraction):
+        seen.append(fraction)
+        if len(seen) == 3:
+            raise KeyError("enough")
+
+    with pytest.raises(KeyError, match="enough"):
+        meshreduce.simplify(m.vertices, m.triangles, ratio=0.05, strategy=strategy,
+                            collapse=collapse, threads=2, progress=stop_at_third)
+    assert len(seen) == 3 and seen[-1] < 1.0
+    # Ctrl-C: SIGINT while the library works becomes KeyboardInterrupt
+    seen.clear()
+
+    def interrupt(fraction):
+        seen.append(fraction)
+        if len(seen) == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        meshreduce.simplify(m.vertices, m.triangles, ratio=0.05, strategy=strategy,
+                            collapse=collapse, threads=2, progress=interrupt)
+    assert len(seen) == 2
 
 
 def rss_kib():

@@ -338,6 +338,12 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     double max_error;
     size_t collapses = mr_simplifier_run(&s, &o, &max_error);
     const double t2 = mr_now_seconds();
+    if (s.cancelled) {
+        mr_simplifier_free(&s);
+        free(geo);
+        free_ctx(&a);
+        return mr_simplifier_cancelled(err);
+    }
 
     /* Output: one vertex per surviving wedge, in input order. */
     const mr_collapse_mesh *m = &s.m;
