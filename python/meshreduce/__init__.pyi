@@ -105,7 +105,8 @@ def write(
 def generate(
     kind: Literal["sphere", "torus", "scan"] = ..., triangles: int = ..., *, seed: int = ...
 ) -> Mesh: ...
-def info(vertices: Any, triangles: Optional[_Indices] = ...) -> dict[str, Any]: ...
+def info(vertices: Any, triangles: Optional[_Indices] = ...) -> dict[str, Any]:
+    """A file path, a Mesh-like object, or the arrays."""
 def compare(
     a_vertices: _Floats,
     a_triangles: _Indices,

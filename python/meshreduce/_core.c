@@ -1034,7 +1034,7 @@ static int mesh_or_arrays(py_mesh *p, PyObject *a, PyObject *b, int need_triangl
 }
 
 PyDoc_STRVAR(info_doc,
-"info(vertices_or_mesh, triangles=None) -> dict\n"
+"info(mesh_or_path_or_vertices, triangles=None) -> dict\n"
 "--\n"
 "\n"
 "Counts, bounds and topology, as `meshreduce info --json` reports them (without\n"
@@ -1042,8 +1042,11 @@ PyDoc_STRVAR(info_doc,
 "triangles, degenerate and duplicate triangles, edges, boundary edges and\n"
 "loops, non-manifold edges and vertices, misoriented edges, components,\n"
 "euler_characteristic, genus (None unless a manifold surface), closed, manifold,\n"
-"oriented, bbox_min, bbox_max, bbox_diagonal, surface_area. Accepts a Mesh (or\n"
-"any object with .vertices and .triangles) or the arrays.");
+"oriented, bbox_min, bbox_max, bbox_diagonal, surface_area. Accepts a file path\n"
+"(read as read() does), a Mesh (or any object with .vertices and .triangles) or\n"
+"the arrays.");
+
+static PyObject *py_read(PyObject *self, PyObject *args, PyObject *kw);
 
 static PyObject *py_info(PyObject *self, PyObject *args, PyObject *kw)
 {
@@ -1052,7 +1055,20 @@ static PyObject *py_info(PyObject *self, PyObject *args, PyObject *kw)
     if (!PyArg_ParseTupleAndKeywords(args, kw, "O|O", kwlist, &a, &b))
         return NULL;
     py_mesh in;
-    if (mesh_or_arrays(&in, a, b, 0) < 0)
+    int rc;
+    if (PyUnicode_Check(a) || PyBytes_Check(a) || PyObject_HasAttrString(a, "__fspath__")) {
+        /* a file: read it, as `meshreduce info FILE` */
+        PyObject *read_args = PyTuple_Pack(1, a);
+        PyObject *mesh = read_args ? py_read(self, read_args, NULL) : NULL;
+        Py_XDECREF(read_args);
+        if (!mesh)
+            return NULL;
+        rc = mesh_or_arrays(&in, mesh, b, 0);
+        Py_DECREF(mesh);
+    } else {
+        rc = mesh_or_arrays(&in, a, b, 0);
+    }
+    if (rc < 0)
         return NULL;
     mr_stats s;
     mr_error err;

@@ -151,6 +151,60 @@ def test_input_not_modified(sphere):
     assert np.array_equal(v, v0) and np.array_equal(t, t0) and t.dtype == np.int32
 
 
+def test_zero_copy():
+    # NumPy's allocations are traced by tracemalloc (the library's own, for
+    # the output, are not): float32 positions and uint32 or non-negative
+    # int32 indices, C-contiguous, are used in place (no traced growth near
+    # their size); float64 positions and int64 indices are converted (a copy
+    # of at least their float32/uint32 size).
+    import tracemalloc
+    m = meshreduce.generate("scan", 200000)
+    v32, t32 = m.vertices, m.triangles
+    cases = [(v32, t32, 0), (v32, t32.astype(np.int32), 0),
+             (v32.astype(np.float64), t32, v32.nbytes),
+             (v32, t32.astype(np.int64), t32.nbytes)]
+    for v, t, copied in cases:
+        tracemalloc.start()
+        tracemalloc.reset_peak()
+        base = tracemalloc.get_traced_memory()[0]
+        meshreduce.simplify(v, t, ratio=0.5, threads=1)
+        peak = tracemalloc.get_traced_memory()[1] - base
+        tracemalloc.stop()
+        if copied:
+            assert peak >= copied, (v.dtype, t.dtype, peak)
+        else:
+            assert peak < v32.nbytes // 10, (v.dtype, t.dtype, peak)
+
+
+def test_gil_released():
+    # While one thread simplifies (no progress callable: the GIL is not
+    # taken back), the main thread keeps running Python code.
+    import threading
+    import time
+    m = meshreduce.generate("scan", 300000)
+    done = threading.Event()
+    spins = []
+
+    def work():
+        meshreduce.simplify(m.vertices, m.triangles, ratio=0.05, strategy="greedy", threads=1)
+        done.set()
+
+    th = threading.Thread(target=work)
+    t0 = time.perf_counter()
+    th.start()
+    n = 0
+    while not done.is_set():
+        n += 1
+        if n % 1000 == 0:
+            spins.append(time.perf_counter() - t0)
+    th.join()
+    elapsed = time.perf_counter() - t0
+    # with the GIL held, the loop would stall for the whole call (a few
+    # switch intervals at most); released, it runs throughout
+    assert elapsed > 0.05
+    assert len(spins) > 100 and spins[-1] > 0.5 * elapsed
+
+
 def test_input_refcounts_and_no_copy_path(sphere):
     v = np.ascontiguousarray(sphere.vertices, dtype=np.float32)
     t = np.ascontiguousarray(sphere.triangles, dtype=np.uint32)
@@ -271,6 +325,7 @@ def test_info_matches_cli(tmp_path, torus):
     meshreduce.write(tmp_path / "t.ply", torus)
     want = json.loads(cli("info", tmp_path / "t.ply", "--json"))
     got = meshreduce.info(meshreduce.read(tmp_path / "t.ply"))
+    assert meshreduce.info(tmp_path / "t.ply") == got == meshreduce.info(str(tmp_path / "t.ply"))
     for k in ("file", "format", "bytes", "read_seconds"):
         want.pop(k)
     got["bbox_min"], got["bbox_max"] = list(got["bbox_min"]), list(got["bbox_max"])
