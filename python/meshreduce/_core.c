@@ -59,13 +59,19 @@ static PyObject *raise_mr_error(const mr_error *err)
                                                  : PyLong_FromUnsignedLongLong(err->line);
     PyObject *offset = err->offset == MR_NO_POSITION ? Py_NewRef(Py_None)
                                                      : PyLong_FromUnsignedLongLong(err->offset);
-    if (line && offset) {
-        PyObject_SetAttrString(exc, "status", PyUnicode_FromString(mr_status_string(err->status)));
-        PyObject_SetAttrString(exc, "line", line);
-        PyObject_SetAttrString(exc, "offset", offset);
+    PyObject *status = PyUnicode_FromString(mr_status_string(err->status));
+    if (!line || !offset || !status || PyObject_SetAttrString(exc, "status", status) < 0 ||
+        PyObject_SetAttrString(exc, "line", line) < 0 ||
+        PyObject_SetAttrString(exc, "offset", offset) < 0) {
+        Py_XDECREF(line);
+        Py_XDECREF(offset);
+        Py_XDECREF(status);
+        Py_DECREF(exc);
+        return NULL;
     }
-    Py_XDECREF(line);
-    Py_XDECREF(offset);
+    Py_DECREF(line);
+    Py_DECREF(offset);
+    Py_DECREF(status);
     PyErr_SetObject(type, exc);
     Py_DECREF(exc);
     return NULL;
@@ -539,9 +545,11 @@ static int to_size(PyObject *o, const char *name, size_t *out)
     PyObject *i = PyNumber_Index(o);
     if (!i)
         return -1;
-    if (_PyLong_Sign(i) < 0) {
+    int overflow = 0;
+    if (PyLong_AsLongLongAndOverflow(i, &overflow) < 0 || overflow < 0) {
         Py_DECREF(i);
-        PyErr_Format(PyExc_ValueError, "%s must be >= 0", name);
+        if (!PyErr_Occurred())
+            PyErr_Format(PyExc_ValueError, "%s must be >= 0", name);
         return -1;
     }
     size_t v = PyLong_AsSize_t(i);
@@ -842,8 +850,12 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                                      (Py_ssize_t)s.priority_updates, "compactions",
                                      (Py_ssize_t)s.compactions));
     if (!stats || rc || PyDict_Update(d, stats) < 0 ||
-        set_item(d, "error", PyFloat_FromDouble(s.max_error)) < 0 ||
-        set_item(d, "stats", stats) < 0) {
+        set_item(d, "error", PyFloat_FromDouble(s.max_error)) < 0) {
+        Py_XDECREF(stats);
+        Py_DECREF(d);
+        return NULL;
+    }
+    if (set_item(d, "stats", stats) < 0) { /* stats released */
         Py_DECREF(d);
         return NULL;
     }
@@ -1331,7 +1343,12 @@ static PyObject *py_weld(PyObject *self, PyObject *args, PyObject *kw)
         (Py_ssize_t)ws.peak_bytes, "seconds", "order", ws.seconds_order, "graph",
         ws.seconds_graph, "mapping", ws.seconds_mapping, "reduction", ws.seconds_reduction,
         "retriangulation", ws.seconds_retriangulation, "total", ws.seconds_total);
-    if (!stats || rc || PyDict_Update(d, stats) < 0 || set_item(d, "stats", stats) < 0) {
+    if (!stats || rc || PyDict_Update(d, stats) < 0) {
+        Py_XDECREF(stats);
+        Py_DECREF(d);
+        return NULL;
+    }
+    if (set_item(d, "stats", stats) < 0) { /* stats released */
         Py_DECREF(d);
         return NULL;
     }
@@ -1431,7 +1448,12 @@ static PyObject *py_cluster(PyObject *self, PyObject *args, PyObject *kw)
         "output_triangles", (Py_ssize_t)cs.output_triangles, "seconds", "cells",
         cs.seconds_cells, "representatives", cs.seconds_representatives, "triangles",
         cs.seconds_triangles, "total", cs.seconds_total);
-    if (!stats || rc || PyDict_Update(d, stats) < 0 || set_item(d, "stats", stats) < 0) {
+    if (!stats || rc || PyDict_Update(d, stats) < 0) {
+        Py_XDECREF(stats);
+        Py_DECREF(d);
+        return NULL;
+    }
+    if (set_item(d, "stats", stats) < 0) { /* stats released */
         Py_DECREF(d);
         return NULL;
     }

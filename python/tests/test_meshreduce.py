@@ -490,7 +490,17 @@ def test_no_leaks_over_10000_calls():
                 pass
             meshreduce.info(v, t)
 
+    import tracemalloc
     calls(200)  # warm up: allocator pools, caches
+    tracemalloc.start()
+    calls(100)
+    gc.collect()
+    traced = tracemalloc.get_traced_memory()[0]
+    calls(2000)  # traced: a leaked Python object per call shows (> 100 KB)
+    gc.collect()
+    grown = tracemalloc.get_traced_memory()[0] - traced
+    tracemalloc.stop()
+    assert grown < 50000, "Python allocations grew by %d bytes over 2,000 calls" % grown
     gc.collect()
     refs = (sys.getrefcount(v), sys.getrefcount(t), sys.getrefcount(t64), sys.getrefcount(None),
             sys.getrefcount(True))
