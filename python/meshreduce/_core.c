@@ -196,7 +196,7 @@ static PyArrayObject *index_rows(PyObject *obj, size_t vertex_count, const char 
         Py_DECREF(a0);
         return NULL;
     }
-    const int in_place = PyArray_ISCARRAY_RO(a0) &&
+    const int in_place = PyArray_ISCARRAY_RO(a0) && PyArray_ISNOTSWAPPED(a0) &&
                          (type == NPY_UINT32 || type == NPY_INT32 ||
                           (PyArray_ITEMSIZE(a0) == 4 && (kind == 'i' || kind == 'u')));
     const npy_intp n = PyArray_SIZE(a0);

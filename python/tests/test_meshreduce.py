@@ -125,12 +125,14 @@ def test_index_and_float_types_agree(sphere):
     v, t = sphere.vertices, sphere.triangles
     ref = meshreduce.simplify(v, t, ratio=0.3)
     for tt in (t.astype(np.int32), t.astype(np.int64), t.astype(np.uint64),
-               t.astype(np.int16), t.tolist()):
+               t.astype(np.int16), t.tolist(), t.astype(">i4"), t.astype(">u4"),
+               t.astype(">i8")):
         r = meshreduce.simplify(v, tt, ratio=0.3)
         assert np.array_equal(r.triangles, ref.triangles)
         assert np.array_equal(r.vertices, ref.vertices)
-    r = meshreduce.simplify(v.astype(np.float64), t, ratio=0.3)
-    assert np.array_equal(r.vertices, ref.vertices)
+    for vv in (v.astype(np.float64), v.astype(">f4"), v.astype(">f8")):
+        r = meshreduce.simplify(vv, t, ratio=0.3)
+        assert np.array_equal(r.vertices, ref.vertices)
     # non-contiguous input is copied, with the same result
     big = np.zeros((len(v), 6), np.float32)
     big[:, ::2] = v
