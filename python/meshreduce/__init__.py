@@ -61,6 +61,7 @@ from ._core import (  # noqa: F401  (re-exported)
     __version__,
     cluster,
     compare,
+    features,
     generate,
     info,
     library_version,
@@ -76,7 +77,7 @@ __all__ = [
     "Mesh", "Result", "simplify", "read", "write", "compare", "info", "generate",
     "weld", "cluster", "render", "write_png",
     "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
-    "EmptyMeshError", "TooLargeError", "NoMemoryError", "CancelledError", "__version__", "library_version",
+    "EmptyMeshError", "TooLargeError", "NoMemoryError", "CancelledError", "features", "__version__", "library_version",
 ]
 
 

@@ -8,6 +8,7 @@ import numpy.typing as npt
 
 __version__: str
 library_version: str
+features: dict[str, bool]  # "openmp": parallel build; "png": write_png available
 
 _Floats = npt.ArrayLike  # (N, k) float32 or float64
 _Indices = npt.ArrayLike  # (M, 3) int32, int64 or uint32

@@ -1730,6 +1730,28 @@ static int add_error(PyObject *m, const char *name, mr_status status, PyObject *
     return PyModule_AddObjectRef(m, name, t);
 }
 
+/* meshreduce.features: what this build has: "openmp" (parallel; else the
+ * serial build, threads=0 meaning one thread) and "png" (write_png). */
+static int add_features(PyObject *m)
+{
+#ifdef _OPENMP
+    PyObject *openmp = Py_True;
+#else
+    PyObject *openmp = Py_False;
+#endif
+#ifdef MR_HAVE_PNG
+    PyObject *png = Py_True;
+#else
+    PyObject *png = Py_False;
+#endif
+    PyObject *f = Py_BuildValue("{s:O,s:O}", "openmp", openmp, "png", png);
+    if (!f)
+        return -1;
+    int rc = PyModule_AddObjectRef(m, "features", f);
+    Py_DECREF(f);
+    return rc;
+}
+
 PyMODINIT_FUNC PyInit__core(void)
 {
     import_array();
@@ -1767,6 +1789,7 @@ PyMODINIT_FUNC PyInit__core(void)
         add_error(m, "CancelledError", MR_ERR_CANCELLED, NULL,
                   "The work was cancelled (MR_ERR_CANCELLED); simplify raises the exception "
                   "that cancelled it instead.") < 0 ||
+        add_features(m) < 0 ||
         PyModule_AddStringConstant(m, "__version__", MR_VERSION_STRING) < 0 ||
         PyModule_AddStringConstant(m, "library_version", mr_version()) < 0) {
         Py_DECREF(m);
