@@ -652,11 +652,11 @@ fail:
 }
 
 PyDoc_STRVAR(simplify_doc,
-"simplify(vertices, triangles, *, ratio=None, vertex_count=None, triangle_count=None,\n"
+"simplify($module, /, vertices, triangles, *, ratio=None, vertex_count=None, triangle_count=None,\n"
 "         max_error=None, absolute=False, collapse='full', strategy=None,\n"
 "         lock_border=False, boundary_weight=1.0, max_normal_turn=60.0, locked=None,\n"
 "         prune=False, normals=None, texcoords=None, colors=None, threads=0,\n"
-"         progress=None) -> Result\n"
+"         progress=None, filter_levels=0, multiqueue_factor=0)\n"
 "--\n"
 "\n"
 "Reduce a triangle mesh by quadric-error edge collapse, as `meshreduce simplify`\n"
@@ -682,6 +682,8 @@ PyDoc_STRVAR(simplify_doc,
 "boolean mask of length N or an array of vertex indices. boundary_weight: weight\n"
 "of the quadrics holding boundaries and seams. max_normal_turn: degrees in\n"
 "(0, 180]. prune: drop small disconnected pieces. threads: 0 = all cores.\n"
+"filter_levels (fppq, rppq; 1..12, 0 = from the thread count) and\n"
+"multiqueue_factor (multiqueue: heaps per thread, 0 = 2) tune the queues.\n"
 "progress: a callable taking the fraction done (0..1), called from this thread\n"
 "about every 1 % of the work; an exception it raises, or Ctrl-C (checked at the\n"
 "same moments, with or without progress), stops the simplification there and is\n"
@@ -874,7 +876,7 @@ static int path_arg(PyObject *o, PyObject **bytes)
 }
 
 PyDoc_STRVAR(read_doc,
-"read(path, *, format=None, threads=0) -> Mesh\n"
+"read($module, /, path, *, format=None, threads=0)\n"
 "--\n"
 "\n"
 "Read a mesh or point cloud (OBJ, PLY, STL, XYZ; by extension, PLY and STL also by\n"
@@ -928,8 +930,8 @@ static PyObject *py_read(PyObject *self, PyObject *args, PyObject *kw)
 }
 
 PyDoc_STRVAR(write_doc,
-"write(path, mesh, *, format=None, encoding=None, normals=True, texcoords=True,\n"
-"      colors=True) -> None\n"
+"write($module, /, path, mesh, *, format=None, encoding=None, normals=True, texcoords=True,\n"
+"      colors=True)\n"
 "--\n"
 "\n"
 "Write a mesh: any object with .vertices and .triangles (and optionally\n"
@@ -986,7 +988,7 @@ fail:
 }
 
 PyDoc_STRVAR(generate_doc,
-"generate(kind='scan', triangles=1000000, *, seed=1) -> Mesh\n"
+"generate($module, /, kind='scan', triangles=1000000, *, seed=1)\n"
 "--\n"
 "\n"
 "A procedural mesh, as `meshreduce generate`: kind 'sphere' (closed geodesic\n"
@@ -1046,10 +1048,11 @@ static int mesh_or_arrays(py_mesh *p, PyObject *a, PyObject *b, int need_triangl
 }
 
 PyDoc_STRVAR(info_doc,
-"info(mesh_or_path_or_vertices, triangles=None) -> dict\n"
+"info($module, /, vertices, triangles=None)\n"
 "--\n"
 "\n"
-"Counts, bounds and topology, as `meshreduce info --json` reports them (without\n"
+"Counts, bounds and topology of a mesh -- `vertices` may also be a file path or a\n"
+"Mesh -- as `meshreduce info --json` reports them (without\n"
 "the file fields): vertices, referenced/unreferenced/surface/split vertices,\n"
 "triangles, degenerate and duplicate triangles, edges, boundary edges and\n"
 "loops, non-manifold edges and vertices, misoriented edges, components,\n"
@@ -1129,8 +1132,8 @@ static PyObject *py_info(PyObject *self, PyObject *args, PyObject *kw)
 /* ------------------------------------------------------------------------ */
 
 PyDoc_STRVAR(compare_doc,
-"compare(a_vertices, a_triangles, b_vertices, b_triangles, *, samples=1000000,\n"
-"        seed=1, threads=0) -> dict\n"
+"compare($module, /, a_vertices, a_triangles, b_vertices, b_triangles, *, samples=1000000,\n"
+"        seed=1, threads=0)\n"
 "--\n"
 "\n"
 "Surface distances between a reference mesh (a) and a test mesh (b), as\n"
@@ -1225,9 +1228,9 @@ static const char *const weld_algorithm_names[] = {"auto", "serial", "pweld", "p
                                                    NULL};
 
 PyDoc_STRVAR(weld_doc,
-"weld(points, triangles=None, *, eps=None, eps_rel=None, reduce=None, strict=False,\n"
+"weld($module, /, points, triangles=None, *, eps=None, eps_rel=None, reduce=None, strict=False,\n"
 "     algorithm='auto', order='index', drop_degenerate=False, normals=None,\n"
-"     texcoords=None, colors=None, threads=0) -> Result\n"
+"     texcoords=None, colors=None, threads=0)\n"
 "--\n"
 "\n"
 "Exact epsilon welding, as `meshreduce weld` (mr_mesh_weld): vertices are visited\n"
@@ -1356,8 +1359,8 @@ static PyObject *py_weld(PyObject *self, PyObject *args, PyObject *kw)
 }
 
 PyDoc_STRVAR(cluster_doc,
-"cluster(vertices, triangles=None, *, cell=None, cell_rel=None, vertex_count=None,\n"
-"        normals=None, texcoords=None, colors=None, threads=0) -> Result\n"
+"cluster($module, /, vertices, triangles=None, *, cell=None, cell_rel=None, vertex_count=None,\n"
+"        normals=None, texcoords=None, colors=None, threads=0)\n"
 "--\n"
 "\n"
 "Grid vertex clustering, as `meshreduce cluster` (mr_mesh_cluster): each occupied\n"
@@ -1506,11 +1509,10 @@ static PyArrayObject *scalar_array(PyObject *o, npy_intp n, const char *name, co
 }
 
 PyDoc_STRVAR(render_doc,
-"render(vertices, triangles=None, *, width=1024, height=768, view='iso', yaw=None,\n"
+"render($module, /, vertices, triangles=None, *, width=1024, height=768, view='iso', yaw=None,\n"
 "       pitch=None, supersample=3, wire=False, background=0xFFFFFF, color=None,\n"
 "       wire_color=None, point_radius=0.0, margin=0.04, face_scalar=None,\n"
 "       vertex_scalar=None, scalar_min=None, scalar_max=None, threads=0)\n"
-"       -> numpy.ndarray\n"
 "--\n"
 "\n"
 "Render a mesh (flat-shaded, z-buffered, headlight) or a point cloud\n"
@@ -1634,7 +1636,7 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
 }
 
 PyDoc_STRVAR(write_png_doc,
-"write_png(path, image) -> None\n"
+"write_png($module, /, path, image)\n"
 "--\n"
 "\n"
 "Write an (H, W, 4) uint8 RGBA image (render's output) as an RGB PNG (alpha\n"

@@ -557,10 +557,14 @@ def test_open3d_arrays(sphere):
 
 
 def test_docstrings():
+    import inspect
     for name in meshreduce.__all__:
         obj = getattr(meshreduce, name)
         if callable(obj):
             assert obj.__doc__ and len(obj.__doc__) >= 30, name
+        if callable(obj) and not isinstance(obj, type):
+            inspect.signature(obj)  # a text signature for help() and IDEs
+    assert "multiqueue_factor" in inspect.signature(meshreduce.simplify).parameters
     stub = os.path.join(os.path.dirname(meshreduce.__file__), "__init__.pyi")
     assert os.path.exists(stub)
 
