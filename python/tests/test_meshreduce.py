@@ -392,6 +392,20 @@ def test_bunny_matches_cli(tmp_path, cli_args, kwargs):
     assert_same(tmp_path, out, r)
 
 
+SPOT = os.path.join(DATA, "spot.obj")
+
+
+@needs_cli
+@pytest.mark.skipif(not os.path.exists(SPOT), reason=SPOT + " absent")
+def test_texcoord_seams_match_cli(tmp_path):
+    # spot.obj has texture coordinates: vertices split along UV seams,
+    # carried through (mr_mesh_simplify's seam handling), as the CLI does.
+    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.2"], ratio=0.2)
+    assert r.texcoords is not None and r.texcoords.shape == (len(r.vertices), 2)
+    assert r.output_vertices > r.output_points  # seam splits kept
+    assert_same(tmp_path, out, r)
+
+
 @needs_cli
 def test_generated_matches_cli(tmp_path):
     src = tmp_path / "scan.ply"
