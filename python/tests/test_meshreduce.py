@@ -480,6 +480,31 @@ def test_progress_cancels(strategy, collapse):
     assert len(seen) == 2
 
 
+def test_ctrl_c_without_progress():
+    # No progress callable: SIGINT while the library works still stops it
+    # at its next report (about 1 % of the collapses), not at the end.
+    import threading
+    import time
+    m = meshreduce.generate("scan", 300000)
+
+    def run():  # greedy on one thread, to 1 %: about a second of work
+        meshreduce.simplify(m.vertices, m.triangles, ratio=0.01, strategy="greedy", threads=1)
+
+    t0 = time.perf_counter()
+    run()
+    full = time.perf_counter() - t0
+    delay = full / 20
+    timer = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
+    t0 = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        run()
+    elapsed = time.perf_counter() - t0
+    timer.join()
+    # stopped soon after the signal, not when the work was done
+    assert elapsed < delay + 0.4 * full, "stopped after %.2f s of %.2f s" % (elapsed, full)
+
+
 def rss_kib():
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") // 1024
