@@ -8,7 +8,7 @@ FUZZ_SECONDS ?= 60
 
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
 BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
-TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev
+TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest
 FUZZ_PKGS  = clang libclang-rt-14-dev
 # ThreadSanitizer: clang's TSan runtime, LLVM's OpenMP runtime with its
 # Archer tool (libomp-14-dev: libomp.so, omp.h, libarcher.so) and
@@ -16,7 +16,7 @@ FUZZ_PKGS  = clang libclang-rt-14-dev
 TSAN_PKGS  = clang libclang-rt-14-dev libomp-14-dev llvm
 
 .PHONY: all build demo check asan tsan serial fuzz bench report clean deps-build deps-test deps-fuzz \
-        deps-tsan
+        deps-tsan pip-check
 
 all: build
 
@@ -76,6 +76,12 @@ serial: build
 	$(CMAKE) --build build-serial -j $(JOBS) --target meshreduce
 	scripts/check-serial.sh $(BUILD)/meshreduce build-serial/meshreduce
 
+# `pip install .` into a fresh virtualenv (--system-site-packages,
+# --no-build-isolation: Debian's numpy, setuptools, wheel), then the Python
+# tests against the installed module.
+pip-check: build
+	scripts/check-pip-install.sh
+
 # Each reader's libFuzzer target for FUZZ_SECONDS under ASan + UBSan.
 fuzz: deps-build deps-fuzz
 	CC=clang $(CMAKE) -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DMR_FUZZ=ON \
@@ -108,4 +114,4 @@ report: build
 	./$(BUILD)/bench/report bench/report/sweep.csv --out bench
 
 clean:
-	rm -rf build build-asan build-tsan build-serial build-fuzz out
+	rm -rf build build-asan build-tsan build-serial build-fuzz build-python out python/*.egg-info

@@ -89,14 +89,14 @@ typedef struct progress {
     int last_percent;
 } progress;
 
-static void show_progress(double fraction, void *user)
+static int show_progress(double fraction, void *user)
 {
     progress *p = user;
     if (cli_now() - p->start < 1.0)
-        return;
+        return 0;
     int percent = (int)(fraction * 100.0 + 0.5);
     if (percent == p->last_percent)
-        return;
+        return 0;
     p->last_percent = percent;
     p->shown = 1;
     char bar[41];
@@ -106,6 +106,7 @@ static void show_progress(double fraction, void *user)
     bar[40] = '\0';
     fprintf(stderr, "\rsimplifying [%s] %3d%%", bar, percent);
     fflush(stderr);
+    return 0; /* go on: Ctrl-C ends the process (cli/main.c's handler) */
 }
 
 /* "0.1" or "10%" -> 0.1 */

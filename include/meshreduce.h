@@ -40,7 +40,8 @@ typedef enum mr_status {
     MR_ERR_UNSUPPORTED,      /* well-formed but not supported (format, type) */
     MR_ERR_EMPTY,            /* the input holds nothing to work on */
     MR_ERR_TOO_LARGE,        /* counts beyond what 32-bit indices can address */
-    MR_ERR_NO_MEMORY         /* an allocation failed */
+    MR_ERR_NO_MEMORY,        /* an allocation failed */
+    MR_ERR_CANCELLED         /* the progress callback asked to stop */
 } mr_status;
 
 /* Sentinel for mr_error.line and mr_error.offset when they do not apply. */
@@ -367,7 +368,11 @@ typedef enum mr_strategy {
                                pops usually near the top, no bound */
 } mr_strategy;
 
-typedef void (*mr_progress_fn)(double fraction_done, void *user);
+/* Progress of a simplification: the fraction done in [0, 1], from the
+ * calling thread. Return 0 to go on; anything else cancels: the work stops
+ * at the next report (within about 1 % of the collapses) and the call
+ * fails with MR_ERR_CANCELLED, its output left empty. */
+typedef int (*mr_progress_fn)(double fraction_done, void *user);
 
 /* How hard the simplifier works for closeness to the input's surface. */
 typedef enum mr_simplify_quality {

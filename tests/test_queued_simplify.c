@@ -262,13 +262,14 @@ typedef struct progress_log {
     bool falling;
 } progress_log;
 
-static void on_progress(double f, void *user)
+static int on_progress(double f, void *user)
 {
     progress_log *p = user;
     p->calls++;
     p->foreign += !pthread_equal(pthread_self(), p->caller);
     p->falling |= f < p->last;
     p->last = f;
+    return 0;
 }
 
 static void test_progress(void **state)

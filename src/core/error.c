@@ -19,6 +19,7 @@ const char *mr_status_string(mr_status status)
     case MR_ERR_EMPTY: return "empty input";
     case MR_ERR_TOO_LARGE: return "too large";
     case MR_ERR_NO_MEMORY: return "out of memory";
+    case MR_ERR_CANCELLED: return "cancelled";
     }
     return "unknown status";
 }

@@ -1080,8 +1080,9 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                 if (mr_simplifier_reached(s, &g))
                     finished = true;
                 if (o->progress && done >= next_report) {
-                    o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
-                                o->progress_user);
+                    if (mr_simplifier_progress(
+                            s, o, g.planned ? (double)done / (double)g.planned : 1.0))
+                        finished = true;
                     next_report = done + g.planned / 100 + 1;
                 }
             }
@@ -1098,8 +1099,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             share = PASS_SHARE;
         }
     }
-    if (o->progress)
-        o->progress(1.0, o->progress_user);
+    mr_simplifier_progress(s, o, 1.0);
     const double e = sqrt(worst);
     *max_error = mr_simplifier_error(s, o, e);
     return done;

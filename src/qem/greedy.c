@@ -403,7 +403,8 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
             worst = cost > worst ? cost : worst;
             done++;
             if (o->progress && done >= next_report) {
-                o->progress(planned ? (double)done / (double)planned : 1.0, o->progress_user);
+                if (mr_simplifier_progress(s, o, planned ? (double)done / (double)planned : 1.0))
+                    break;
                 next_report += planned / 100 + 1;
             }
             continue;
@@ -428,14 +429,14 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
         worst = cost > worst ? cost : worst;
         done++;
         if (o->progress && done >= next_report) {
-            o->progress(planned ? (double)done / (double)planned : 1.0, o->progress_user);
+            if (mr_simplifier_progress(s, o, planned ? (double)done / (double)planned : 1.0))
+                break;
             next_report += planned / 100 + 1;
         }
     }
     /* The queue is done with: its memory goes before the output's. */
     greedy_free(s);
-    if (o->progress)
-        o->progress(1.0, o->progress_user);
+    mr_simplifier_progress(s, o, 1.0);
     double e = sqrt(worst);
     *max_error = mr_simplifier_error(s, o, e);
     return done;

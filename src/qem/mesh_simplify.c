@@ -342,7 +342,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, &o, &max_error);
-    if (o.quality == MR_QUALITY_BEST) {
+    if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
         st = mr_simplifier_refine(&s, in->positions, 0, gidx, tc, err);
         free(gidx);
         gidx = NULL;
@@ -355,6 +355,12 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         }
     }
     const double t2 = mr_now_seconds();
+    if (s.cancelled) {
+        mr_simplifier_free(&s);
+        free(geo);
+        free_ctx(&a);
+        return mr_simplifier_cancelled(err);
+    }
 
     /* Output: one vertex per surviving wedge, in input order. */
     const mr_collapse_mesh *m = &s.m;

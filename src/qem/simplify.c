@@ -51,6 +51,12 @@ mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
     return mr_simplifier_greedy_init(s, err);
 }
 
+mr_status mr_simplifier_cancelled(mr_error *err)
+{
+    return mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
+                         "simplify: cancelled by the progress callback");
+}
+
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
 {
     size_t done = s->batched  ? mr_simplifier_run_batched(s, o, max_error)
@@ -99,7 +105,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplifier_run(&s, options, &max_error);
-    if (options->quality == MR_QUALITY_BEST) {
+    if (options->quality == MR_QUALITY_BEST && !s.cancelled) {
         st = mr_simplifier_refine(&s, positions, stride, indices, triangle_count, err);
         if (st != MR_OK) {
             mr_simplifier_free(&s);
@@ -107,6 +113,10 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
         }
     }
     const double t2 = mr_now_seconds();
+    if (s.cancelled) {
+        mr_simplifier_free(&s);
+        return mr_simplifier_cancelled(err);
+    }
     /* Only the mesh is needed from here: release the rest before the
      * output is allocated (it would set the peak). The greedy strategy's
      * heap went at the end of its run. */

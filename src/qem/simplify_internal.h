@@ -50,6 +50,7 @@ struct mr_simplifier {
     mr_queued *qd;           /* its state, while it runs */
     mr_queued_profile profile; /* its counts, after the run */
     int threads;             /* threads the run may use (options.threads) */
+    bool cancelled;          /* the progress callback asked to stop */
     double centre[3], scale, diagonal;
     double error_base;       /* bounding-box diagonal of all the input's
                                 vertices: relative errors are relative to it */
@@ -221,6 +222,21 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
 /* ---- simplify.c: the dispatcher, which alone picks the strategy */
 mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
+
+/* Report progress (options.progress, when set) from the calling thread;
+ * true when the callback asked to stop (s->cancelled is then set): the
+ * strategy ends its run as at a reached target, and the caller fails with
+ * MR_ERR_CANCELLED (mr_simplifier_cancelled). */
+static inline bool mr_simplifier_progress(mr_simplifier *s, const mr_simplify_options *o,
+                                          double fraction)
+{
+    if (o->progress && !s->cancelled && o->progress(fraction, o->progress_user) != 0)
+        s->cancelled = true;
+    return s->cancelled;
+}
+
+/* The error of a cancelled run. */
+mr_status mr_simplifier_cancelled(mr_error *err);
 
 /* ---- the strategies: start (fill the queue), run */
 mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err);

@@ -1,6 +1,9 @@
-/* PNG output through libpng, written atomically (temporary file + rename). */
+/* PNG output through libpng, written atomically (temporary file + rename).
+ * Built without libpng (MR_HAVE_PNG undefined), mr_png_write fails with
+ * MR_ERR_UNSUPPORTED. */
 #include "../core/internal.h"
 
+#ifdef MR_HAVE_PNG
 #include <errno.h>
 #include <png.h>
 #include <stdio.h>
@@ -93,3 +96,19 @@ mr_status mr_png_write(const char *path, const uint8_t *rgba, int width, int hei
                  : mr_fail_plain(err, MR_ERR_IO, path, "PNG encoding failed: %s", fail.message);
     return mr_output_close(&out, path, st, err);
 }
+
+#else /* !MR_HAVE_PNG */
+
+mr_status mr_png_write(const char *path, const uint8_t *rgba, int width, int height,
+                       mr_error *err)
+{
+    (void)rgba;
+    (void)width;
+    (void)height;
+    mr_error_clear(err);
+    return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
+                         "PNG output: support was not built (libpng was missing when "
+                         "meshreduce was built)");
+}
+
+#endif

@@ -514,7 +514,8 @@ static void run_thread(mr_simplifier *s, mr_queued *qd, qthread *t, bool caller,
             for (int i = 0; i < qd->threads; i++)
                 made += atomic_load_explicit(&qd->th[i].made, memory_order_relaxed);
             if (made >= next_report) {
-                o->progress(planned ? (double)made / (double)planned : 1.0, o->progress_user);
+                if (mr_simplifier_progress(s, o, planned ? (double)made / (double)planned : 1.0))
+                    ask(qd, &qd->stop); /* every thread stops at the safe point */
                 next_report = made + planned / 100 + 1;
             }
         }
@@ -677,8 +678,7 @@ size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
     const size_t end = atomic_load(&qd->cursor);
     m->refs_size = end < m->refs_capacity ? end : m->refs_capacity;
     mr_simplifier_queued_free(s);
-    if (o->progress)
-        o->progress(1.0, o->progress_user);
+    mr_simplifier_progress(s, o, 1.0);
     *max_error = mr_simplifier_error(s, o, sqrt(worst));
     return made;
 }
