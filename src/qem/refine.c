@@ -64,7 +64,9 @@ static const double out_beta[OUT_SAMPLES][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3},
 typedef struct pull {
     double n[3], r, w;
     float beta[3];
-    uint32_t tri; /* input samples: index into the live triangles */
+    uint32_t tri; /* the nearest triangle, the next sweep's hint: input
+                     samples, an index into the live triangles; output
+                     samples, an input triangle */
 } pull;
 
 /* Normal (twice the area) of triangle (a, b, c) and its squared length. */
@@ -181,6 +183,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
         if (m->tris[3 * t] != MR_COLLAPSE_NONE)
             memcpy(live + 3 * k++, m->tris + 3 * t, 3 * sizeof *live);
     by_vertex(vc, nlive, live, NULL, tstart, tlist); /* the output's triangles stay */
+    for (size_t i = 0; i < no; i++)
+        out_pull[i].tri = MR_NO_HINT;
 
     /* the input in normalised coordinates, its hierarchy, its samples */
     const ptrdiff_t niv = (ptrdiff_t)ivc, nsi = (ptrdiff_t)ns;
@@ -273,8 +277,9 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                 pull *o = &out_pull[OUT_SAMPLES * (size_t)t + (size_t)k];
                 double q[3], mn[3], ml2;
                 uint32_t itri;
-                mr_tri_bvh_nearest(&ibvh, p, MR_NO_HINT, &itri, q);
+                mr_tri_bvh_nearest(&ibvh, p, o->tri, &itri, q);
                 tri_normal(ipos, indices + 3 * (size_t)itri, mn, &ml2);
+                o->tri = itri;
                 o->w = 0;
                 if (!(ml2 > 0) || !(area > 0))
                     continue;
