@@ -363,8 +363,16 @@ typedef enum mr_strategy {
                                l = filter_levels): no rank bound */
     MR_STRATEGY_FPPQ,       /* the heap with filter_levels l filter levels:
                                every pop among the best l * 2^l + 1 */
-    MR_STRATEGY_MULTIQUEUE  /* multiqueue_factor * threads locked heaps:
+    MR_STRATEGY_MULTIQUEUE, /* multiqueue_factor * threads locked heaps:
                                pops usually near the top, no bound */
+    /* Partitioned batches: vertices in `partitions` slabs along the
+     * longest axis (balanced by vertex counts, rebalanced as the mesh
+     * shrinks); each pass, every slab applies its interior collapses
+     * (whose two closed 1-rings lie in the slab) in cost order on its own
+     * thread, then the edges across slabs follow in one global (cost,
+     * edge) order. Full or half collapse. For a fixed `partitions` the
+     * output is byte-identical at every thread count. */
+    MR_STRATEGY_PARTITIONED
 } mr_strategy;
 
 typedef void (*mr_progress_fn)(double fraction_done, void *user);
@@ -411,7 +419,14 @@ typedef struct mr_simplify_options {
                                    mr_fppq_default_levels) */
     unsigned multiqueue_factor; /* MR_STRATEGY_MULTIQUEUE: heaps per thread
                                    (0 = 2) */
+    unsigned partitions;        /* MR_STRATEGY_PARTITIONED: slabs, 1 ..
+                                   MR_PARTITIONS_MAX (0 = MR_PARTITIONS_DEFAULT,
+                                   a constant: never from the thread count,
+                                   so the output does not depend on it) */
 } mr_simplify_options;
+
+#define MR_PARTITIONS_DEFAULT 16
+#define MR_PARTITIONS_MAX 4096
 
 void mr_simplify_options_default(mr_simplify_options *options);
 
@@ -466,6 +481,12 @@ typedef struct mr_simplify_stats {
     size_t topology_checks;     /* validity tests of a collapse */
     size_t priority_updates;    /* queue keys set (re-keys, inserts, removals) */
     size_t compactions;         /* all threads stopped to compact the lists */
+    /* MR_STRATEGY_PARTITIONED's profile (0 for the others): */
+    size_t partition_passes;    /* passes (gather, interior, boundary) */
+    size_t interior_collapses;  /* made by the slabs concurrently */
+    size_t boundary_collapses;  /* made in the global order (edges across
+                                   slabs, and the last ones to the target) */
+    size_t rebalances;          /* slabs recomputed as the mesh shrank */
 } mr_simplify_stats;
 
 /* The result of a simplification on flat arrays: malloc'd arrays that

@@ -1,0 +1,756 @@
+/*
+ * Partitioned batches of collapses (MR_STRATEGY_PARTITIONED; issue 16,
+ * the parallel-QEM report's "partitioned batch" with boundary-aware
+ * handling, applied in parallel where the report committed sequentially).
+ *
+ * The live vertices are split into `partitions` slabs along the longest
+ * axis of their bounding box, the slab planes at vertex-count quantiles (a
+ * histogram of SLAB_BINS bins: balanced slabs, deterministic). A vertex
+ * keeps its slab, even when a full collapse moves it across a plane, until
+ * the next rebalance, which happens each time the live vertices halve
+ * (counts only, never time).
+ *
+ * An edge (a, b) is interior when everything its collapse reads or writes
+ * -- the closed 1-rings of a and b: collapse.h's read/write set -- lies in
+ * one slab, i.e. when a and b are both "pure" (every vertex of every
+ * triangle of theirs is in their own slab). A pure vertex's triangles hold
+ * only vertices of its slab, and a collapse of two pure vertices touches
+ * only those triangles and vertices (the survivor's new triangles are its
+ * ends', the opposite vertices are in the slab), so collapses of
+ * different slabs never touch the same vertex, triangle or list: they
+ * commute, and slab p's outcome depends only on slab p's own work.
+ *
+ * A pass:
+ *   1. gather, per slab in parallel: clean the lists of the slab's live
+ *      vertices, mark the pure ones; then every live edge once (batched.c's
+ *      half-edge rule), with its cost from the vectorised planner, kept
+ *      when its collapse may happen; interior edges to the slab's list,
+ *      the others to its boundary list;
+ *   2. a global cost threshold, as batched.c's: the goal-th cheapest key
+ *      (goal = the collapses still needed) times PASS_SLACK, from a
+ *      histogram of every slab's candidates (integer sums: the same on any
+ *      number of threads); each slab keeps its candidates under it and
+ *      sorts them by (cost, edge) with edge = (smaller id, larger id);
+ *   3. interior, per slab in parallel: the slab's candidates in that
+ *      order, skipping an edge with an end that was already an end of a
+ *      collapse in this pass (only the ends of a collapse change, so every
+ *      other candidate's cost is still exact), testing validity
+ *      (mr_simplifier_allowed) on the mesh as it stands, applying with
+ *      mr_simplifier_collapse_at into the slab's room in refs (handed out
+ *      by prefix sums; when it runs out the slab pauses, refs is compacted
+ *      at a barrier and the paused slabs resume where they stopped -- a
+ *      collapse's result does not depend on where its list is written);
+ *   4. boundary, on the calling thread: every slab's boundary candidates
+ *      under the threshold in one (cost, edge) order, the same skip rule,
+ *      tested and applied one at a time, stopping exactly at the target.
+ * Near the target each slab has a quota (its share, by candidate counts,
+ * of the vertices and triangles still to go, less what one collapse can
+ * remove: 3 vertices, 2 triangles), so the concurrent step never
+ * overshoots; once the collapses still needed are few (TAIL_PER_PARTITION
+ * per slab) or a quota stopped a slab, the pass is a tail pass: all
+ * candidates in one global order on the calling thread, up to the target.
+ *
+ * Determinism: what each slab does depends only on the mesh, the slabs
+ * (from positions and counts) and the constants; slabs run in any order on
+ * any thread; every global order is (cost, edge); the boundary and tail
+ * steps are sequential; refs compaction gives the same layout on any
+ * number of threads. So for a fixed `partitions` the output is
+ * byte-identical at every thread count and in the serial build. With one
+ * slab every edge is interior, there is no boundary list, and a pass is
+ * the sequential sweep batched.c approximates with its rounds.
+ */
+#include "simplify_internal.h"
+
+#include "../core/omp_compat.h"
+
+#include <math.h>
+
+#define NONE MR_COLLAPSE_NONE
+
+/* The slack on the goal-th cheapest cost (as batched.c's PASS_SLACK). */
+#define PASS_SLACK 1.5f
+/* Histogram buckets over the top 16 bits of a cost key. */
+#define HIST_BUCKETS 65536u
+/* Bins of the slab quantiles along the axis. */
+#define SLAB_BINS 4096u
+/* Tail passes (one global order, one thread) once fewer collapses than
+ * this many per slab are needed. */
+#define TAIL_PER_PARTITION 64
+/* Edges per call of the vectorised cost planner. */
+#define GATHER_BATCH 256
+
+/* pure[] bits: the vertex's closed 1-ring is in its slab; counted in the
+ * room bound of this pass. */
+#define PURE 1u
+#define SEEN 2u
+
+/* A candidate edge, a < b, and the bits of its (float) cost. */
+typedef struct pcand {
+    uint32_t key, a, b;
+} pcand;
+
+/* One slab's state in a pass. */
+typedef struct pslab {
+    size_t c0, c1;        /* its region in cand */
+    size_t nin, nbd;      /* interior candidates from c0, boundary ones
+                             ending at c1 */
+    size_t next;          /* interior: the next candidate to try */
+    size_t demand;        /* refs room bound of what is left */
+    size_t room0, room1;  /* its room in refs this step, [room0, room1) */
+    size_t qv, qt;        /* quotas: vertices, triangles */
+    size_t gone, deleted, made, refused;
+    double worst;
+    bool paused, quota_hit;
+} pslab;
+
+struct mr_partitioned {
+    unsigned parts;
+    int threads;
+    uint16_t *part;       /* per vertex: its slab */
+    uint8_t *pure;        /* per vertex: PURE, SEEN */
+    uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
+    uint32_t *pverts;     /* the live vertices at the last balance, by slab */
+    size_t *pvoff;        /* parts + 1 */
+    pslab *slab;          /* parts */
+    pcand *cand;          /* cand_cap */
+    size_t cand_cap;
+    pcand *seq;           /* the boundary (or tail) candidates, merged */
+    size_t seq_cap;
+    uint32_t *hist;       /* HIST_BUCKETS per thread */
+    size_t balanced_live; /* live vertices at the last balance */
+};
+
+static inline uint32_t float_key(float x)
+{
+    uint32_t u;
+    memcpy(&u, &x, sizeof u);
+    return u; /* costs are >= 0: the bits order as the values */
+}
+
+static inline float key_float(uint32_t u)
+{
+    float x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+static int cand_cmp(const void *x, const void *y)
+{
+    const pcand *p = x, *q = y;
+    if (p->key != q->key)
+        return p->key < q->key ? -1 : 1;
+    if (p->a != q->a)
+        return p->a < q->a ? -1 : 1;
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+/* ---- slabs ----------------------------------------------------------------- */
+
+/* Slabs from the live vertices' current positions: the longest axis of
+ * their bounding box, planes at vertex-count quantiles; then the live
+ * vertices listed slab by slab (in id order). */
+static void balance(mr_simplifier *s)
+{
+    mr_partitioned *pt = s->pt;
+    const mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+    const bool par = pt->threads > 1 && nv > 65536;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    float lo0 = INFINITY, lo1 = INFINITY, lo2 = INFINITY;
+    float hi0 = -INFINITY, hi1 = -INFINITY, hi2 = -INFINITY;
+#pragma omp parallel for schedule(static) num_threads(pt->threads) if (par) \
+    reduction(min : lo0, lo1, lo2) reduction(max : hi0, hi1, hi2)
+    for (ptrdiff_t v = 0; v < nv; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        const float *p = m->pos + 3 * v;
+        lo0 = p[0] < lo0 ? p[0] : lo0;
+        lo1 = p[1] < lo1 ? p[1] : lo1;
+        lo2 = p[2] < lo2 ? p[2] : lo2;
+        hi0 = p[0] > hi0 ? p[0] : hi0;
+        hi1 = p[1] > hi1 ? p[1] : hi1;
+        hi2 = p[2] > hi2 ? p[2] : hi2;
+    }
+    lo[0] = lo0, lo[1] = lo1, lo[2] = lo2;
+    hi[0] = hi0, hi[1] = hi1, hi[2] = hi2;
+    int axis = 0;
+    for (int k = 1; k < 3; k++)
+        if (hi[k] - lo[k] > hi[axis] - lo[axis])
+            axis = k;
+    const float a0 = lo[axis];
+    const float ext = hi[axis] > lo[axis] ? hi[axis] - lo[axis] : 1.0f;
+    const float scale = (float)SLAB_BINS / ext;
+    uint32_t bins[SLAB_BINS];
+    memset(bins, 0, sizeof bins);
+    size_t live = 0;
+    for (ptrdiff_t v = 0; v < nv; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        float f = (m->pos[3 * v + axis] - a0) * scale;
+        uint32_t b = f <= 0 ? 0 : f >= (float)(SLAB_BINS - 1) ? SLAB_BINS - 1 : (uint32_t)f;
+        bins[b]++;
+        live++;
+    }
+    /* a bin's slab: the share of live vertices before it */
+    uint16_t slab_of[SLAB_BINS];
+    size_t acc = 0;
+    for (uint32_t b = 0; b < SLAB_BINS; b++) {
+        const size_t q = live ? acc * pt->parts / live : 0;
+        slab_of[b] = (uint16_t)(q < pt->parts ? q : pt->parts - 1);
+        acc += bins[b];
+    }
+    size_t *off = pt->pvoff;
+    memset(off, 0, (pt->parts + 1) * sizeof *off);
+    for (ptrdiff_t v = 0; v < nv; v++) {
+        float f = (m->pos[3 * v + axis] - a0) * scale;
+        uint32_t b = f <= 0 ? 0 : f >= (float)(SLAB_BINS - 1) ? SLAB_BINS - 1 : (uint32_t)f;
+        pt->part[v] = slab_of[b];
+        if (!(m->flags[v] & MR_VF_REMOVED))
+            off[slab_of[b] + 1]++;
+    }
+    for (unsigned p = 0; p < pt->parts; p++)
+        off[p + 1] += off[p];
+    for (ptrdiff_t v = 0; v < nv; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED))
+            pt->pverts[off[pt->part[v]]++] = (uint32_t)v;
+    for (unsigned p = pt->parts; p > 0; p--)
+        off[p] = off[p - 1];
+    off[0] = 0;
+    pt->balanced_live = m->live_vertices;
+}
+
+/* ---- set-up ---------------------------------------------------------------- */
+
+mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
+{
+    mr_collapse_mesh *m = &s->m;
+    mr_partitioned *pt = mr_calloc_array(1, sizeof *pt);
+    if (!pt)
+        return mr_fail_nomem(err, NULL, sizeof *pt);
+    s->pt = pt;
+    pt->threads = s->threads > 0 ? s->threads : 1;
+    pt->parts = s->partitions ? s->partitions : MR_PARTITIONS_DEFAULT;
+    m->lazy = true; /* only a collapse's two ends read its lists */
+    mr_collapse_prepare(m);
+    /* every half-edge of a live triangle at most once */
+    pt->cand_cap = 3 * m->live_triangles + 1;
+    pt->cand = mr_alloc_array(pt->cand_cap, sizeof *pt->cand);
+    pt->part = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part);
+    pt->pure = mr_calloc_array(m->vertex_count + 1, 1);
+    pt->mark = mr_calloc_array(m->vertex_count + 1, 1);
+    pt->pverts = mr_alloc_array(m->vertex_count + 1, sizeof *pt->pverts);
+    pt->pvoff = mr_alloc_array((size_t)pt->parts + 1, sizeof *pt->pvoff);
+    pt->slab = mr_calloc_array(pt->parts, sizeof *pt->slab);
+    pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
+    if (!pt->cand || !pt->part || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
+        !pt->slab || !pt->hist || !m->dead)
+        return mr_fail_nomem(err, NULL, pt->cand_cap * sizeof *pt->cand + m->vertex_count * 12);
+    balance(s);
+    return MR_OK;
+}
+
+void mr_simplifier_partitioned_free(mr_simplifier *s)
+{
+    mr_partitioned *pt = s->pt;
+    if (!pt)
+        return;
+    free(pt->cand);
+    free(pt->seq);
+    free(pt->part);
+    free(pt->pure);
+    free(pt->mark);
+    free(pt->pverts);
+    free(pt->pvoff);
+    free(pt->slab);
+    free(pt->hist);
+    free(pt);
+    s->pt = NULL;
+}
+
+/* ---- a pass ---------------------------------------------------------------- */
+
+/* Collapses still needed to reach the targets. */
+static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g)
+{
+    const mr_collapse_mesh *m = &s->m;
+    size_t needed = m->live_vertices > g->vertices ? m->live_vertices - g->vertices : 0;
+    if (g->triangles) {
+        const size_t t = m->live_triangles > g->triangles
+                             ? (m->live_triangles - g->triangles + 1) / 2
+                             : 0;
+        needed = t < needed ? t : needed;
+    }
+    return needed;
+}
+
+/* Slab p's live vertices: lists cleaned, pure ones marked; returns the
+ * sum of their list lengths (a bound on the slab's candidates). */
+static size_t slab_prepare(mr_simplifier *s, unsigned p)
+{
+    mr_partitioned *pt = s->pt;
+    mr_collapse_mesh *m = &s->m;
+    size_t sum = 0;
+    for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++) {
+        const uint32_t v = pt->pverts[i];
+        if (m->flags[v] & MR_VF_REMOVED) {
+            pt->pure[v] = 0;
+            continue;
+        }
+        mr_collapse_clean(m, v);
+        const uint32_t *list = mr_collapse_vertex_tris(m, v);
+        const uint32_t n = m->count[v];
+        bool pure = true;
+        for (uint32_t j = 0; j < n && pure; j++) {
+            const uint32_t *t = m->tris + (list[j] - list[j] % 3);
+            pure = pt->part[t[0]] == p && pt->part[t[1]] == p && pt->part[t[2]] == p;
+        }
+        pt->pure[v] = pure ? PURE : 0;
+        sum += n;
+    }
+    return sum;
+}
+
+/* Slab p's candidates: every live edge from one of its vertices' half-edges
+ * (an inner edge from its smaller end, a boundary edge from its only
+ * half-edge, an inner edge between two boundary vertices never: batched.c's
+ * rule), whose collapse may happen; interior ones from c0 up, the others
+ * from c1 down. */
+static void slab_gather(mr_simplifier *s, unsigned p, double limit)
+{
+    mr_partitioned *pt = s->pt;
+    const mr_collapse_mesh *m = &s->m;
+    pslab *sl = &pt->slab[p];
+    pcand *cand = pt->cand;
+    size_t nin = 0, nbd = 0;
+    uint32_t ea[GATHER_BATCH], eb[GATHER_BATCH];
+    uint8_t in[GATHER_BATCH];
+    double cost[GATHER_BATCH];
+    size_t nb = 0;
+#define FLUSH()                                                                       \
+    do {                                                                              \
+        mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
+        for (size_t f_ = 0; f_ < nb; f_++) {                                             \
+            if (!(cost[f_] <= limit && cost[f_] < INFINITY))                            \
+                continue;                                                             \
+            const uint32_t a = ea[f_] < eb[f_] ? ea[f_] : eb[f_];                         \
+            const uint32_t b = ea[f_] < eb[f_] ? eb[f_] : ea[f_];                         \
+            const pcand e_ = {float_key((float)cost[f_]), a, b};                        \
+            if (in[f_])                                                                \
+                cand[sl->c0 + nin++] = e_;                                             \
+            else                                                                      \
+                cand[sl->c1 - ++nbd] = e_;                                             \
+        }                                                                             \
+        nb = 0;                                                                       \
+    } while (0)
+    for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++) {
+        const uint32_t v = pt->pverts[i];
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        const uint32_t *list = mr_collapse_vertex_tris(m, v);
+        for (uint32_t j = 0, n = m->count[v]; j < n; j++) {
+            const uint32_t c = list[j], k = c % 3;
+            const uint32_t w = m->tris[c - k + (k == 2 ? 0 : k + 1)];
+            bool take = v < w;
+            if (m->flags[v] & m->flags[w] & MR_VF_BOUNDARY)
+                take = mr_collapse_edge_triangles(m, v, w) == 1;
+            if (!take)
+                continue;
+            __builtin_prefetch(s->q + w);
+            ea[nb] = v;
+            eb[nb] = w;
+            in[nb] = (pt->pure[v] & pt->pure[w] & PURE) != 0;
+            if (++nb == GATHER_BATCH)
+                FLUSH();
+        }
+    }
+    if (nb)
+        FLUSH();
+#undef FLUSH
+    sl->nin = nin;
+    sl->nbd = nbd;
+}
+
+/* Every slab's candidates (step 1); returns their number. */
+static size_t gather(mr_simplifier *s, double limit)
+{
+    mr_partitioned *pt = s->pt;
+    const ptrdiff_t np = (ptrdiff_t)pt->parts;
+    const bool par = pt->threads > 1 && np > 1;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par)
+    for (ptrdiff_t p = 0; p < np; p++) {
+        const size_t n = slab_prepare(s, (unsigned)p);
+        pt->slab[p].c1 = n; /* for now: the slab's bound */
+    }
+    size_t off = 0;
+    for (unsigned p = 0; p < pt->parts; p++) {
+        const size_t n = pt->slab[p].c1;
+        pt->slab[p].c0 = off;
+        off += n;
+        pt->slab[p].c1 = off;
+    }
+    if (off > pt->cand_cap) /* never: no vertex has more half-edges than at the start */
+        return 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par)
+    for (ptrdiff_t p = 0; p < np; p++)
+        slab_gather(s, (unsigned)p, limit);
+    size_t total = 0;
+    for (unsigned p = 0; p < pt->parts; p++)
+        total += pt->slab[p].nin + pt->slab[p].nbd;
+    return total;
+}
+
+/* The key below which at least rank + 1 of the n candidates lie, to the
+ * resolution of the top 16 bits (as batched.c's rank_key). */
+static uint32_t rank_key(mr_simplifier *s, size_t n, size_t rank)
+{
+    mr_partitioned *pt = s->pt;
+    const int nt = n > 65536 ? pt->threads : 1;
+    const ptrdiff_t np = (ptrdiff_t)pt->parts;
+#pragma omp parallel num_threads(nt) if (nt > 1)
+    {
+        const int me = omp_get_thread_num(), team = omp_get_num_threads();
+        uint32_t *hist = pt->hist + (size_t)me * HIST_BUCKETS;
+        memset(hist, 0, HIST_BUCKETS * sizeof *hist);
+#pragma omp for schedule(dynamic, 1)
+        for (ptrdiff_t p = 0; p < np; p++) {
+            const pslab *sl = &pt->slab[p];
+            for (size_t i = sl->c0; i < sl->c0 + sl->nin; i++)
+                hist[pt->cand[i].key >> 16]++;
+            for (size_t i = sl->c1 - sl->nbd; i < sl->c1; i++)
+                hist[pt->cand[i].key >> 16]++;
+        }
+        /* (the implicit barrier of the loop) the sum of the threads'
+         * histograms, bucket ranges split */
+#pragma omp for schedule(static)
+        for (ptrdiff_t k = 0; k < (ptrdiff_t)HIST_BUCKETS; k++) {
+            uint32_t sum = 0;
+            for (int t = 0; t < team; t++)
+                sum += pt->hist[(size_t)t * HIST_BUCKETS + (size_t)k];
+            pt->hist[k] = sum;
+        }
+    }
+    size_t acc = 0;
+    for (uint32_t b = 0; b < HIST_BUCKETS; b++) {
+        acc += pt->hist[b];
+        if (acc > rank)
+            return b << 16 | 0xFFFFu;
+    }
+    return UINT32_MAX;
+}
+
+/* Slab p keeps its candidates with keys up to lim, interior ones sorted
+ * (unless `tail`: all go to the global order), and bounds the refs room
+ * its collapses can take: the list lengths of the distinct ends (each
+ * vertex is an end once a pass, and its list does not grow before). */
+static void slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
+{
+    mr_partitioned *pt = s->pt;
+    const mr_collapse_mesh *m = &s->m;
+    pslab *sl = &pt->slab[p];
+    pcand *c = pt->cand;
+    size_t k = 0;
+    for (size_t i = 0; i < sl->nin; i++) {
+        c[sl->c0 + k] = c[sl->c0 + i];
+        k += c[sl->c0 + i].key <= lim;
+    }
+    sl->nin = k;
+    k = 0;
+    for (size_t i = 0; i < sl->nbd; i++) {
+        c[sl->c1 - 1 - k] = c[sl->c1 - 1 - i];
+        k += c[sl->c1 - 1 - i].key <= lim;
+    }
+    sl->nbd = k;
+    sl->next = 0;
+    sl->demand = 0;
+    if (tail)
+        return;
+    qsort(c + sl->c0, sl->nin, sizeof *c, cand_cmp);
+    for (size_t i = sl->c0; i < sl->c0 + sl->nin; i++) {
+        const uint32_t e[2] = {c[i].a, c[i].b};
+        for (int j = 0; j < 2; j++) {
+            if (!(pt->pure[e[j]] & SEEN)) {
+                pt->pure[e[j]] |= SEEN;
+                sl->demand += m->count[e[j]];
+            }
+        }
+    }
+    for (size_t i = sl->c0; i < sl->c0 + sl->nin; i++) {
+        pt->pure[c[i].a] &= (uint8_t)~SEEN;
+        pt->pure[c[i].b] &= (uint8_t)~SEEN;
+    }
+}
+
+/* Slab p's interior collapses (step 3) from sl->next on, in its room;
+ * pauses when the room is spent, stops at its quota. */
+static void slab_apply(mr_simplifier *s, unsigned p, double limit)
+{
+    mr_partitioned *pt = s->pt;
+    mr_collapse_mesh *m = &s->m;
+    pslab *sl = &pt->slab[p];
+    const pcand *c = pt->cand + sl->c0;
+    size_t at = sl->room0;
+    sl->paused = false;
+    for (; sl->next < sl->nin; sl->next++) {
+        if (sl->gone + 3 > sl->qv || sl->deleted + 2 > sl->qt) {
+            sl->quota_hit = true;
+            sl->next = sl->nin;
+            break;
+        }
+        const pcand e = c[sl->next];
+        if (pt->mark[e.a] | pt->mark[e.b])
+            continue;
+        uint32_t r, k;
+        double target[3];
+        mr_collapse_clean(m, e.a);
+        mr_collapse_clean(m, e.b);
+        const double cost = mr_simplifier_plan_edge(s, e.a, e.b, &r, &k, target);
+        if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
+            sl->refused++;
+            continue;
+        }
+        const size_t need = (size_t)m->count[r] + m->count[k] - 1;
+        if (at + need > sl->room1) {
+            sl->paused = true;
+            break;
+        }
+        uint32_t *out = m->refs + at;
+        size_t rm;
+        sl->deleted += mr_simplifier_collapse_at(s, r, k, target, out, &rm);
+        sl->gone += rm;
+        for (size_t j = m->count[k]; j < need; j++)
+            out[j] = 0; /* no compaction tag may stay behind */
+        at += need;
+        sl->demand -= sl->demand < need + 1 ? sl->demand : need + 1;
+        pt->mark[r] = pt->mark[k] = 1;
+        sl->made++;
+        sl->worst = cost > sl->worst ? cost : sl->worst;
+    }
+    for (size_t j = at; j < sl->room1; j++)
+        m->refs[j] = 0; /* the room left unused */
+}
+
+/* Step 3 for every slab: room handed out by prefix sums, compaction
+ * between steps when a slab ran out. Returns the collapses made. */
+static size_t interior(mr_simplifier *s, double limit, double *worst, bool *quota_hit)
+{
+    mr_partitioned *pt = s->pt;
+    mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t np = (ptrdiff_t)pt->parts;
+    bool stuck = false;
+    size_t made = 0;
+    for (;;) {
+        size_t want = 0, active = 0, before = 0;
+        for (unsigned p = 0; p < pt->parts; p++) {
+            const pslab *sl = &pt->slab[p];
+            before += sl->next + sl->made;
+            if (sl->next < sl->nin) {
+                want += sl->demand + 1;
+                active++;
+            }
+        }
+        if (active == 0)
+            break;
+        if (m->refs_size + want > m->refs_capacity)
+            mr_collapse_compact(m);
+        const size_t free_room = m->refs_capacity - m->refs_size;
+        /* each active slab's room: its bound, scaled down to the free room
+         * when they do not all fit (stuck: the first active slab takes it
+         * all; a collapse needs less than the free room after compaction) */
+        size_t at = m->refs_size;
+        bool first_active = true;
+        for (unsigned p = 0; p < pt->parts; p++) {
+            pslab *sl = &pt->slab[p];
+            size_t r = 0;
+            if (sl->next < sl->nin) {
+                const size_t d = sl->demand + 1;
+                if (stuck)
+                    r = first_active ? free_room : 0;
+                else
+                    r = want <= free_room
+                            ? d
+                            : (size_t)((unsigned __int128)d * free_room / want);
+                first_active = false;
+            }
+            sl->room0 = at;
+            sl->room1 = at + r;
+            at += r;
+        }
+        m->refs_size = at;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) \
+    if (pt->threads > 1 && np > 1 && active > 1)
+        for (ptrdiff_t p = 0; p < np; p++) {
+            pslab *sl = &pt->slab[p];
+            if (sl->next < sl->nin)
+                slab_apply(s, (unsigned)p, limit);
+        }
+        size_t after = 0;
+        for (unsigned p = 0; p < pt->parts; p++)
+            after += pt->slab[p].next + pt->slab[p].made;
+        if (after == before && stuck)
+            break; /* cannot happen (see above): never loop */
+        stuck = after == before;
+    }
+    size_t gone = 0, deleted = 0;
+    for (unsigned p = 0; p < pt->parts; p++) {
+        const pslab *sl = &pt->slab[p];
+        gone += sl->gone;
+        deleted += sl->deleted;
+        made += sl->made;
+        *worst = sl->worst > *worst ? sl->worst : *worst;
+        *quota_hit |= sl->quota_hit;
+    }
+    m->live_vertices -= gone;
+    m->live_triangles -= deleted;
+    return made;
+}
+
+/* Step 4 (or a tail pass): the candidates in seq[0..n), sorted, one at a
+ * time on this thread, up to the target. Returns the collapses made. */
+static size_t sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst)
+{
+    mr_partitioned *pt = s->pt;
+    mr_collapse_mesh *m = &s->m;
+    qsort(pt->seq, n, sizeof *pt->seq, cand_cmp);
+    size_t made = 0;
+    for (size_t i = 0; i < n && !mr_simplifier_reached(s, g); i++) {
+        const pcand e = pt->seq[i];
+        if (pt->mark[e.a] | pt->mark[e.b])
+            continue;
+        mr_collapse_clean(m, e.a);
+        mr_collapse_clean(m, e.b);
+        uint32_t r, k;
+        double target[3];
+        const double cost = mr_simplifier_plan_edge(s, e.a, e.b, &r, &k, target);
+        if (!mr_simplifier_allowed(s, r, k, target, cost, g->limit))
+            continue;
+        mr_simplifier_collapse(s, r, k, target);
+        pt->mark[r] = pt->mark[k] = 1;
+        made++;
+        *worst = cost > *worst ? cost : *worst;
+    }
+    return made;
+}
+
+/* Room for n merged candidates in seq. */
+static bool seq_room(mr_partitioned *pt, size_t n)
+{
+    if (n <= pt->seq_cap)
+        return true;
+    free(pt->seq);
+    pt->seq_cap = n + n / 4;
+    pt->seq = mr_alloc_array(pt->seq_cap, sizeof *pt->seq);
+    if (!pt->seq)
+        pt->seq_cap = 0;
+    return pt->seq != NULL;
+}
+
+size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
+                                     double *max_error)
+{
+    mr_partitioned *pt = s->pt;
+    mr_collapse_mesh *m = &s->m;
+    mr_partition_profile *prof = &s->pprofile;
+    mr_simplify_goal g;
+    mr_simplifier_targets(s, o, &g);
+    size_t next_report = g.planned / 100 + 1, done = 0;
+    double worst = 0, share = 1.0;
+    bool force_tail = false;
+    const ptrdiff_t np = (ptrdiff_t)pt->parts;
+    const bool par = pt->threads > 1 && np > 1;
+    memset(prof, 0, sizeof *prof);
+    while (!mr_simplifier_reached(s, &g)) {
+        if (2 * m->live_vertices <= pt->balanced_live) {
+            balance(s);
+            prof->rebalances++;
+        }
+        const size_t n = gather(s, g.limit);
+        if (n == 0)
+            break;
+        prof->passes++;
+        const size_t needed = needed_collapses(s, &g);
+        const bool tail = force_tail || needed < (size_t)TAIL_PER_PARTITION * pt->parts;
+        const double goal = ceil(share * (double)needed);
+        uint32_t lim = UINT32_MAX;
+        if (goal < (double)n)
+            lim = float_key(key_float(rank_key(s, n, (size_t)goal)) * PASS_SLACK);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par)
+        for (ptrdiff_t p = 0; p < np; p++)
+            slab_select(s, (unsigned)p, lim, tail);
+        size_t nin = 0, nbd = 0;
+        for (unsigned p = 0; p < pt->parts; p++) {
+            nin += pt->slab[p].nin;
+            nbd += pt->slab[p].nbd;
+        }
+        const bool partial = nin + nbd < n;
+        memset(pt->mark, 0, m->vertex_count);
+        size_t pass_done = 0;
+        bool quota_hit = false;
+        if (!tail) {
+            /* quotas: each slab's share of what is left, by candidates */
+            const size_t all = nin + nbd;
+            const size_t lv = m->live_vertices - g.vertices;
+            const size_t lt = g.triangles ? m->live_triangles - g.triangles : SIZE_MAX;
+            for (unsigned p = 0; p < pt->parts; p++) {
+                pslab *sl = &pt->slab[p];
+                sl->qv = 3 * nin < lv ? SIZE_MAX
+                                      : (size_t)((unsigned __int128)lv * sl->nin / all);
+                sl->qt = 2 * nin < lt ? SIZE_MAX
+                                      : (size_t)((unsigned __int128)lt * sl->nin / all);
+                sl->gone = sl->deleted = sl->made = sl->refused = 0;
+                sl->worst = 0;
+                sl->quota_hit = false;
+            }
+            const size_t made = interior(s, g.limit, &worst, &quota_hit);
+            prof->interior += made;
+            pass_done += made;
+            done += made;
+            if (o->progress && done >= next_report) {
+                o->progress(g.planned ? (double)done / (double)g.planned : 1.0,
+                            o->progress_user);
+                next_report = done + g.planned / 100 + 1;
+            }
+        }
+        /* the boundary candidates (a tail pass: all), one global order */
+        const size_t ns = tail ? nin + nbd : nbd;
+        if (!seq_room(pt, ns))
+            break; /* no memory: stop here */
+        size_t k = 0;
+        for (unsigned p = 0; p < pt->parts; p++) {
+            const pslab *sl = &pt->slab[p];
+            if (tail) {
+                memcpy(pt->seq + k, pt->cand + sl->c0, sl->nin * sizeof *pt->seq);
+                k += sl->nin;
+            }
+            memcpy(pt->seq + k, pt->cand + sl->c1 - sl->nbd, sl->nbd * sizeof *pt->seq);
+            k += sl->nbd;
+        }
+        const size_t made = sequential(s, k, &g, &worst);
+        prof->boundary += made;
+        pass_done += made;
+        done += made;
+        if (o->progress && done >= next_report) {
+            o->progress(g.planned ? (double)done / (double)g.planned : 1.0, o->progress_user);
+            next_report = done + g.planned / 100 + 1;
+        }
+        force_tail = quota_hit;
+        if (pass_done == 0) {
+            if (!partial)
+                break; /* nothing valid is left */
+            share *= 4; /* the cheapest are all invalid: look further */
+        } else {
+            share = 1.0;
+        }
+    }
+    if (o->progress)
+        o->progress(1.0, o->progress_user);
+    *max_error = mr_simplifier_error(s, o, sqrt(worst));
+    return done;
+}
+
+void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats *stats)
+{
+    stats->partition_passes = p->passes;
+    stats->interior_collapses = p->interior;
+    stats->boundary_collapses = p->boundary;
+    stats->rebalances = p->rebalances;
+}
