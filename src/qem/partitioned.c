@@ -725,7 +725,10 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             k += sl->nbd;
         }
         const size_t made = sequential(s, k, &g, &worst);
-        prof->boundary += made;
+        if (tail)
+            prof->tail += made;
+        else
+            prof->boundary += made;
         pass_done += made;
         done += made;
         if (o->progress && done >= next_report) {
@@ -752,5 +755,33 @@ void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats
     stats->partition_passes = p->passes;
     stats->interior_collapses = p->interior;
     stats->boundary_collapses = p->boundary;
+    stats->tail_collapses = p->tail;
     stats->rebalances = p->rebalances;
+}
+
+unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v)
+{
+    return s->pt->part[v];
+}
+
+size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,
+                            size_t cap)
+{
+    const mr_partitioned *pt = s->pt;
+    gather(s, INFINITY);
+    size_t n = 0;
+    for (unsigned p = 0; p < pt->parts; p++) {
+        const pslab *sl = &pt->slab[p];
+        for (size_t i = sl->c0; i < sl->c1; i++) {
+            if (i >= sl->c0 + sl->nin && i < sl->c1 - sl->nbd)
+                continue;
+            if (n < cap) {
+                a[n] = pt->cand[i].a;
+                b[n] = pt->cand[i].b;
+                interior[n] = i < sl->c0 + sl->nin;
+            }
+            n++;
+        }
+    }
+    return n;
 }
