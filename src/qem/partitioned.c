@@ -76,24 +76,29 @@
 /* Tail passes (one global order, one thread) once fewer collapses than
  * this many per slab are needed. */
 #define TAIL_PER_PARTITION 64
-/* Edges per call of the vectorised cost planner. */
+/* Edges per call of the vectorised cost planner: gathering, applying. */
 #define GATHER_BATCH 256
+#define PLAN_BATCH 64
 
 /* pure[] bits: the vertex's closed 1-ring is in its slab; counted in the
  * room bound of this pass. */
 #define PURE 1u
 #define SEEN 2u
 
-/* A candidate edge, a < b, and the bits of its (float) cost. */
+/* A candidate edge (a, b) -- a the end whose slab gathered it -- and the
+ * bits of its (float) cost. */
 typedef struct pcand {
     uint32_t key, a, b;
 } pcand;
 
 /* One slab's state in a pass. */
 typedef struct pslab {
-    size_t c0, c1;        /* its region in cand */
-    size_t nin, nbd;      /* interior candidates from c0, boundary ones
-                             ending at c1 */
+    pcand *buf;           /* its candidates: interior ones from buf[0] up,
+                             the others from buf[c1 - 1] down */
+    pcand *tmp;           /* the radix sort's scratch */
+    size_t cap, tcap;     /* their sizes */
+    size_t c1;            /* this pass's bound on its candidates (<= cap) */
+    size_t nin, nbd;
     size_t next;          /* interior: the next candidate to try */
     size_t demand;        /* refs room bound of what is left */
     size_t room0, room1;  /* its room in refs this step, [room0, room1) */
@@ -112,10 +117,9 @@ struct mr_partitioned {
     uint32_t *pverts;     /* the live vertices at the last balance, by slab */
     size_t *pvoff;        /* parts + 1 */
     pslab *slab;          /* parts */
-    pcand *cand;          /* cand_cap */
-    size_t cand_cap;
-    pcand *seq;           /* the boundary (or tail) candidates, merged */
-    size_t seq_cap;
+    pcand *seq, *seq_tmp; /* the boundary (or tail) candidates, merged;
+                             the radix sort's scratch */
+    size_t seq_cap, seq_tmp_cap;
     uint32_t *hist;       /* HIST_BUCKETS per thread */
     size_t balanced_live; /* live vertices at the last balance */
 };
@@ -134,14 +138,48 @@ static inline float key_float(uint32_t u)
     return x;
 }
 
-static int cand_cmp(const void *x, const void *y)
+/* Sort c[0..n) by key, stable (ties keep their order), with scratch
+ * tmp[0..n): LSD radix, 11 + 11 + 10 bits, a pass skipped when every key
+ * has the same digit. */
+static void sort_keys(pcand *c, pcand *tmp, size_t n)
 {
-    const pcand *p = x, *q = y;
-    if (p->key != q->key)
-        return p->key < q->key ? -1 : 1;
-    if (p->a != q->a)
-        return p->a < q->a ? -1 : 1;
-    return (p->b > q->b) - (p->b < q->b);
+    static const unsigned shift[3] = {0, 11, 22}, bits[3] = {11, 11, 10};
+    pcand *src = c, *dst = tmp;
+    for (int pass = 0; pass < 3; pass++) {
+        size_t cnt[2048];
+        const uint32_t mask = (1u << bits[pass]) - 1;
+        memset(cnt, 0, sizeof cnt);
+        for (size_t i = 0; i < n; i++)
+            cnt[(src[i].key >> shift[pass]) & mask]++;
+        if (n == 0 || cnt[(src[0].key >> shift[pass]) & mask] == n)
+            continue;
+        size_t off = 0;
+        for (uint32_t d = 0; d <= mask; d++) {
+            const size_t k = cnt[d];
+            cnt[d] = off;
+            off += k;
+        }
+        for (size_t i = 0; i < n; i++)
+            dst[cnt[(src[i].key >> shift[pass]) & mask]++] = src[i];
+        pcand *t = src;
+        src = dst;
+        dst = t;
+    }
+    if (src != c)
+        memcpy(c, src, n * sizeof *c);
+}
+
+/* Room for n entries in *buf (contents dropped). */
+static bool room_for(pcand **buf, size_t *cap, size_t n)
+{
+    if (n <= *cap && *buf)
+        return true;
+    free(*buf);
+    *cap = n + n / 8 + 64;
+    *buf = mr_alloc_array(*cap, sizeof **buf);
+    if (!*buf)
+        *cap = 0;
+    return *buf != NULL;
 }
 
 /* ---- slabs ----------------------------------------------------------------- */
@@ -232,9 +270,6 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
     pt->parts = s->partitions ? s->partitions : MR_PARTITIONS_DEFAULT;
     m->lazy = true; /* only a collapse's two ends read its lists */
     mr_collapse_prepare(m);
-    /* every half-edge of a live triangle at most once */
-    pt->cand_cap = 3 * m->live_triangles + 1;
-    pt->cand = mr_alloc_array(pt->cand_cap, sizeof *pt->cand);
     pt->part = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part);
     pt->pure = mr_calloc_array(m->vertex_count + 1, 1);
     pt->mark = mr_calloc_array(m->vertex_count + 1, 1);
@@ -242,9 +277,9 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
     pt->pvoff = mr_alloc_array((size_t)pt->parts + 1, sizeof *pt->pvoff);
     pt->slab = mr_calloc_array(pt->parts, sizeof *pt->slab);
     pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
-    if (!pt->cand || !pt->part || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
+    if (!pt->part || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
         !pt->slab || !pt->hist || !m->dead)
-        return mr_fail_nomem(err, NULL, pt->cand_cap * sizeof *pt->cand + m->vertex_count * 12);
+        return mr_fail_nomem(err, NULL, m->vertex_count * 12);
     balance(s);
     return MR_OK;
 }
@@ -254,8 +289,12 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     mr_partitioned *pt = s->pt;
     if (!pt)
         return;
-    free(pt->cand);
+    for (unsigned p = 0; pt->slab && p < pt->parts; p++) {
+        free(pt->slab[p].buf);
+        free(pt->slab[p].tmp);
+    }
     free(pt->seq);
+    free(pt->seq_tmp);
     free(pt->part);
     free(pt->pure);
     free(pt->mark);
@@ -283,120 +322,112 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
     return needed;
 }
 
-/* Slab p's live vertices: lists cleaned, pure ones marked; returns the
- * sum of their list lengths (a bound on the slab's candidates). */
-static size_t slab_prepare(mr_simplifier *s, unsigned p)
+/* Does the gathering take half-edge (v, w) (a half-edge of one of v's
+ * triangles)? An inner edge from its smaller end, a boundary edge from its
+ * only half-edge, an inner edge between two boundary vertices never
+ * (batched.c's rule: its collapse would pinch the surface). */
+static inline bool takes(const mr_collapse_mesh *m, uint32_t v, uint32_t w)
+{
+    if (m->flags[v] & m->flags[w] & MR_VF_BOUNDARY)
+        return mr_collapse_edge_triangles(m, v, w) == 1;
+    return v < w;
+}
+
+/*
+ * Step 1 for slab p, in one sweep over its live vertices: each one's list
+ * cleaned, whether it is pure, and every live edge taken from one of its
+ * half-edges (as (v, w), v the slab's end) whose collapse may happen, with
+ * its cost; then the interior ones (both ends pure) to buf[0..nin), in
+ * gathering order, the others to buf[c1 - nbd .. c1). Reads and writes
+ * only the slab's own vertices' lists and pure[] (pure[w] is read only
+ * when v is pure, and then w is in the slab). Returns false when out of
+ * memory.
+ */
+static bool slab_gather(mr_simplifier *s, unsigned p, double limit)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
-    size_t sum = 0;
+    pslab *sl = &pt->slab[p];
+    size_t bound = 0;
+    for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++)
+        bound += m->count[pt->pverts[i]]; /* removed ones: 0 */
+    sl->nin = sl->nbd = 0;
+    sl->c1 = bound;
+    if (!room_for(&sl->buf, &sl->cap, bound) || !room_for(&sl->tmp, &sl->tcap, bound))
+        return false;
+    pcand *cand = sl->buf;
+    size_t n = 0;
+    uint32_t ea[GATHER_BATCH], eb[GATHER_BATCH];
+    double cost[GATHER_BATCH];
+    size_t nb = 0;
+#define FLUSH()                                                                       \
+    do {                                                                              \
+        mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
+        for (size_t f_ = 0; f_ < nb; f_++) {                                          \
+            cand[n] = (pcand){float_key((float)cost[f_]), ea[f_], eb[f_]};            \
+            n += cost[f_] <= limit && cost[f_] < INFINITY;                            \
+        }                                                                             \
+        nb = 0;                                                                       \
+    } while (0)
     for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++) {
         const uint32_t v = pt->pverts[i];
         if (m->flags[v] & MR_VF_REMOVED) {
             pt->pure[v] = 0;
             continue;
         }
-        mr_collapse_clean(m, v);
+        if (mr_collapse_dirty(m, v))
+            mr_collapse_clean(m, v);
         const uint32_t *list = mr_collapse_vertex_tris(m, v);
-        const uint32_t n = m->count[v];
         bool pure = true;
-        for (uint32_t j = 0; j < n && pure; j++) {
-            const uint32_t *t = m->tris + (list[j] - list[j] % 3);
-            pure = pt->part[t[0]] == p && pt->part[t[1]] == p && pt->part[t[2]] == p;
-        }
-        pt->pure[v] = pure ? PURE : 0;
-        sum += n;
-    }
-    return sum;
-}
-
-/* Slab p's candidates: every live edge from one of its vertices' half-edges
- * (an inner edge from its smaller end, a boundary edge from its only
- * half-edge, an inner edge between two boundary vertices never: batched.c's
- * rule), whose collapse may happen; interior ones from c0 up, the others
- * from c1 down. */
-static void slab_gather(mr_simplifier *s, unsigned p, double limit)
-{
-    mr_partitioned *pt = s->pt;
-    const mr_collapse_mesh *m = &s->m;
-    pslab *sl = &pt->slab[p];
-    pcand *cand = pt->cand;
-    size_t nin = 0, nbd = 0;
-    uint32_t ea[GATHER_BATCH], eb[GATHER_BATCH];
-    uint8_t in[GATHER_BATCH];
-    double cost[GATHER_BATCH];
-    size_t nb = 0;
-#define FLUSH()                                                                       \
-    do {                                                                              \
-        mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
-        for (size_t f_ = 0; f_ < nb; f_++) {                                             \
-            if (!(cost[f_] <= limit && cost[f_] < INFINITY))                            \
-                continue;                                                             \
-            const uint32_t a = ea[f_] < eb[f_] ? ea[f_] : eb[f_];                         \
-            const uint32_t b = ea[f_] < eb[f_] ? eb[f_] : ea[f_];                         \
-            const pcand e_ = {float_key((float)cost[f_]), a, b};                        \
-            if (in[f_])                                                                \
-                cand[sl->c0 + nin++] = e_;                                             \
-            else                                                                      \
-                cand[sl->c1 - ++nbd] = e_;                                             \
-        }                                                                             \
-        nb = 0;                                                                       \
-    } while (0)
-    for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++) {
-        const uint32_t v = pt->pverts[i];
-        if (m->flags[v] & MR_VF_REMOVED)
-            continue;
-        const uint32_t *list = mr_collapse_vertex_tris(m, v);
-        for (uint32_t j = 0, n = m->count[v]; j < n; j++) {
+        for (uint32_t j = 0, nl = m->count[v]; j < nl; j++) {
             const uint32_t c = list[j], k = c % 3;
-            const uint32_t w = m->tris[c - k + (k == 2 ? 0 : k + 1)];
-            bool take = v < w;
-            if (m->flags[v] & m->flags[w] & MR_VF_BOUNDARY)
-                take = mr_collapse_edge_triangles(m, v, w) == 1;
-            if (!take)
+            const uint32_t *t = m->tris + (c - k);
+            pure &= (pt->part[t[0]] == p) & (pt->part[t[1]] == p) & (pt->part[t[2]] == p);
+            const uint32_t w = t[k == 2 ? 0 : k + 1];
+            if (!takes(m, v, w))
                 continue;
             __builtin_prefetch(s->q + w);
             ea[nb] = v;
             eb[nb] = w;
-            in[nb] = (pt->pure[v] & pt->pure[w] & PURE) != 0;
             if (++nb == GATHER_BATCH)
                 FLUSH();
         }
+        pt->pure[v] = pure ? PURE : 0;
     }
     if (nb)
         FLUSH();
 #undef FLUSH
+    /* interior ones in place, the others through tmp to the end */
+    size_t nin = 0, nbd = 0;
+    for (size_t i = 0; i < n; i++) {
+        const pcand e = cand[i];
+        if ((pt->pure[e.a] & PURE) && (pt->pure[e.b] & PURE))
+            cand[nin++] = e;
+        else
+            sl->tmp[nbd++] = e;
+    }
+    memcpy(cand + bound - nbd, sl->tmp, nbd * sizeof *cand);
     sl->nin = nin;
     sl->nbd = nbd;
+    return true;
 }
 
-/* Every slab's candidates (step 1); returns their number. */
+/* Every slab's candidates (step 1); returns their number, or 0 when out
+ * of memory. */
 static size_t gather(mr_simplifier *s, double limit)
 {
     mr_partitioned *pt = s->pt;
     const ptrdiff_t np = (ptrdiff_t)pt->parts;
     const bool par = pt->threads > 1 && np > 1;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par)
-    for (ptrdiff_t p = 0; p < np; p++) {
-        const size_t n = slab_prepare(s, (unsigned)p);
-        pt->slab[p].c1 = n; /* for now: the slab's bound */
-    }
-    size_t off = 0;
-    for (unsigned p = 0; p < pt->parts; p++) {
-        const size_t n = pt->slab[p].c1;
-        pt->slab[p].c0 = off;
-        off += n;
-        pt->slab[p].c1 = off;
-    }
-    if (off > pt->cand_cap) /* never: no vertex has more half-edges than at the start */
-        return 0;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par)
+    bool ok = true;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
+    reduction(&& : ok)
     for (ptrdiff_t p = 0; p < np; p++)
-        slab_gather(s, (unsigned)p, limit);
+        ok = slab_gather(s, (unsigned)p, limit) && ok;
     size_t total = 0;
     for (unsigned p = 0; p < pt->parts; p++)
         total += pt->slab[p].nin + pt->slab[p].nbd;
-    return total;
+    return ok ? total : 0;
 }
 
 /* The key below which at least rank + 1 of the n candidates lie, to the
@@ -414,10 +445,10 @@ static uint32_t rank_key(mr_simplifier *s, size_t n, size_t rank)
 #pragma omp for schedule(dynamic, 1)
         for (ptrdiff_t p = 0; p < np; p++) {
             const pslab *sl = &pt->slab[p];
-            for (size_t i = sl->c0; i < sl->c0 + sl->nin; i++)
-                hist[pt->cand[i].key >> 16]++;
+            for (size_t i = 0; i < sl->nin; i++)
+                hist[sl->buf[i].key >> 16]++;
             for (size_t i = sl->c1 - sl->nbd; i < sl->c1; i++)
-                hist[pt->cand[i].key >> 16]++;
+                hist[sl->buf[i].key >> 16]++;
         }
         /* (the implicit barrier of the loop) the sum of the threads'
          * histograms, bucket ranges split */
@@ -441,17 +472,18 @@ static uint32_t rank_key(mr_simplifier *s, size_t n, size_t rank)
 /* Slab p keeps its candidates with keys up to lim, interior ones sorted
  * (unless `tail`: all go to the global order), and bounds the refs room
  * its collapses can take: the list lengths of the distinct ends (each
- * vertex is an end once a pass, and its list does not grow before). */
-static void slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
+ * vertex is an end once a pass, and its list does not grow before).
+ * Returns false when out of memory. */
+static bool slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
 {
     mr_partitioned *pt = s->pt;
     const mr_collapse_mesh *m = &s->m;
     pslab *sl = &pt->slab[p];
-    pcand *c = pt->cand;
+    pcand *c = sl->buf;
     size_t k = 0;
     for (size_t i = 0; i < sl->nin; i++) {
-        c[sl->c0 + k] = c[sl->c0 + i];
-        k += c[sl->c0 + i].key <= lim;
+        c[k] = c[i];
+        k += c[i].key <= lim;
     }
     sl->nin = k;
     k = 0;
@@ -463,9 +495,11 @@ static void slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
     sl->next = 0;
     sl->demand = 0;
     if (tail)
-        return;
-    qsort(c + sl->c0, sl->nin, sizeof *c, cand_cmp);
-    for (size_t i = sl->c0; i < sl->c0 + sl->nin; i++) {
+        return true;
+    if (!room_for(&sl->tmp, &sl->tcap, sl->nin))
+        return false;
+    sort_keys(c, sl->tmp, sl->nin);
+    for (size_t i = 0; i < sl->nin; i++) {
         const uint32_t e[2] = {c[i].a, c[i].b};
         for (int j = 0; j < 2; j++) {
             if (!(pt->pure[e[j]] & SEEN)) {
@@ -474,10 +508,11 @@ static void slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
             }
         }
     }
-    for (size_t i = sl->c0; i < sl->c0 + sl->nin; i++) {
+    for (size_t i = 0; i < sl->nin; i++) {
         pt->pure[c[i].a] &= (uint8_t)~SEEN;
         pt->pure[c[i].b] &= (uint8_t)~SEEN;
     }
+    return true;
 }
 
 /* Slab p's interior collapses (step 3) from sl->next on, in its room;
@@ -487,23 +522,44 @@ static void slab_apply(mr_simplifier *s, unsigned p, double limit)
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
     pslab *sl = &pt->slab[p];
-    const pcand *c = pt->cand + sl->c0;
+    const pcand *c = sl->buf;
     size_t at = sl->room0;
     sl->paused = false;
-    for (; sl->next < sl->nin; sl->next++) {
+    /* the next PLAN_BATCH candidates with both ends unmarked, planned in
+     * one call of the vector loop (a plan stays exact while its ends are
+     * unmarked: only the ends of a collapse change) */
+    size_t idx[PLAN_BATCH];
+    uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
+    double pc[PLAN_BATCH], ptg[3 * PLAN_BATCH];
+    size_t ni = 0, ii = 0;
+    for (;;) {
+        if (ii == ni) {
+            ni = ii = 0;
+            for (; sl->next < sl->nin && ni < PLAN_BATCH; sl->next++) {
+                const pcand e = c[sl->next];
+                if (pt->mark[e.a] | pt->mark[e.b])
+                    continue;
+                idx[ni] = sl->next;
+                pa[ni] = e.a;
+                pb[ni] = e.b;
+                ni++;
+            }
+            if (ni == 0)
+                break;
+            mr_simplifier_plan_edges(s, ni, pa, pb, pc, pr, pk, ptg);
+        }
+        const size_t j = ii++;
         if (sl->gone + 3 > sl->qv || sl->deleted + 2 > sl->qt) {
             sl->quota_hit = true;
             sl->next = sl->nin;
             break;
         }
-        const pcand e = c[sl->next];
-        if (pt->mark[e.a] | pt->mark[e.b])
+        if (pt->mark[pa[j]] | pt->mark[pb[j]])
             continue;
-        uint32_t r, k;
-        double target[3];
-        mr_collapse_clean(m, e.a);
-        mr_collapse_clean(m, e.b);
-        const double cost = mr_simplifier_plan_edge(s, e.a, e.b, &r, &k, target);
+        const uint32_t r = pr[j], k = pk[j];
+        const double *target = ptg + 3 * j, cost = pc[j];
+        mr_collapse_clean(m, r);
+        mr_collapse_clean(m, k);
         if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
             sl->refused++;
             continue;
@@ -511,22 +567,23 @@ static void slab_apply(mr_simplifier *s, unsigned p, double limit)
         const size_t need = (size_t)m->count[r] + m->count[k] - 1;
         if (at + need > sl->room1) {
             sl->paused = true;
+            sl->next = idx[j]; /* resumes here */
             break;
         }
         uint32_t *out = m->refs + at;
         size_t rm;
         sl->deleted += mr_simplifier_collapse_at(s, r, k, target, out, &rm);
         sl->gone += rm;
-        for (size_t j = m->count[k]; j < need; j++)
-            out[j] = 0; /* no compaction tag may stay behind */
+        for (size_t q = m->count[k]; q < need; q++)
+            out[q] = 0; /* no compaction tag may stay behind */
         at += need;
         sl->demand -= sl->demand < need + 1 ? sl->demand : need + 1;
         pt->mark[r] = pt->mark[k] = 1;
         sl->made++;
         sl->worst = cost > sl->worst ? cost : sl->worst;
     }
-    for (size_t j = at; j < sl->room1; j++)
-        m->refs[j] = 0; /* the room left unused */
+    for (size_t q = at; q < sl->room1; q++)
+        m->refs[q] = 0; /* the room left unused */
 }
 
 /* Step 3 for every slab: room handed out by prefix sums, compaction
@@ -610,7 +667,7 @@ static size_t sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, 
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
-    qsort(pt->seq, n, sizeof *pt->seq, cand_cmp);
+    sort_keys(pt->seq, pt->seq_tmp, n);
     size_t made = 0;
     for (size_t i = 0; i < n && !mr_simplifier_reached(s, g); i++) {
         const pcand e = pt->seq[i];
@@ -634,14 +691,7 @@ static size_t sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, 
 /* Room for n merged candidates in seq. */
 static bool seq_room(mr_partitioned *pt, size_t n)
 {
-    if (n <= pt->seq_cap)
-        return true;
-    free(pt->seq);
-    pt->seq_cap = n + n / 4;
-    pt->seq = mr_alloc_array(pt->seq_cap, sizeof *pt->seq);
-    if (!pt->seq)
-        pt->seq_cap = 0;
-    return pt->seq != NULL;
+    return room_for(&pt->seq, &pt->seq_cap, n) && room_for(&pt->seq_tmp, &pt->seq_tmp_cap, n);
 }
 
 size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
@@ -673,9 +723,13 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
         uint32_t lim = UINT32_MAX;
         if (goal < (double)n)
             lim = float_key(key_float(rank_key(s, n, (size_t)goal)) * PASS_SLACK);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par)
+        bool ok = true;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
+    reduction(&& : ok)
         for (ptrdiff_t p = 0; p < np; p++)
-            slab_select(s, (unsigned)p, lim, tail);
+            ok = slab_select(s, (unsigned)p, lim, tail) && ok;
+        if (!ok)
+            break; /* no memory: stop here */
         size_t nin = 0, nbd = 0;
         for (unsigned p = 0; p < pt->parts; p++) {
             nin += pt->slab[p].nin;
@@ -718,10 +772,10 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
         for (unsigned p = 0; p < pt->parts; p++) {
             const pslab *sl = &pt->slab[p];
             if (tail) {
-                memcpy(pt->seq + k, pt->cand + sl->c0, sl->nin * sizeof *pt->seq);
+                memcpy(pt->seq + k, sl->buf, sl->nin * sizeof *pt->seq);
                 k += sl->nin;
             }
-            memcpy(pt->seq + k, pt->cand + sl->c1 - sl->nbd, sl->nbd * sizeof *pt->seq);
+            memcpy(pt->seq + k, sl->buf + sl->c1 - sl->nbd, sl->nbd * sizeof *pt->seq);
             k += sl->nbd;
         }
         const size_t made = sequential(s, k, &g, &worst);
@@ -772,13 +826,14 @@ size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t 
     size_t n = 0;
     for (unsigned p = 0; p < pt->parts; p++) {
         const pslab *sl = &pt->slab[p];
-        for (size_t i = sl->c0; i < sl->c1; i++) {
-            if (i >= sl->c0 + sl->nin && i < sl->c1 - sl->nbd)
+        for (size_t i = 0; i < sl->c1; i++) {
+            if (i >= sl->nin && i < sl->c1 - sl->nbd)
                 continue;
             if (n < cap) {
-                a[n] = pt->cand[i].a;
-                b[n] = pt->cand[i].b;
-                interior[n] = i < sl->c0 + sl->nin;
+                const uint32_t x = sl->buf[i].a, y = sl->buf[i].b;
+                a[n] = x < y ? x : y;
+                b[n] = x < y ? y : x;
+                interior[n] = i < sl->nin;
             }
             n++;
         }
