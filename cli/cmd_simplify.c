@@ -378,10 +378,10 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
     if (s->partition_passes) /* the partitioned strategy's profile */
         fprintf(stderr,
                 "profile    %zu passes, %zu interior collapses (slabs in parallel), %zu "
-                "boundary collapses (one global order), %zu tail collapses, %zu "
+                "boundary collapses (%zu of them on one thread), %zu tail collapses, %zu "
                 "rebalances\n",
                 s->partition_passes, s->interior_collapses, s->boundary_collapses,
-                s->tail_collapses, s->rebalances);
+                s->boundary_sequential, s->tail_collapses, s->rebalances);
 }
 
 static void print_json(const cli_io *io, const mr_mesh *result, const cli_times *t,
@@ -412,9 +412,10 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
                s->collapses, s->priority_updates, s->compactions);
     if (s->partition_passes) /* the partitioned strategy's profile */
         printf(", \"partitioned\": {\"passes\": %zu, \"interior_collapses\": %zu, "
-               "\"boundary_collapses\": %zu, \"tail_collapses\": %zu, \"rebalances\": %zu}",
+               "\"boundary_collapses\": %zu, \"boundary_sequential\": %zu, "
+               "\"tail_collapses\": %zu, \"rebalances\": %zu}",
                s->partition_passes, s->interior_collapses, s->boundary_collapses,
-               s->tail_collapses, s->rebalances);
+               s->boundary_sequential, s->tail_collapses, s->rebalances);
     printf("}\n");
 }
 

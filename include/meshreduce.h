@@ -484,8 +484,11 @@ typedef struct mr_simplify_stats {
     /* MR_STRATEGY_PARTITIONED's profile (0 for the others): */
     size_t partition_passes;    /* passes (gather, interior, boundary) */
     size_t interior_collapses;  /* made by the slabs concurrently */
-    size_t boundary_collapses;  /* edges across slabs, in one global order
-                                   after the slabs' step of each pass */
+    size_t boundary_collapses;  /* edges across slabs, after the slabs'
+                                   step of each pass: concurrently by the
+                                   shifted slabs (planes halfway between),
+                                   the rest in one global order */
+    size_t boundary_sequential; /* of those, made on the calling thread */
     size_t tail_collapses;      /* the last ones to the target: every
                                    candidate in one global order */
     size_t rebalances;          /* slabs recomputed as the mesh shrank */

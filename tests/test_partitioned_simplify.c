@@ -122,8 +122,12 @@ static void check_classification(const mr_mesh *m, unsigned parts)
     /* slabs: by vertex counts (5 columns each), not at the box's middle */
     uint32_t slab[COLS * ROWS];
     for (uint32_t v = 0; v < nv; v++) {
-        slab[v] = mr_partitioned_slab(&s, v);
+        slab[v] = mr_partitioned_slab(&s, v, false);
         assert_int_equal(slab[v], parts == 1 ? 0 : column(v) >= COLS / 2);
+        /* shifted slabs: planes at the quantiles (i - 1/2) / parts */
+        const uint32_t c = column(v);
+        assert_int_equal(mr_partitioned_slab(&s, v, true),
+                         parts == 1 ? (c >= COLS / 2) : (c >= 3) + (c >= 8));
     }
     /* edges and their triangle counts; vertices on the open boundary */
     static uint8_t ntri[COLS * ROWS][COLS * ROWS];
@@ -171,6 +175,24 @@ static void check_classification(const mr_mesh *m, unsigned parts)
         }
         interior += in[i];
         boundary += !in[i];
+        /* the boundary step: interior to a shifted slab exactly when both
+         * closed 1-rings lie in it */
+        if (!in[i]) {
+            const uint32_t q = mr_partitioned_slab(&s, a[i], true);
+            bool want2 = true;
+            for (size_t t = 0; t < nt; t++) {
+                const uint32_t *x = m->indices + 3 * t;
+                const bool touches = x[0] == a[i] || x[1] == a[i] || x[2] == a[i] ||
+                                     x[0] == b[i] || x[1] == b[i] || x[2] == b[i];
+                for (int j = 0; touches && j < 3; j++)
+                    want2 &= mr_partitioned_slab(&s, x[j], true) == q;
+            }
+            assert_int_equal(mr_partitioned_shifted_interior(&s, a[i], b[i]), want2);
+            /* the plane between columns 4 and 5 lies inside shifted slab 1 */
+            if (parts == 2 && column(a[i]) >= 4 && column(b[i]) >= 4 && column(a[i]) <= 5 &&
+                column(b[i]) <= 5)
+                assert_true(want2);
+        }
     }
     size_t expected = 0;
     for (uint32_t x = 0; x < nv; x++)
@@ -220,6 +242,7 @@ static void expect_same(const char *what, int threads, const mr_simplified *x,
                 x->stats.stop == y->stats.stop &&
                 x->stats.interior_collapses == y->stats.interior_collapses &&
                 x->stats.boundary_collapses == y->stats.boundary_collapses &&
+                x->stats.boundary_sequential == y->stats.boundary_sequential &&
                 x->stats.tail_collapses == y->stats.tail_collapses &&
                 x->stats.partition_passes == y->stats.partition_passes &&
                 x->stats.rebalances == y->stats.rebalances;

@@ -112,6 +112,12 @@ struct mr_partitioned {
     unsigned parts;
     int threads;
     uint16_t *part;       /* per vertex: its slab */
+    uint16_t *part2;      /* per vertex: its shifted slab (parts + 1 of
+                             them, planes halfway between part's) */
+    pslab *slab2;         /* parts + 1: the boundary step's slabs */
+    uint8_t *in2;         /* per boundary candidate: interior to a shifted
+                             slab */
+    size_t in2_cap;
     uint8_t *pure;        /* per vertex: PURE, SEEN */
     uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
     uint32_t *pverts;     /* the live vertices at the last balance, by slab */
@@ -229,12 +235,15 @@ static void balance(mr_simplifier *s)
         bins[b]++;
         live++;
     }
-    /* a bin's slab: the share of live vertices before it */
-    uint16_t slab_of[SLAB_BINS];
+    /* a bin's slab: the share of live vertices before it; its shifted
+     * slab: the same, half a slab on */
+    uint16_t slab_of[SLAB_BINS], slab2_of[SLAB_BINS];
     size_t acc = 0;
     for (uint32_t b = 0; b < SLAB_BINS; b++) {
         const size_t q = live ? acc * pt->parts / live : 0;
+        const size_t q2 = live ? (2 * acc * pt->parts + live) / (2 * live) : 0;
         slab_of[b] = (uint16_t)(q < pt->parts ? q : pt->parts - 1);
+        slab2_of[b] = (uint16_t)(q2 < pt->parts ? q2 : pt->parts);
         acc += bins[b];
     }
     size_t *off = pt->pvoff;
@@ -243,6 +252,7 @@ static void balance(mr_simplifier *s)
         float f = (m->pos[3 * v + axis] - a0) * scale;
         uint32_t b = f <= 0 ? 0 : f >= (float)(SLAB_BINS - 1) ? SLAB_BINS - 1 : (uint32_t)f;
         pt->part[v] = slab_of[b];
+        pt->part2[v] = slab2_of[b];
         if (!(m->flags[v] & MR_VF_REMOVED))
             off[slab_of[b] + 1]++;
     }
@@ -276,8 +286,10 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
     pt->pverts = mr_alloc_array(m->vertex_count + 1, sizeof *pt->pverts);
     pt->pvoff = mr_alloc_array((size_t)pt->parts + 1, sizeof *pt->pvoff);
     pt->slab = mr_calloc_array(pt->parts, sizeof *pt->slab);
+    pt->part2 = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part2);
+    pt->slab2 = mr_calloc_array((size_t)pt->parts + 1, sizeof *pt->slab2);
     pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
-    if (!pt->part || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
+    if (!pt->part || !pt->part2 || !pt->slab2 || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
         !pt->slab || !pt->hist || !m->dead)
         return mr_fail_nomem(err, NULL, m->vertex_count * 12);
     balance(s);
@@ -293,6 +305,13 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
         free(pt->slab[p].buf);
         free(pt->slab[p].tmp);
     }
+    for (unsigned p = 0; pt->slab2 && p <= pt->parts; p++) {
+        free(pt->slab2[p].buf);
+        free(pt->slab2[p].tmp);
+    }
+    free(pt->slab2);
+    free(pt->part2);
+    free(pt->in2);
     free(pt->seq);
     free(pt->seq_tmp);
     free(pt->part);
@@ -517,11 +536,10 @@ static bool slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
 
 /* Slab p's interior collapses (step 3) from sl->next on, in its room;
  * pauses when the room is spent, stops at its quota. */
-static void slab_apply(mr_simplifier *s, unsigned p, double limit)
+static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
-    pslab *sl = &pt->slab[p];
     const pcand *c = sl->buf;
     size_t at = sl->room0;
     sl->paused = false;
@@ -586,19 +604,43 @@ static void slab_apply(mr_simplifier *s, unsigned p, double limit)
         m->refs[q] = 0; /* the room left unused */
 }
 
-/* Step 3 for every slab: room handed out by prefix sums, compaction
- * between steps when a slab ran out. Returns the collapses made. */
-static size_t interior(mr_simplifier *s, double limit, double *worst, bool *quota_hit)
+/* Quotas of the slabs sl[0..ns) for a step whose candidates are `all`
+ * in all (theirs and those after the step): each slab's share, by its
+ * candidates, of what is left to the targets, when they could reach it;
+ * and their counts reset. */
+static void set_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl, size_t ns,
+                       size_t all)
+{
+    const mr_collapse_mesh *m = &s->m;
+    size_t nin = 0;
+    for (size_t p = 0; p < ns; p++)
+        nin += sl[p].nin;
+    const size_t lv = m->live_vertices - g->vertices;
+    const size_t lt = g->triangles ? m->live_triangles - g->triangles : SIZE_MAX;
+    for (size_t p = 0; p < ns; p++) {
+        sl[p].qv = 3 * nin < lv ? SIZE_MAX : (size_t)((unsigned __int128)lv * sl[p].nin / all);
+        sl[p].qt = 2 * nin < lt ? SIZE_MAX : (size_t)((unsigned __int128)lt * sl[p].nin / all);
+        sl[p].gone = sl[p].deleted = sl[p].made = sl[p].refused = 0;
+        sl[p].worst = 0;
+        sl[p].quota_hit = false;
+    }
+}
+
+/* The slabs sl[0..ns) apply their candidates concurrently (steps 3 and
+ * 4): room in refs handed out by prefix sums, compaction between steps
+ * when a slab ran out. Returns the collapses made. */
+static size_t apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double limit, double *worst,
+                          bool *quota_hit)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
-    const ptrdiff_t np = (ptrdiff_t)pt->parts;
+    const ptrdiff_t np = (ptrdiff_t)ns;
     bool stuck = false;
     size_t made = 0;
     for (;;) {
         size_t want = 0, active = 0, before = 0;
-        for (unsigned p = 0; p < pt->parts; p++) {
-            const pslab *sl = &pt->slab[p];
+        for (size_t p = 0; p < ns; p++) {
+            const pslab *sl = &slabs[p];
             before += sl->next + sl->made;
             if (sl->next < sl->nin) {
                 want += sl->demand + 1;
@@ -615,8 +657,8 @@ static size_t interior(mr_simplifier *s, double limit, double *worst, bool *quot
          * all; a collapse needs less than the free room after compaction) */
         size_t at = m->refs_size;
         bool first_active = true;
-        for (unsigned p = 0; p < pt->parts; p++) {
-            pslab *sl = &pt->slab[p];
+        for (size_t p = 0; p < ns; p++) {
+            pslab *sl = &slabs[p];
             size_t r = 0;
             if (sl->next < sl->nin) {
                 const size_t d = sl->demand + 1;
@@ -636,20 +678,20 @@ static size_t interior(mr_simplifier *s, double limit, double *worst, bool *quot
 #pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) \
     if (pt->threads > 1 && np > 1 && active > 1)
         for (ptrdiff_t p = 0; p < np; p++) {
-            pslab *sl = &pt->slab[p];
+            pslab *sl = &slabs[p];
             if (sl->next < sl->nin)
-                slab_apply(s, (unsigned)p, limit);
+                slab_apply(s, sl, limit);
         }
         size_t after = 0;
-        for (unsigned p = 0; p < pt->parts; p++)
-            after += pt->slab[p].next + pt->slab[p].made;
+        for (size_t p = 0; p < ns; p++)
+            after += slabs[p].next + slabs[p].made;
         if (after == before && stuck)
             break; /* cannot happen (see above): never loop */
         stuck = after == before;
     }
     size_t gone = 0, deleted = 0;
-    for (unsigned p = 0; p < pt->parts; p++) {
-        const pslab *sl = &pt->slab[p];
+    for (size_t p = 0; p < ns; p++) {
+        const pslab *sl = &slabs[p];
         gone += sl->gone;
         deleted += sl->deleted;
         made += sl->made;
@@ -661,13 +703,126 @@ static size_t interior(mr_simplifier *s, double limit, double *worst, bool *quot
     return made;
 }
 
-/* Step 4 (or a tail pass): the candidates in seq[0..n), sorted, one at a
- * time on this thread, up to the target. Returns the collapses made. */
+/* Does every live triangle of v lie in shifted slab q? (v's list may hold
+ * deleted triangles: skipped.) */
+static bool ring_in(const mr_collapse_mesh *m, const uint16_t *part2, uint32_t v, uint16_t q)
+{
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    for (uint32_t j = 0, n = m->count[v]; j < n; j++) {
+        const uint32_t *t = m->tris + (list[j] - list[j] % 3);
+        if (t[0] == NONE)
+            continue;
+        if ((part2[t[0]] != q) | (part2[t[1]] != q) | (part2[t[2]] != q))
+            return false;
+    }
+    return true;
+}
+
+/* Slab sl's refs room bound, from its candidates' distinct ends (as
+ * slab_select's); counts are of the lists as they are (dirty ones are
+ * cleaned before a collapse, which only shortens them). */
+static void slab_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl)
+{
+    const pcand *c = sl->buf;
+    sl->demand = 0;
+    sl->next = 0;
+    for (size_t i = 0; i < sl->nin; i++) {
+        const uint32_t e[2] = {c[i].a, c[i].b};
+        for (int j = 0; j < 2; j++) {
+            if (!(pt->pure[e[j]] & SEEN)) {
+                pt->pure[e[j]] |= SEEN;
+                sl->demand += m->count[e[j]];
+            }
+        }
+    }
+    for (size_t i = 0; i < sl->nin; i++) {
+        pt->pure[c[i].a] &= (uint8_t)~SEEN;
+        pt->pure[c[i].b] &= (uint8_t)~SEEN;
+    }
+}
+
+/*
+ * Step 4's concurrent part: of the boundary candidates seq[0..n) (sorted),
+ * those still unmarked whose two ends' closed 1-rings lie in one shifted
+ * slab -- the planes of `part` run through the middle of those -- are
+ * applied by the shifted slabs concurrently, each in the sorted order (the
+ * same reasoning as the interior step's, with part2). The rest stay in
+ * seq, in order, for the calling thread; returns how many, and the
+ * collapses made in *made. Returns SIZE_MAX when out of memory.
+ */
+static size_t shifted(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst,
+                      bool *quota_hit, size_t *made)
+{
+    mr_partitioned *pt = s->pt;
+    const mr_collapse_mesh *m = &s->m;
+    const size_t ns = (size_t)pt->parts + 1;
+    *made = 0;
+    if (n <= pt->in2_cap && pt->in2 == NULL)
+        pt->in2_cap = 0;
+    if (n > pt->in2_cap) {
+        free(pt->in2);
+        pt->in2_cap = n + n / 8 + 64;
+        pt->in2 = mr_alloc_array(pt->in2_cap, 1);
+        if (!pt->in2) {
+            pt->in2_cap = 0;
+            return SIZE_MAX;
+        }
+    }
+    const pcand *c = pt->seq;
+    uint8_t *in2 = pt->in2;
+    const ptrdiff_t nn = (ptrdiff_t)n;
+#pragma omp parallel for schedule(static) num_threads(pt->threads) \
+    if (pt->threads > 1 && nn > 4096)
+    for (ptrdiff_t i = 0; i < nn; i++) {
+        const pcand e = c[i];
+        if (pt->mark[e.a] | pt->mark[e.b]) {
+            in2[i] = 2; /* dropped: an end moved this pass */
+            continue;
+        }
+        const uint16_t q = pt->part2[e.a];
+        in2[i] = ring_in(m, pt->part2, e.a, q) && ring_in(m, pt->part2, e.b, q);
+    }
+    /* the shifted slabs' lists, in the sorted order */
+    for (size_t q = 0; q < ns; q++)
+        pt->slab2[q].nin = 0;
+    for (size_t i = 0; i < n; i++)
+        pt->slab2[pt->part2[c[i].a]].nin += in2[i] == 1;
+    for (size_t q = 0; q < ns; q++) {
+        pslab *sl = &pt->slab2[q];
+        if (!room_for(&sl->buf, &sl->cap, sl->nin))
+            return SIZE_MAX;
+        sl->c1 = sl->nin;
+        sl->nin = 0;
+    }
+    size_t rest = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (in2[i] == 1) {
+            pslab *sl = &pt->slab2[pt->part2[c[i].a]];
+            sl->buf[sl->nin++] = c[i];
+        } else if (in2[i] == 0) {
+            pt->seq[rest++] = c[i];
+        }
+    }
+    const ptrdiff_t nq = (ptrdiff_t)ns;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) \
+    if (pt->threads > 1 && n > 4096)
+    for (ptrdiff_t q = 0; q < nq; q++)
+        slab_demand(pt, m, &pt->slab2[q]);
+    size_t nin = 0;
+    for (size_t q = 0; q < ns; q++)
+        nin += pt->slab2[q].nin;
+    set_quotas(s, g, pt->slab2, ns, nin + rest);
+    *made = apply_slabs(s, pt->slab2, ns, g->limit, worst, quota_hit);
+    return rest;
+}
+
+/* Step 4's rest (or a tail pass): the candidates in seq[0..n), sorted,
+ * one at a time on this thread, up to the target. Returns the collapses
+ * made. */
 static size_t sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
-    sort_keys(pt->seq, pt->seq_tmp, n);
     size_t made = 0;
     for (size_t i = 0; i < n && !mr_simplifier_reached(s, g); i++) {
         const pcand e = pt->seq[i];
@@ -740,21 +895,8 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
         size_t pass_done = 0;
         bool quota_hit = false;
         if (!tail) {
-            /* quotas: each slab's share of what is left, by candidates */
-            const size_t all = nin + nbd;
-            const size_t lv = m->live_vertices - g.vertices;
-            const size_t lt = g.triangles ? m->live_triangles - g.triangles : SIZE_MAX;
-            for (unsigned p = 0; p < pt->parts; p++) {
-                pslab *sl = &pt->slab[p];
-                sl->qv = 3 * nin < lv ? SIZE_MAX
-                                      : (size_t)((unsigned __int128)lv * sl->nin / all);
-                sl->qt = 2 * nin < lt ? SIZE_MAX
-                                      : (size_t)((unsigned __int128)lt * sl->nin / all);
-                sl->gone = sl->deleted = sl->made = sl->refused = 0;
-                sl->worst = 0;
-                sl->quota_hit = false;
-            }
-            const size_t made = interior(s, g.limit, &worst, &quota_hit);
+            set_quotas(s, &g, pt->slab, pt->parts, nin + nbd);
+            const size_t made = apply_slabs(s, pt->slab, pt->parts, g.limit, &worst, &quota_hit);
             prof->interior += made;
             pass_done += made;
             done += made;
@@ -778,11 +920,21 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             memcpy(pt->seq + k, sl->buf + sl->c1 - sl->nbd, sl->nbd * sizeof *pt->seq);
             k += sl->nbd;
         }
+        sort_keys(pt->seq, pt->seq_tmp, k);
+        if (!tail && !mr_simplifier_reached(s, &g)) {
+            size_t made2;
+            k = shifted(s, k, &g, &worst, &quota_hit, &made2);
+            if (k == SIZE_MAX)
+                break; /* no memory: stop here */
+            prof->boundary += made2;
+            pass_done += made2;
+            done += made2;
+        }
         const size_t made = sequential(s, k, &g, &worst);
         if (tail)
             prof->tail += made;
         else
-            prof->boundary += made;
+            prof->boundary_seq += made;
         pass_done += made;
         done += made;
         if (o->progress && done >= next_report) {
@@ -808,14 +960,21 @@ void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats
 {
     stats->partition_passes = p->passes;
     stats->interior_collapses = p->interior;
-    stats->boundary_collapses = p->boundary;
+    stats->boundary_collapses = p->boundary + p->boundary_seq;
+    stats->boundary_sequential = p->boundary_seq;
     stats->tail_collapses = p->tail;
     stats->rebalances = p->rebalances;
 }
 
-unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v)
+unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs)
 {
-    return s->pt->part[v];
+    return shifted_slabs ? s->pt->part2[v] : s->pt->part[v];
+}
+
+bool mr_partitioned_shifted_interior(const mr_simplifier *s, uint32_t a, uint32_t b)
+{
+    const uint16_t q = s->pt->part2[a];
+    return ring_in(&s->m, s->pt->part2, a, q) && ring_in(&s->m, s->pt->part2, b, q);
 }
 
 size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,

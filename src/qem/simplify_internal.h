@@ -40,7 +40,7 @@ static inline bool mr_strategy_queued(int x)
 
 /* What the partitioned strategy counts (mr_simplify_stats' fields). */
 typedef struct mr_partition_profile {
-    size_t passes, interior, boundary, tail, rebalances;
+    size_t passes, interior, boundary, boundary_seq, tail, rebalances;
 } mr_partition_profile;
 
 /* What the concurrent-queue strategies count, summed over the threads
@@ -248,10 +248,13 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
 /* A run's profile as mr_simplify_stats' fields. */
 void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats);
 void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats *stats);
-/* For the tests: vertex v's slab, and the candidates a pass of the
- * partitioned strategy would gather now (no cost limit), each with
- * whether it is interior; returns their number (at most cap are stored). */
-unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v);
+/* For the tests: vertex v's slab (or shifted slab), whether edge (a, b)
+ * is interior to a shifted slab (the boundary step's test), and the
+ * candidates a pass of the partitioned strategy would gather now (no cost
+ * limit), each with whether it is interior; returns their number (at most
+ * cap are stored). */
+unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs);
+bool mr_partitioned_shifted_interior(const mr_simplifier *s, uint32_t a, uint32_t b);
 size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,
                             size_t cap);
 
