@@ -395,10 +395,10 @@ static double rms_of(const mr_mesh *m, const mr_simplified *r)
     return res.rms;
 }
 
-static void check_one_partition(const char *name, const mr_mesh *m)
+static void check_one_partition(const char *name, const mr_mesh *m, size_t nratios)
 {
     static const double ratios[] = {0.1, 0.01};
-    for (size_t i = 0; i < 2; i++) {
+    for (size_t i = 0; i < nratios; i++) {
         mr_simplify_options o;
         mr_simplify_options_default(&o);
         o.target_ratio = ratios[i];
@@ -423,11 +423,13 @@ static void test_one_partition(void **state)
     (void)state;
     mr_mesh m;
     if (read_shared("stanford-bunny.obj", &m)) {
-        check_one_partition("bunny", &m);
+        check_one_partition("bunny", &m, 2);
         mr_mesh_free(&m);
     }
+    /* (the quick scan's 1 % -- 200 vertices -- is too coarse to compare
+     * within 1 %) */
     generate(MR_GEN_SCAN, quick() ? 40000 : 200000, &m);
-    check_one_partition("scan", &m);
+    check_one_partition("scan", &m, quick() ? 1 : 2);
     mr_mesh_free(&m);
 }
 

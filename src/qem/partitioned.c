@@ -76,9 +76,8 @@
 /* Tail passes (one global order, one thread) once fewer collapses than
  * this many per slab are needed. */
 #define TAIL_PER_PARTITION 64
-/* Edges per call of the vectorised cost planner: gathering, applying. */
+/* Edges per call of the vectorised cost planner (gathering). */
 #define GATHER_BATCH 256
-#define PLAN_BATCH 64
 
 /* pure[] bits: the vertex's closed 1-ring is in its slab; counted in the
  * room bound of this pass. */
@@ -344,12 +343,21 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
 /* Does the gathering take half-edge (v, w) (a half-edge of one of v's
  * triangles)? An inner edge from its smaller end, a boundary edge from its
  * only half-edge, an inner edge between two boundary vertices never
- * (batched.c's rule: its collapse would pinch the surface). */
+ * (batched.c's rule: its collapse would pinch the surface). Reads v's list
+ * (clean) and the flags of v and w. */
 static inline bool takes(const mr_collapse_mesh *m, uint32_t v, uint32_t w)
 {
-    if (m->flags[v] & m->flags[w] & MR_VF_BOUNDARY)
-        return mr_collapse_edge_triangles(m, v, w) == 1;
-    return v < w;
+    if (!(m->flags[v] & m->flags[w] & MR_VF_BOUNDARY))
+        return v < w;
+    /* the edge's triangles, from v's list only (w's may be another slab's,
+     * cleaned meanwhile); v's list is clean */
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    uint32_t n = 0;
+    for (uint32_t i = 0, c = m->count[v]; i < c; i++) {
+        const uint32_t *t = m->tris + (list[i] - list[i] % 3);
+        n += (t[0] == w) | (t[1] == w) | (t[2] == w);
+    }
+    return n == 1;
 }
 
 /*
@@ -543,39 +551,21 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
     const pcand *c = sl->buf;
     size_t at = sl->room0;
     sl->paused = false;
-    /* the next PLAN_BATCH candidates with both ends unmarked, planned in
-     * one call of the vector loop (a plan stays exact while its ends are
-     * unmarked: only the ends of a collapse change) */
-    size_t idx[PLAN_BATCH];
-    uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
-    double pc[PLAN_BATCH], ptg[3 * PLAN_BATCH];
-    size_t ni = 0, ii = 0;
-    for (;;) {
-        if (ii == ni) {
-            ni = ii = 0;
-            for (; sl->next < sl->nin && ni < PLAN_BATCH; sl->next++) {
-                const pcand e = c[sl->next];
-                if (pt->mark[e.a] | pt->mark[e.b])
-                    continue;
-                idx[ni] = sl->next;
-                pa[ni] = e.a;
-                pb[ni] = e.b;
-                ni++;
-            }
-            if (ni == 0)
-                break;
-            mr_simplifier_plan_edges(s, ni, pa, pb, pc, pr, pk, ptg);
-        }
-        const size_t j = ii++;
+    /* Plans one by one (mr_simplifier_plan_edge): the vector planner
+     * reads a float past each quadric record, which may be another slab's
+     * vertex's, written meanwhile. */
+    for (; sl->next < sl->nin; sl->next++) {
         if (sl->gone + 3 > sl->qv || sl->deleted + 2 > sl->qt) {
             sl->quota_hit = true;
             sl->next = sl->nin;
             break;
         }
-        if (pt->mark[pa[j]] | pt->mark[pb[j]])
+        const pcand e = c[sl->next];
+        if (pt->mark[e.a] | pt->mark[e.b])
             continue;
-        const uint32_t r = pr[j], k = pk[j];
-        const double *target = ptg + 3 * j, cost = pc[j];
+        uint32_t r, k;
+        double target[3];
+        const double cost = mr_simplifier_plan_edge(s, e.a, e.b, &r, &k, target);
         mr_collapse_clean(m, r);
         mr_collapse_clean(m, k);
         if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
@@ -584,8 +574,7 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
         }
         const size_t need = (size_t)m->count[r] + m->count[k] - 1;
         if (at + need > sl->room1) {
-            sl->paused = true;
-            sl->next = idx[j]; /* resumes here */
+            sl->paused = true; /* resumes here */
             break;
         }
         uint32_t *out = m->refs + at;
