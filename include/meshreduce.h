@@ -369,9 +369,10 @@ typedef enum mr_strategy {
      * longest axis (balanced by vertex counts, rebalanced as the mesh
      * shrinks); each pass, every slab applies its interior collapses
      * (whose two closed 1-rings lie in the slab) in cost order on its own
-     * thread, then the edges across slabs follow in one global (cost,
-     * edge) order. Full or half collapse. For a fixed `partitions` the
-     * output is byte-identical at every thread count. */
+     * thread; the edges across slabs follow, by slabs shifted half a slab
+     * where their 1-rings fit in one, else in one global cost order on
+     * the calling thread. Full or half collapse. For a fixed `partitions`
+     * the output is byte-identical at every thread count. */
     MR_STRATEGY_PARTITIONED
 } mr_strategy;
 

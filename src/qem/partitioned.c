@@ -21,43 +21,55 @@
  * commute, and slab p's outcome depends only on slab p's own work.
  *
  * A pass:
- *   1. gather, per slab in parallel: clean the lists of the slab's live
- *      vertices, mark the pure ones; then every live edge once (batched.c's
- *      half-edge rule), with its cost from the vectorised planner, kept
- *      when its collapse may happen; interior edges to the slab's list,
- *      the others to its boundary list;
+ *   1. gather, per slab in parallel, in one sweep over the slab's live
+ *      vertices: each list cleaned, whether the vertex is pure, and every
+ *      live edge once (batched.c's half-edge rule) as (the slab's end, the
+ *      other), with its cost from the vectorised planner, kept when its
+ *      collapse may happen; then interior edges to the slab's list, the
+ *      others to its boundary list, both in gathering order;
  *   2. a global cost threshold, as batched.c's: the goal-th cheapest key
  *      (goal = the collapses still needed) times PASS_SLACK, from a
  *      histogram of every slab's candidates (integer sums: the same on any
  *      number of threads); each slab keeps its candidates under it and
- *      sorts them by (cost, edge) with edge = (smaller id, larger id);
+ *      sorts them by cost (a stable radix sort: ties keep the gathering
+ *      order, which comes from the mesh and the slabs alone);
  *   3. interior, per slab in parallel: the slab's candidates in that
  *      order, skipping an edge with an end that was already an end of a
  *      collapse in this pass (only the ends of a collapse change, so every
  *      other candidate's cost is still exact), testing validity
  *      (mr_simplifier_allowed) on the mesh as it stands, applying with
  *      mr_simplifier_collapse_at into the slab's room in refs (handed out
- *      by prefix sums; when it runs out the slab pauses, refs is compacted
- *      at a barrier and the paused slabs resume where they stopped -- a
- *      collapse's result does not depend on where its list is written);
- *   4. boundary, on the calling thread: every slab's boundary candidates
- *      under the threshold in one (cost, edge) order, the same skip rule,
- *      tested and applied one at a time, stopping exactly at the target.
+ *      by prefix sums of a bound; when the room runs out the slab pauses,
+ *      refs is compacted between the steps and the paused slabs resume
+ *      where they stopped -- a collapse's result does not depend on where
+ *      its list is written);
+ *   4. boundary: every slab's boundary candidates in one cost order; those
+ *      whose ends are both unmarked and whose two closed 1-rings lie in one
+ *      *shifted* slab (parts + 1 of them, planes at the quantiles
+ *      (i - 1/2) / parts: each slab plane runs through the middle of one)
+ *      are applied by the shifted slabs concurrently, exactly as in step 3;
+ *      the rest (rings spanning a plane of both kinds: a few dozen a pass
+ *      on a 1M-triangle scan) on the calling thread, in that order, up to
+ *      the target.
  * Near the target each slab has a quota (its share, by candidate counts,
  * of the vertices and triangles still to go, less what one collapse can
- * remove: 3 vertices, 2 triangles), so the concurrent step never
- * overshoots; once the collapses still needed are few (TAIL_PER_PARTITION
+ * remove: 3 vertices, 2 triangles), so the concurrent steps never
+ * overshoot; once the collapses still needed are few (TAIL_PER_PARTITION
  * per slab) or a quota stopped a slab, the pass is a tail pass: all
- * candidates in one global order on the calling thread, up to the target.
+ * candidates in one cost order on the calling thread, up to the target.
  *
  * Determinism: what each slab does depends only on the mesh, the slabs
  * (from positions and counts) and the constants; slabs run in any order on
- * any thread; every global order is (cost, edge); the boundary and tail
- * steps are sequential; refs compaction gives the same layout on any
- * number of threads. So for a fixed `partitions` the output is
- * byte-identical at every thread count and in the serial build. With one
- * slab every edge is interior, there is no boundary list, and a pass is
- * the sequential sweep batched.c approximates with its rounds.
+ * any thread; every global order is by cost, then by the gathering order
+ * (slab by slab); the sequential steps are sequential; refs compaction
+ * gives the same layout on any number of threads. So for a fixed
+ * `partitions` the output is byte-identical at every thread count and in
+ * the serial build. With one slab every edge is interior, there is no
+ * boundary list, and a pass is the sequential sweep batched.c approximates
+ * with its rounds.
+ *
+ * Not done (issue 16): the candidates are gathered anew each pass (as
+ * batched.c's) rather than refreshed around the collapses only.
  */
 #include "simplify_internal.h"
 

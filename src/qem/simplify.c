@@ -9,7 +9,9 @@
  * owns only its own queue or candidate arrays and decides which collapses
  * run when: greedy.c (MR_STRATEGY_GREEDY, the sequential reference: one
  * collapse at a time from a heap) and batched.c (MR_STRATEGY_BATCHED, the
- * default: passes over all edges). mr_mesh_simplify (mesh_simplify.c)
+ * default: passes over all edges); partitioned.c (MR_STRATEGY_PARTITIONED:
+ * slabs of vertices applying their interior collapses concurrently) and
+ * parallel/queued.c (the concurrent-queue strategies) are the others. mr_mesh_simplify (mesh_simplify.c)
  * drives the same phases with attribute hooks.
  */
 #include "simplify_internal.h"
