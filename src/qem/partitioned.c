@@ -88,8 +88,14 @@
 /* Tail passes (one global order, one thread) once fewer collapses than
  * this many per slab are needed. */
 #define TAIL_PER_PARTITION 64
-/* Edges per call of the vectorised cost planner (gathering). */
+/* Edges per call of the vectorised cost planner: gathering, planning. */
 #define GATHER_BATCH 256
+#define PLAN_BATCH 64
+/* How many candidates ahead the three prefetch stages of
+ * mr_collapse_prefetch run (as batched.c's). */
+#define PF0 6
+#define PF1 4
+#define PF2 2
 
 /* pure[] bits: the vertex's closed 1-ring is in its slab; counted in the
  * room bound of this pass. */
@@ -102,8 +108,17 @@ typedef struct pcand {
     uint32_t key, a, b;
 } pcand;
 
+/* A candidate's planned collapse: r goes, k stays, at target. */
+typedef struct pplan {
+    double target[3];
+    double cost;
+    uint32_t r, k;
+} pplan;
+
 /* One slab's state in a pass. */
 typedef struct pslab {
+    pplan *plan;          /* plan[i]: candidate buf[i]'s (interior ones) */
+    size_t pcap;
     pcand *buf;           /* its candidates: interior ones from buf[0] up,
                              the others from buf[c1 - 1] down */
     pcand *tmp;           /* the radix sort's scratch */
@@ -315,10 +330,12 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     for (unsigned p = 0; pt->slab && p < pt->parts; p++) {
         free(pt->slab[p].buf);
         free(pt->slab[p].tmp);
+        free(pt->slab[p].plan);
     }
     for (unsigned p = 0; pt->slab2 && p <= pt->parts; p++) {
         free(pt->slab2[p].buf);
         free(pt->slab2[p].tmp);
+        free(pt->slab2[p].plan);
     }
     free(pt->slab2);
     free(pt->part2);
@@ -508,6 +525,41 @@ static uint32_t rank_key(mr_simplifier *s, size_t n, size_t rank)
     return UINT32_MAX;
 }
 
+/* Plan slab sl's candidates buf[0..nin) (the vector planner, in batches:
+ * called while no collapse runs -- the planner reads a float past each
+ * quadric record, which may be another slab's vertex's). A plan stays
+ * exact while neither end has moved. Returns false when out of memory. */
+static bool slab_plan(const mr_simplifier *s, pslab *sl)
+{
+    if (sl->nin > sl->pcap || !sl->plan) {
+        free(sl->plan);
+        sl->pcap = sl->nin + sl->nin / 8 + 64;
+        sl->plan = mr_alloc_array(sl->pcap, sizeof *sl->plan);
+        if (!sl->plan) {
+            sl->pcap = 0;
+            return false;
+        }
+    }
+    uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
+    double pc[PLAN_BATCH], pt3[3 * PLAN_BATCH];
+    for (size_t i0 = 0; i0 < sl->nin; i0 += PLAN_BATCH) {
+        const size_t n = sl->nin - i0 < PLAN_BATCH ? sl->nin - i0 : PLAN_BATCH;
+        for (size_t j = 0; j < n; j++) {
+            pa[j] = sl->buf[i0 + j].a;
+            pb[j] = sl->buf[i0 + j].b;
+        }
+        mr_simplifier_plan_edges(s, n, pa, pb, pc, pr, pk, pt3);
+        for (size_t j = 0; j < n; j++) {
+            pplan *x = &sl->plan[i0 + j];
+            memcpy(x->target, pt3 + 3 * j, sizeof x->target);
+            x->cost = pc[j];
+            x->r = pr[j];
+            x->k = pk[j];
+        }
+    }
+    return true;
+}
+
 /* Slab p keeps its candidates with keys up to lim, interior ones sorted
  * (unless `tail`: all go to the global order), and bounds the refs room
  * its collapses can take: the list lengths of the distinct ends (each
@@ -538,6 +590,8 @@ static bool slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
     if (!room_for(&sl->tmp, &sl->tcap, sl->nin))
         return false;
     sort_keys(c, sl->tmp, sl->nin);
+    if (!slab_plan(s, sl))
+        return false;
     for (size_t i = 0; i < sl->nin; i++) {
         const uint32_t e[2] = {c[i].a, c[i].b};
         for (int j = 0; j < 2; j++) {
@@ -563,21 +617,34 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
     const pcand *c = sl->buf;
     size_t at = sl->room0;
     sl->paused = false;
-    /* Plans one by one (mr_simplifier_plan_edge): the vector planner
-     * reads a float past each quadric record, which may be another slab's
-     * vertex's, written meanwhile. */
     for (; sl->next < sl->nin; sl->next++) {
         if (sl->gone + 3 > sl->qv || sl->deleted + 2 > sl->qt) {
             sl->quota_hit = true;
             sl->next = sl->nin;
             break;
         }
+        /* the lists, triangles and quadrics of the candidates a few
+         * turns ahead, in stages (the sorted order jumps about the slab) */
+        static const size_t ahead[3] = {PF0, PF1, PF2};
+        for (int st = 0; st < 3; st++) {
+            if (sl->next + ahead[st] < sl->nin) {
+                const pcand y = c[sl->next + ahead[st]];
+                mr_collapse_prefetch(m, y.a, st);
+                mr_collapse_prefetch(m, y.b, st);
+                if (st == 1) {
+                    __builtin_prefetch(s->q + y.a);
+                    __builtin_prefetch(s->q + y.b);
+                    __builtin_prefetch(pt->mark + y.a);
+                    __builtin_prefetch(pt->mark + y.b);
+                }
+            }
+        }
         const pcand e = c[sl->next];
         if (pt->mark[e.a] | pt->mark[e.b])
             continue;
-        uint32_t r, k;
-        double target[3];
-        const double cost = mr_simplifier_plan_edge(s, e.a, e.b, &r, &k, target);
+        const pplan *x = &sl->plan[sl->next];
+        const uint32_t r = x->r, k = x->k;
+        const double *target = x->target, cost = x->cost;
         mr_collapse_clean(m, r);
         mr_collapse_clean(m, k);
         if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
@@ -722,8 +789,10 @@ static bool ring_in(const mr_collapse_mesh *m, const uint16_t *part2, uint32_t v
 /* Slab sl's refs room bound, from its candidates' distinct ends (as
  * slab_select's); counts are of the lists as they are (dirty ones are
  * cleaned before a collapse, which only shortens them). */
-static void slab_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl)
+static bool slab_demand(const mr_simplifier *s, pslab *sl)
 {
+    mr_partitioned *pt = s->pt;
+    const mr_collapse_mesh *m = &s->m;
     const pcand *c = sl->buf;
     sl->demand = 0;
     sl->next = 0;
@@ -740,6 +809,7 @@ static void slab_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl
         pt->pure[c[i].a] &= (uint8_t)~SEEN;
         pt->pure[c[i].b] &= (uint8_t)~SEEN;
     }
+    return slab_plan(s, sl);
 }
 
 /*
@@ -805,10 +875,13 @@ static size_t shifted(mr_simplifier *s, size_t n, const mr_simplify_goal *g, dou
         }
     }
     const ptrdiff_t nq = (ptrdiff_t)ns;
+    bool ok = true;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) \
-    if (pt->threads > 1 && n > 4096)
+    if (pt->threads > 1 && n > 4096) reduction(&& : ok)
     for (ptrdiff_t q = 0; q < nq; q++)
-        slab_demand(pt, m, &pt->slab2[q]);
+        ok = slab_demand(s, &pt->slab2[q]) && ok;
+    if (!ok)
+        return SIZE_MAX;
     size_t nin = 0;
     for (size_t q = 0; q < ns; q++)
         nin += pt->slab2[q].nin;
