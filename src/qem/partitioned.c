@@ -88,6 +88,9 @@
 /* Tail passes (one global order, one thread) once fewer collapses than
  * this many per slab are needed. */
 #define TAIL_PER_PARTITION 64
+/* Triangles per gathering block (a constant: the candidates' order must
+ * not depend on the thread count). */
+#define BLOCK_TRIANGLES 4096
 /* Edges per call of the vectorised cost planner: gathering, planning. */
 #define GATHER_BATCH 256
 #define PLAN_BATCH 64
@@ -97,9 +100,7 @@
 #define PF1 4
 #define PF2 2
 
-/* pure[] bits: the vertex's closed 1-ring is in its slab; counted in the
- * room bound of this pass. */
-#define PURE 1u
+/* pure[] bit: counted in the room bound of this pass (a scratch mark). */
 #define SEEN 2u
 
 /* A candidate edge (a, b) -- a the end whose slab gathered it -- and the
@@ -143,8 +144,17 @@ struct mr_partitioned {
     pslab *slab2;         /* parts + 1: the boundary step's slabs */
     uint8_t *in2;         /* per boundary candidate: interior to a shifted
                              slab */
+    uint32_t *impure;     /* per vertex: the gathering (gen) at which one of
+                             its triangles was found to span slabs */
+    uint32_t gen;         /* the gatherings so far */
+    pcand *bcand;         /* the gathering's blocks: 3 * BLOCK_TRIANGLES
+                             candidates each */
+    size_t nblocks;
+    uint32_t *bcount;     /* per block: candidates; then per block and slab
+                             (2 * parts): interior and boundary counts, then
+                             their offsets in the slab's list */
     size_t in2_cap;
-    uint8_t *pure;        /* per vertex: PURE, SEEN */
+    uint8_t *pure;        /* per vertex: SEEN */
     uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
     uint32_t *pverts;     /* the live vertices at the last balance, by slab */
     size_t *pvoff;        /* parts + 1 */
@@ -313,9 +323,14 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
     pt->pvoff = mr_alloc_array((size_t)pt->parts + 1, sizeof *pt->pvoff);
     pt->slab = mr_calloc_array(pt->parts, sizeof *pt->slab);
     pt->part2 = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part2);
+    pt->impure = mr_calloc_array(m->vertex_count + 1, sizeof *pt->impure);
+    pt->nblocks = (m->triangle_count + BLOCK_TRIANGLES - 1) / BLOCK_TRIANGLES;
+    pt->bcand = mr_alloc_array(pt->nblocks * 3 * BLOCK_TRIANGLES + 1, sizeof *pt->bcand);
+    pt->bcount = mr_alloc_array(pt->nblocks * (2 * (size_t)pt->parts + 1) + 1,
+                                sizeof *pt->bcount);
     pt->slab2 = mr_calloc_array((size_t)pt->parts + 1, sizeof *pt->slab2);
     pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
-    if (!pt->part || !pt->part2 || !pt->slab2 || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
+    if (!pt->part || !pt->part2 || !pt->impure || !pt->bcand || !pt->bcount || !pt->slab2 || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
         !pt->slab || !pt->hist || !m->dead)
         return mr_fail_nomem(err, NULL, m->vertex_count * 12);
     balance(s);
@@ -339,6 +354,9 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     }
     free(pt->slab2);
     free(pt->part2);
+    free(pt->impure);
+    free(pt->bcand);
+    free(pt->bcount);
     free(pt->in2);
     free(pt->seq);
     free(pt->seq_tmp);
@@ -369,50 +387,81 @@ static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g
     return needed;
 }
 
-/* Does the gathering take half-edge (v, w) (a half-edge of one of v's
- * triangles)? An inner edge from its smaller end, a boundary edge from its
- * only half-edge, an inner edge between two boundary vertices never
- * (batched.c's rule: its collapse would pinch the surface). Reads v's list
- * (clean) and the flags of v and w. */
-static inline bool takes(const mr_collapse_mesh *m, uint32_t v, uint32_t w)
+/*
+ * Runs the block once for every live edge of triangle t, as (a, b) along
+ * one of its half-edges: an inner edge from the half-edge that runs from
+ * its smaller end, a boundary edge from its only half-edge, an inner edge
+ * between two boundary vertices never (batched.c's rule: its collapse
+ * would pinch the surface). Lists may hold deleted triangles
+ * (mr_collapse_edge_triangles counts right on them).
+ */
+#define FOR_EACH_TRIANGLE_EDGE(m, t, a, b, ...)                                         \
+    do {                                                                               \
+        const uint32_t *tri_ = (m)->tris + 3 * (size_t)(t);                            \
+        for (int j_ = 0; j_ < 3; j_++) {                                               \
+            const uint32_t a = tri_[j_], b = tri_[j_ == 2 ? 0 : j_ + 1];               \
+            bool take_ = a < b;                                                        \
+            if ((m)->flags[a] & (m)->flags[b] & MR_VF_BOUNDARY)                        \
+                take_ = mr_collapse_edge_triangles((m), a, b) == 1;                    \
+            if (take_) {                                                               \
+                __VA_ARGS__                                                            \
+            }                                                                          \
+        }                                                                              \
+    } while (0)
+
+/* Triangles [t0, t1) of block blk. */
+static inline void block_range(const mr_partitioned *pt, const mr_collapse_mesh *m, size_t blk,
+                               size_t *t0, size_t *t1)
 {
-    if (!(m->flags[v] & m->flags[w] & MR_VF_BOUNDARY))
-        return v < w;
-    /* the edge's triangles, from v's list only (w's may be another slab's,
-     * cleaned meanwhile); v's list is clean */
-    const uint32_t *list = mr_collapse_vertex_tris(m, v);
-    uint32_t n = 0;
-    for (uint32_t i = 0, c = m->count[v]; i < c; i++) {
-        const uint32_t *t = m->tris + (list[i] - list[i] % 3);
-        n += (t[0] == w) | (t[1] == w) | (t[2] == w);
-    }
-    return n == 1;
+    (void)pt;
+    *t0 = blk * BLOCK_TRIANGLES;
+    *t1 = m->triangle_count - *t0 < BLOCK_TRIANGLES ? m->triangle_count : *t0 + BLOCK_TRIANGLES;
 }
 
-/*
- * Step 1 for slab p, in one sweep over its live vertices: each one's list
- * cleaned, whether it is pure, and every live edge taken from one of its
- * half-edges (as (v, w), v the slab's end) whose collapse may happen, with
- * its cost; then the interior ones (both ends pure) to buf[0..nin), in
- * gathering order, the others to buf[c1 - nbd .. c1). Reads and writes
- * only the slab's own vertices' lists and pure[] (pure[w] is read only
- * when v is pure, and then w is in the slab). Returns false when out of
- * memory.
- */
-static bool slab_gather(mr_simplifier *s, unsigned p, double limit)
+/* Gathering, first sweep over block blk: each vertex of a live triangle
+ * that spans slabs is impure at this gathering (an idempotent store: a
+ * vertex's triangles may lie in several blocks). */
+static void block_impure(mr_partitioned *pt, const mr_collapse_mesh *m, size_t blk, bool par)
+{
+    size_t t0, t1;
+    block_range(pt, m, blk, &t0, &t1);
+    for (size_t t = t0; t < t1; t++) {
+        const uint32_t *x = m->tris + 3 * t;
+        if (x[0] == NONE)
+            continue;
+        const uint16_t p0 = pt->part[x[0]], p1 = pt->part[x[1]], p2 = pt->part[x[2]];
+        if ((p0 == p1) & (p1 == p2))
+            continue;
+        for (int j = 0; j < 3; j++) {
+            if (par)
+                __atomic_store_n(&pt->impure[x[j]], pt->gen, __ATOMIC_RELAXED);
+            else
+                pt->impure[x[j]] = pt->gen;
+        }
+    }
+}
+
+/* Is v pure -- its closed 1-ring in its slab -- at this gathering? */
+static inline bool is_pure(const mr_partitioned *pt, uint32_t v)
+{
+    return pt->impure[v] != pt->gen; /* read after the first sweep's barrier */
+}
+
+/* Gathering, second sweep over block blk: every live edge whose collapse
+ * may happen, with its cost, in triangle order, to the block's part of
+ * bcand, oriented so that a is the end whose slab takes it; counted per
+ * slab, interior (both ends pure) and boundary. */
+static void block_gather(mr_simplifier *s, size_t blk, double limit)
 {
     mr_partitioned *pt = s->pt;
-    mr_collapse_mesh *m = &s->m;
-    pslab *sl = &pt->slab[p];
-    size_t bound = 0;
-    for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++)
-        bound += m->count[pt->pverts[i]]; /* removed ones: 0 */
-    sl->nin = sl->nbd = 0;
-    sl->c1 = bound;
-    if (!room_for(&sl->buf, &sl->cap, bound) || !room_for(&sl->tmp, &sl->tcap, bound))
-        return false;
-    pcand *cand = sl->buf;
-    size_t n = 0;
+    const mr_collapse_mesh *m = &s->m;
+    size_t t0, t1;
+    block_range(pt, m, blk, &t0, &t1);
+    pcand *out = pt->bcand + blk * 3 * BLOCK_TRIANGLES;
+    const size_t np = pt->parts;
+    uint32_t *cnt = pt->bcount + pt->nblocks + blk * 2 * np;
+    memset(cnt, 0, 2 * np * sizeof *cnt);
+    uint32_t n = 0;
     uint32_t ea[GATHER_BATCH], eb[GATHER_BATCH];
     double cost[GATHER_BATCH];
     size_t nb = 0;
@@ -420,70 +469,120 @@ static bool slab_gather(mr_simplifier *s, unsigned p, double limit)
     do {                                                                              \
         mr_simplifier_plan_edges(s, nb, ea, eb, cost, NULL, NULL, NULL);              \
         for (size_t f_ = 0; f_ < nb; f_++) {                                          \
-            cand[n] = (pcand){float_key((float)cost[f_]), ea[f_], eb[f_]};            \
-            n += cost[f_] <= limit && cost[f_] < INFINITY;                            \
+            const uint32_t a_ = ea[f_], b_ = eb[f_];                                  \
+            const bool in_ = is_pure(pt, a_) && is_pure(pt, b_);                      \
+            out[n] = (pcand){float_key((float)cost[f_]), a_, b_};                     \
+            const bool keep_ = cost[f_] <= limit && cost[f_] < INFINITY;              \
+            cnt[2 * pt->part[a_] + !in_] += keep_;                                    \
+            n += keep_;                                                               \
         }                                                                             \
         nb = 0;                                                                       \
     } while (0)
-    for (size_t i = pt->pvoff[p]; i < pt->pvoff[p + 1]; i++) {
-        const uint32_t v = pt->pverts[i];
-        if (m->flags[v] & MR_VF_REMOVED) {
-            pt->pure[v] = 0;
-            continue;
-        }
-        if (mr_collapse_dirty(m, v))
-            mr_collapse_clean(m, v);
-        const uint32_t *list = mr_collapse_vertex_tris(m, v);
-        bool pure = true;
-        for (uint32_t j = 0, nl = m->count[v]; j < nl; j++) {
-            const uint32_t c = list[j], k = c % 3;
-            const uint32_t *t = m->tris + (c - k);
-            pure &= (pt->part[t[0]] == p) & (pt->part[t[1]] == p) & (pt->part[t[2]] == p);
-            const uint32_t w = t[k == 2 ? 0 : k + 1];
-            if (!takes(m, v, w))
-                continue;
-            __builtin_prefetch(s->q + w);
-            ea[nb] = v;
-            eb[nb] = w;
-            if (++nb == GATHER_BATCH)
+    for (size_t c0 = t0; c0 < t1; c0 += 64) {
+        const size_t nt = t1 - c0 < 64 ? t1 - c0 : 64;
+        uint64_t live = 0;
+        for (size_t i = 0; i < nt; i++)
+            live |= (uint64_t)(m->tris[3 * (c0 + i)] != NONE) << i;
+        for (; live; live &= live - 1) {
+            const size_t t = c0 + (size_t)__builtin_ctzll(live);
+            FOR_EACH_TRIANGLE_EDGE(m, t, a, b, {
+                __builtin_prefetch(s->q + b);
+                ea[nb] = a;
+                eb[nb] = b;
+                nb++;
+            });
+            if (nb > GATHER_BATCH - 3)
                 FLUSH();
         }
-        pt->pure[v] = pure ? PURE : 0;
     }
     if (nb)
         FLUSH();
 #undef FLUSH
-    /* interior ones in place, the others through tmp to the end */
-    size_t nin = 0, nbd = 0;
-    for (size_t i = 0; i < n; i++) {
-        const pcand e = cand[i];
-        if ((pt->pure[e.a] & PURE) && (pt->pure[e.b] & PURE))
-            cand[nin++] = e;
-        else
-            sl->tmp[nbd++] = e;
-    }
-    memcpy(cand + bound - nbd, sl->tmp, nbd * sizeof *cand);
-    sl->nin = nin;
-    sl->nbd = nbd;
-    return true;
+    pt->bcount[blk] = n;
 }
 
-/* Every slab's candidates (step 1); returns their number, or 0 when out
- * of memory. */
+/* Gathering, last sweep over block blk: its candidates to their slabs'
+ * lists, at the offsets the prefix sums gave. */
+static void block_scatter(mr_partitioned *pt, size_t blk)
+{
+    const size_t np = pt->parts;
+    uint32_t *off = pt->bcount + pt->nblocks + blk * 2 * np;
+    const pcand *c = pt->bcand + blk * 3 * BLOCK_TRIANGLES;
+    for (uint32_t i = 0, n = pt->bcount[blk]; i < n; i++) {
+        const pcand e = c[i];
+        const bool in = is_pure(pt, e.a) && is_pure(pt, e.b);
+        const uint16_t p = pt->part[e.a];
+        pslab *sl = &pt->slab[p];
+        if (in)
+            sl->buf[off[2 * p]++] = e;
+        else
+            sl->buf[off[2 * p + 1]++] = e;
+    }
+}
+
+/*
+ * Step 1: every slab's candidates, interior ones in buf[0..nin), the
+ * others in buf[c1 - nbd .. c1), each in triangle order (fixed blocks of
+ * triangles, whatever the threads). Three sweeps over the triangle
+ * blocks: which vertices are impure (a triangle of theirs spans slabs);
+ * the edges with their costs, counted per block and slab; after prefix
+ * sums over the blocks, each block's candidates to its slabs' lists.
+ * Lists are only read (no cleaning). Returns the candidates' number, or 0
+ * when out of memory.
+ */
 static size_t gather(mr_simplifier *s, double limit)
 {
     mr_partitioned *pt = s->pt;
-    const ptrdiff_t np = (ptrdiff_t)pt->parts;
-    const bool par = pt->threads > 1 && np > 1;
+    const mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t nb = (ptrdiff_t)pt->nblocks;
+    const size_t np = pt->parts;
+    const bool par = pt->threads > 1 && m->live_triangles > 65536;
+    pt->gen++;
+#pragma omp parallel num_threads(pt->threads) if (par)
+    {
+#pragma omp for schedule(static)
+        for (ptrdiff_t i = 0; i < nb; i++)
+            block_impure(pt, m, (size_t)i, par);
+#pragma omp for schedule(dynamic, 4)
+        for (ptrdiff_t i = 0; i < nb; i++)
+            block_gather(s, (size_t)i, limit);
+    }
+    /* per slab: interior candidates block by block from 0, then the
+     * boundary ones */
     bool ok = true;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
-    reduction(&& : ok)
-    for (ptrdiff_t p = 0; p < np; p++)
-        ok = slab_gather(s, (unsigned)p, limit) && ok;
     size_t total = 0;
-    for (unsigned p = 0; p < pt->parts; p++)
-        total += pt->slab[p].nin + pt->slab[p].nbd;
-    return ok ? total : 0;
+    for (size_t p = 0; p < np; p++) {
+        pslab *sl = &pt->slab[p];
+        size_t ni = 0, nbd = 0;
+        for (size_t i = 0; i < pt->nblocks; i++) {
+            const uint32_t *cnt = pt->bcount + pt->nblocks + i * 2 * np + 2 * p;
+            ni += cnt[0];
+            nbd += cnt[1];
+        }
+        sl->nin = ni;
+        sl->nbd = nbd;
+        sl->c1 = ni + nbd;
+        total += ni + nbd;
+        if (!room_for(&sl->buf, &sl->cap, sl->c1) || !room_for(&sl->tmp, &sl->tcap, sl->c1)) {
+            ok = false;
+            continue;
+        }
+        uint32_t oi = 0, ob = (uint32_t)ni;
+        for (size_t i = 0; i < pt->nblocks; i++) {
+            uint32_t *cnt = pt->bcount + pt->nblocks + i * 2 * np + 2 * p;
+            const uint32_t ci = cnt[0], cb = cnt[1];
+            cnt[0] = oi;
+            cnt[1] = ob;
+            oi += ci;
+            ob += cb;
+        }
+    }
+    if (!ok)
+        return 0;
+#pragma omp parallel for schedule(static) num_threads(pt->threads) if (par)
+    for (ptrdiff_t i = 0; i < nb; i++)
+        block_scatter(pt, (size_t)i);
+    return total;
 }
 
 /* The key below which at least rank + 1 of the n candidates lie, to the
