@@ -80,7 +80,9 @@ static bool quick(void)
 
 static const char *strategy_name(mr_strategy s)
 {
-    return s == MR_STRATEGY_GREEDY ? "greedy" : s == MR_STRATEGY_PARTITIONED ? "partitioned" : "batched";
+    return s == MR_STRATEGY_GREEDY        ? "greedy"
+           : s == MR_STRATEGY_PARTITIONED ? "partitioned"
+                                          : "batched";
 }
 
 static const char *collapse_name(mr_collapse_kind k)

@@ -120,8 +120,8 @@ typedef struct pplan {
 typedef struct pslab {
     pplan *plan;          /* plan[i]: candidate buf[i]'s (interior ones) */
     size_t pcap;
-    pcand *buf;           /* its candidates: interior ones from buf[0] up,
-                             the others from buf[c1 - 1] down */
+    pcand *buf;           /* its candidates: interior ones in buf[0..nin),
+                             the others in buf[c1 - nbd .. c1) */
     pcand *tmp;           /* the radix sort's scratch */
     size_t cap, tcap;     /* their sizes */
     size_t c1;            /* this pass's bound on its candidates (<= cap) */
@@ -156,8 +156,6 @@ struct mr_partitioned {
     size_t in2_cap;
     uint8_t *pure;        /* per vertex: SEEN */
     uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
-    uint32_t *pverts;     /* the live vertices at the last balance, by slab */
-    size_t *pvoff;        /* parts + 1 */
     pslab *slab;          /* parts */
     pcand *seq, *seq_tmp; /* the boundary (or tail) candidates, merged;
                              the radix sort's scratch */
@@ -282,24 +280,15 @@ static void balance(mr_simplifier *s)
         slab2_of[b] = (uint16_t)(q2 < pt->parts ? q2 : pt->parts);
         acc += bins[b];
     }
-    size_t *off = pt->pvoff;
-    memset(off, 0, (pt->parts + 1) * sizeof *off);
+#pragma omp parallel for schedule(static) num_threads(pt->threads) if (par)
     for (ptrdiff_t v = 0; v < nv; v++) {
-        float f = (m->pos[3 * v + axis] - a0) * scale;
-        uint32_t b = f <= 0 ? 0 : f >= (float)(SLAB_BINS - 1) ? SLAB_BINS - 1 : (uint32_t)f;
+        const float f = (m->pos[3 * v + axis] - a0) * scale;
+        const uint32_t b = f <= 0                          ? 0
+                           : f >= (float)(SLAB_BINS - 1) ? SLAB_BINS - 1
+                                                           : (uint32_t)f;
         pt->part[v] = slab_of[b];
         pt->part2[v] = slab2_of[b];
-        if (!(m->flags[v] & MR_VF_REMOVED))
-            off[slab_of[b] + 1]++;
     }
-    for (unsigned p = 0; p < pt->parts; p++)
-        off[p + 1] += off[p];
-    for (ptrdiff_t v = 0; v < nv; v++)
-        if (!(m->flags[v] & MR_VF_REMOVED))
-            pt->pverts[off[pt->part[v]]++] = (uint32_t)v;
-    for (unsigned p = pt->parts; p > 0; p--)
-        off[p] = off[p - 1];
-    off[0] = 0;
     pt->balanced_live = m->live_vertices;
 }
 
@@ -319,8 +308,6 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
     pt->part = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part);
     pt->pure = mr_calloc_array(m->vertex_count + 1, 1);
     pt->mark = mr_calloc_array(m->vertex_count + 1, 1);
-    pt->pverts = mr_alloc_array(m->vertex_count + 1, sizeof *pt->pverts);
-    pt->pvoff = mr_alloc_array((size_t)pt->parts + 1, sizeof *pt->pvoff);
     pt->slab = mr_calloc_array(pt->parts, sizeof *pt->slab);
     pt->part2 = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part2);
     pt->impure = mr_calloc_array(m->vertex_count + 1, sizeof *pt->impure);
@@ -330,9 +317,9 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
                                 sizeof *pt->bcount);
     pt->slab2 = mr_calloc_array((size_t)pt->parts + 1, sizeof *pt->slab2);
     pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
-    if (!pt->part || !pt->part2 || !pt->impure || !pt->bcand || !pt->bcount || !pt->slab2 || !pt->pure || !pt->mark || !pt->pverts || !pt->pvoff ||
-        !pt->slab || !pt->hist || !m->dead)
-        return mr_fail_nomem(err, NULL, m->vertex_count * 12);
+    if (!pt->part || !pt->part2 || !pt->impure || !pt->bcand || !pt->bcount || !pt->slab2 ||
+        !pt->pure || !pt->mark || !pt->slab || !pt->hist || !m->dead)
+        return mr_fail_nomem(err, NULL, m->vertex_count * 12 + m->triangle_count * 36);
     balance(s);
     return MR_OK;
 }
@@ -363,8 +350,6 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     free(pt->part);
     free(pt->pure);
     free(pt->mark);
-    free(pt->pverts);
-    free(pt->pvoff);
     free(pt->slab);
     free(pt->hist);
     free(pt);
