@@ -21,18 +21,19 @@
  * commute, and slab p's outcome depends only on slab p's own work.
  *
  * A pass:
- *   1. gather, per slab in parallel, in one sweep over the slab's live
- *      vertices: each list cleaned, whether the vertex is pure, and every
- *      live edge once (batched.c's half-edge rule) as (the slab's end, the
- *      other), with its cost from the vectorised planner, kept when its
- *      collapse may happen; then interior edges to the slab's list, the
- *      others to its boundary list, both in gathering order;
+ *   1. gather, in fixed blocks of triangles in parallel (the triangles are
+ *      in spatial order, setup.c): the vertices of triangles that span
+ *      slabs are impure; every live edge once (batched.c's half-edge rule)
+ *      with its cost from the vectorised planner, kept when its collapse
+ *      may happen, counted per block and slab; after prefix sums, each
+ *      block's edges to its slabs' lists: interior ones (both ends pure)
+ *      to the slab's list, the others to its boundary list;
  *   2. a global cost threshold, as batched.c's: the goal-th cheapest key
  *      (goal = the collapses still needed) times PASS_SLACK, from a
  *      histogram of every slab's candidates (integer sums: the same on any
  *      number of threads); each slab keeps its candidates under it and
- *      sorts them by cost (a stable radix sort: ties keep the gathering
- *      order, which comes from the mesh and the slabs alone);
+ *      sorts them by (cost, edge id) (a radix sort of the keys, ties by
+ *      (smaller end, larger end));
  *   3. interior, per slab in parallel: the slab's candidates in that
  *      order, skipping an edge with an end that was already an end of a
  *      collapse in this pass (only the ends of a collapse change, so every
@@ -43,7 +44,8 @@
  *      refs is compacted between the steps and the paused slabs resume
  *      where they stopped -- a collapse's result does not depend on where
  *      its list is written);
- *   4. boundary: every slab's boundary candidates in one cost order; those
+ *   4. boundary: every slab's boundary candidates in one (cost, edge id)
+ *      order; those
  *      whose ends are both unmarked and whose two closed 1-rings lie in one
  *      *shifted* slab (parts + 1 of them, planes at the quantiles
  *      (i - 1/2) / parts: each slab plane runs through the middle of one)
@@ -60,8 +62,7 @@
  *
  * Determinism: what each slab does depends only on the mesh, the slabs
  * (from positions and counts) and the constants; slabs run in any order on
- * any thread; every global order is by cost, then by the gathering order
- * (slab by slab); the sequential steps are sequential; refs compaction
+ * any thread; every order is by (cost, edge id); the sequential steps are sequential; refs compaction
  * gives the same layout on any number of threads. So for a fixed
  * `partitions` the output is byte-identical at every thread count and in
  * the serial build. With one slab every edge is interior, there is no
@@ -178,9 +179,24 @@ static inline float key_float(uint32_t u)
     return x;
 }
 
-/* Sort c[0..n) by key, stable (ties keep their order), with scratch
- * tmp[0..n): LSD radix, 11 + 11 + 10 bits, a pass skipped when every key
- * has the same digit. */
+/* The edge id of a candidate: (smaller end, larger end). */
+static inline uint64_t edge_id(const pcand *e)
+{
+    const uint32_t lo = e->a < e->b ? e->a : e->b, hi = e->a < e->b ? e->b : e->a;
+    return (uint64_t)lo << 32 | hi;
+}
+
+static int by_edge(const void *x, const void *y)
+{
+    const uint64_t p = edge_id(x), q = edge_id(y);
+    return (p > q) - (p < q);
+}
+
+/* Sort c[0..n) by (key, edge id), with scratch tmp[0..n): an LSD radix
+ * sort of the keys (11 + 11 + 10 bits, a pass skipped when every key has
+ * the same digit), then each run of equal keys by edge id (such runs are
+ * short but for the many zero-cost edges of flat parts). The order then
+ * comes from the mesh alone, not from where an edge was gathered. */
 static void sort_keys(pcand *c, pcand *tmp, size_t n)
 {
     static const unsigned shift[3] = {0, 11, 22}, bits[3] = {11, 11, 10};
@@ -207,6 +223,14 @@ static void sort_keys(pcand *c, pcand *tmp, size_t n)
     }
     if (src != c)
         memcpy(c, src, n * sizeof *c);
+    for (size_t i = 0; i < n;) {
+        size_t j = i + 1;
+        while (j < n && c[j].key == c[i].key)
+            j++;
+        if (j - i > 1)
+            qsort(c + i, j - i, sizeof *c, by_edge);
+        i = j;
+    }
 }
 
 /* Room for n entries in *buf (contents dropped). */
