@@ -37,7 +37,7 @@ static const char usage[] =
     "  -o, --output FILE     output file (required)\n"
     "  --collapse full|half  full: both ends move to the optimal position (default);\n"
     "                        half: one end moves onto the other\n"
-    "  --strategy greedy|batched|ppq|rppq|fppq|multiqueue\n"
+    "  --strategy greedy|batched|ppq|rppq|fppq|multiqueue|partitioned\n"
     "                        batched: passes over all edges, cheapest first, at\n"
     "                        most one collapse per vertex a pass (default);\n"
     "                        greedy: always the single cheapest collapse, from a\n"
@@ -53,6 +53,16 @@ static const char usage[] =
     "                        rank bound); fppq: every pop among the best\n"
     "                        k = L*2^L + 1 (L filter levels); multiqueue: none\n"
     "                        beyond \"usually near the top\"\n"
+    "                        partitioned: vertices in slabs along the longest axis;\n"
+    "                        each pass every slab applies its interior collapses\n"
+    "                        (both ends' 1-rings in the slab) in cost order on its\n"
+    "                        own thread; then the edges across slabs, by slabs\n"
+    "                        shifted half a slab where they fit in one, the rest\n"
+    "                        in one global order; the same bytes at every thread\n"
+    "                        count for a given --partitions\n"
+    "  --partitions P        partitioned: P slabs, 1..4096 (default 16, a constant:\n"
+    "                        not the thread count, so that the output does not\n"
+    "                        depend on it)\n"
     "  --quality default|best\n"
     "                        best: full collapse only; each survivor also keeps the\n"
     "                        volume around it (Lindstrom-Turk placement) and at the\n"
@@ -254,9 +264,11 @@ static int option(int argc, char **argv, int *i, void *user)
             o->strategy = MR_STRATEGY_FPPQ;
         else if (v && !strcmp(v, "multiqueue"))
             o->strategy = MR_STRATEGY_MULTIQUEUE;
+        else if (v && !strcmp(v, "partitioned"))
+            o->strategy = MR_STRATEGY_PARTITIONED;
         else
             return cli_usage_error("simplify", "--strategy is greedy, batched, ppq, rppq, "
-                                               "fppq or multiqueue");
+                                               "fppq, multiqueue or partitioned");
     } else if (cli_value(argc, argv, i, "--quality", &v)) {
         if (v && !strcmp(v, "default"))
             o->quality = MR_QUALITY_DEFAULT;
@@ -264,6 +276,10 @@ static int option(int argc, char **argv, int *i, void *user)
             o->quality = MR_QUALITY_BEST;
         else
             return cli_usage_error("simplify", "--quality is default or best");
+    } else if (cli_value(argc, argv, i, "--partitions", &v)) {
+        if (!cli_parse_count(v, &n) || n < 1 || n > MR_PARTITIONS_MAX)
+            return cli_usage_error("simplify", "--partitions needs a count in 1..4096");
+        o->partitions = (unsigned)n;
     } else if (cli_value(argc, argv, i, "--filter-levels", &v)) {
         if (!cli_parse_count(v, &n) || n < 1 || n > 12)
             return cli_usage_error("simplify", "--filter-levels needs a count in 1..12");
@@ -375,6 +391,13 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
                 "%zu compactions\n",
                 s->queue_pops, s->lock_acquisitions, s->lock_failures, s->topology_checks,
                 s->collapses, s->priority_updates, s->compactions);
+    if (s->partition_passes) /* the partitioned strategy's profile */
+        fprintf(stderr,
+                "profile    %zu passes, %zu interior collapses (slabs in parallel), %zu "
+                "boundary collapses (%zu of them on one thread), %zu tail collapses, %zu "
+                "rebalances\n",
+                s->partition_passes, s->interior_collapses, s->boundary_collapses,
+                s->boundary_sequential, s->tail_collapses, s->rebalances);
 }
 
 static void print_json(const cli_io *io, const mr_mesh *result, const cli_times *t,
@@ -403,6 +426,12 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
                "\"priority_updates\": %zu, \"compactions\": %zu}",
                s->queue_pops, s->lock_acquisitions, s->lock_failures, s->topology_checks,
                s->collapses, s->priority_updates, s->compactions);
+    if (s->partition_passes) /* the partitioned strategy's profile */
+        printf(", \"partitioned\": {\"passes\": %zu, \"interior_collapses\": %zu, "
+               "\"boundary_collapses\": %zu, \"boundary_sequential\": %zu, "
+               "\"tail_collapses\": %zu, \"rebalances\": %zu}",
+               s->partition_passes, s->interior_collapses, s->boundary_collapses,
+               s->boundary_sequential, s->tail_collapses, s->rebalances);
     printf("}\n");
 }
 

@@ -364,8 +364,17 @@ typedef enum mr_strategy {
                                l = filter_levels): no rank bound */
     MR_STRATEGY_FPPQ,       /* the heap with filter_levels l filter levels:
                                every pop among the best l * 2^l + 1 */
-    MR_STRATEGY_MULTIQUEUE  /* multiqueue_factor * threads locked heaps:
+    MR_STRATEGY_MULTIQUEUE, /* multiqueue_factor * threads locked heaps:
                                pops usually near the top, no bound */
+    /* Partitioned batches: vertices in `partitions` slabs along the
+     * longest axis (balanced by vertex counts, rebalanced as the mesh
+     * shrinks); each pass, every slab applies its interior collapses
+     * (whose two closed 1-rings lie in the slab) in cost order on its own
+     * thread; the edges across slabs follow, by slabs shifted half a slab
+     * where their 1-rings fit in one, else in one global cost order on
+     * the calling thread. Full or half collapse. For a fixed `partitions`
+     * the output is byte-identical at every thread count. */
+    MR_STRATEGY_PARTITIONED
 } mr_strategy;
 
 /* Progress of a simplification: the fraction done in [0, 1], from the
@@ -379,7 +388,8 @@ typedef enum mr_simplify_quality {
     MR_QUALITY_DEFAULT = 0, /* each survivor at its quadric's optimum */
     MR_QUALITY_BEST         /* full collapse only: each survivor also keeps the
                                volume its neighbourhood encloses (Lindstrom
-                               and Turk's placement), and at the end the
+                               and Turk's placement; batched, greedy and
+                               partitioned strategies), and at the end the
                                output's vertices are fitted to the input's
                                surface (least squares, no triangle flips);
                                lower RMS distance, several times the time */
@@ -427,8 +437,15 @@ typedef struct mr_simplify_options {
                                    mr_fppq_default_levels) */
     unsigned multiqueue_factor; /* MR_STRATEGY_MULTIQUEUE: heaps per thread
                                    (0 = 2) */
+    unsigned partitions;        /* MR_STRATEGY_PARTITIONED: slabs, 1 ..
+                                   MR_PARTITIONS_MAX (0 = MR_PARTITIONS_DEFAULT,
+                                   a constant: never from the thread count,
+                                   so the output does not depend on it) */
     mr_simplify_quality quality; /* MR_QUALITY_DEFAULT by default */
 } mr_simplify_options;
+
+#define MR_PARTITIONS_DEFAULT 16
+#define MR_PARTITIONS_MAX 4096
 
 void mr_simplify_options_default(mr_simplify_options *options);
 
@@ -483,6 +500,17 @@ typedef struct mr_simplify_stats {
     size_t topology_checks;     /* validity tests of a collapse */
     size_t priority_updates;    /* queue keys set (re-keys, inserts, removals) */
     size_t compactions;         /* all threads stopped to compact the lists */
+    /* MR_STRATEGY_PARTITIONED's profile (0 for the others): */
+    size_t partition_passes;    /* passes (gather, interior, boundary) */
+    size_t interior_collapses;  /* made by the slabs concurrently */
+    size_t boundary_collapses;  /* edges across slabs, after the slabs'
+                                   step of each pass: concurrently by the
+                                   shifted slabs (planes halfway between),
+                                   the rest in one global order */
+    size_t boundary_sequential; /* of those, made on the calling thread */
+    size_t tail_collapses;      /* the last ones to the target: every
+                                   candidate in one global order */
+    size_t rebalances;          /* slabs recomputed as the mesh shrank */
 } mr_simplify_stats;
 
 /* The result of a simplification on flat arrays: malloc'd arrays that

@@ -64,6 +64,9 @@ simplify scan-batched-half "$tmp/scan.ply" --ratio 0.25 --collapse half
 simplify scan-greedy-full "$tmp/scan.ply" --ratio 0.01 --strategy greedy
 simplify torus-lock-border "$tmp/torus.ply" --ratio 0.1 --lock-border
 simplify scan-quality-best "$tmp/scan.ply" --ratio 0.05 --quality best
+simplify scan-partitioned-full "$tmp/scan.ply" --ratio 0.1 --strategy partitioned
+simplify torus-partitioned-half "$tmp/torus.ply" --ratio 0.05 --strategy partitioned \
+    --partitions 5 --collapse half
 for st in ppq rppq fppq multiqueue; do
     simplify_one "scan-$st" "$tmp/scan.ply" --ratio 0.05 --collapse half --strategy "$st"
 done

@@ -11,7 +11,8 @@
  * parallel loops start), a torus with open boundaries (lock_border, an
  * error-bounded run with prune), a sphere with attribute seams (normals,
  * texture coordinates and colours through mr_mesh_simplify) and a scan
- * with locked vertices; both strategies, both collapse kinds, ratios 0.25,
+ * with locked vertices; the greedy, batched and partitioned strategies
+ * (the last on the generated cases), both collapse kinds, ratios 0.25,
  * 0.1 and 0.01. With MR_TEST_QUICK set (the ThreadSanitizer stage) the
  * cases shrink, staying above the parallel thresholds. */
 #include "testutil.h"
@@ -43,6 +44,8 @@ typedef struct variant {
 #define BATCHED_HALF(r) {MR_STRATEGY_BATCHED, MR_COLLAPSE_HALF, (r)}
 #define GREEDY_FULL(r) {MR_STRATEGY_GREEDY, MR_COLLAPSE_FULL, (r)}
 #define GREEDY_HALF(r) {MR_STRATEGY_GREEDY, MR_COLLAPSE_HALF, (r)}
+#define PART_FULL(r) {MR_STRATEGY_PARTITIONED, MR_COLLAPSE_FULL, (r)}
+#define PART_HALF(r) {MR_STRATEGY_PARTITIONED, MR_COLLAPSE_HALF, (r)}
 
 /* An input and how to simplify it. */
 typedef struct sim_case {
@@ -77,7 +80,9 @@ static bool quick(void)
 
 static const char *strategy_name(mr_strategy s)
 {
-    return s == MR_STRATEGY_GREEDY ? "greedy" : "batched";
+    return s == MR_STRATEGY_GREEDY        ? "greedy"
+           : s == MR_STRATEGY_PARTITIONED ? "partitioned"
+                                          : "batched";
 }
 
 static const char *collapse_name(mr_collapse_kind k)
@@ -528,25 +533,27 @@ static void test_open_boundaries(void **state)
     const variant plain[] = {
         BATCHED_FULL(0.25), BATCHED_FULL(0.1), BATCHED_FULL(0.01),
         BATCHED_HALF(0.1),  GREEDY_FULL(0.01), GREEDY_HALF(0.25),
+        PART_FULL(0.1),     PART_HALF(0.01),
     };
-    const variant plain_quick[] = {BATCHED_FULL(0.1), GREEDY_HALF(0.25)};
+    const variant plain_quick[] = {BATCHED_FULL(0.1), GREEDY_HALF(0.25), PART_FULL(0.1)};
     if (quick())
-        check_variants(&c, &o, plain_quick, 2);
+        check_variants(&c, &o, plain_quick, 3);
     else
         check_variants(&c, &o, plain, sizeof plain / sizeof plain[0]);
 
     snprintf(c.name, sizeof c.name, "generated torus, lock_border");
     o.lock_border = 1;
-    const variant border[] = {BATCHED_FULL(0.1), BATCHED_HALF(0.01), GREEDY_FULL(0.25)};
-    check_variants(&c, &o, border, quick() ? 1 : sizeof border / sizeof border[0]);
+    const variant border[] = {BATCHED_FULL(0.1), PART_FULL(0.1), BATCHED_HALF(0.01),
+                              GREEDY_FULL(0.25)};
+    check_variants(&c, &o, border, quick() ? 2 : sizeof border / sizeof border[0]);
 
     snprintf(c.name, sizeof c.name, "generated torus, until_error max_error 0.002, prune");
     mr_simplify_options_default(&o);
     o.until_error = 1;
     o.max_error = 0.002;
     o.prune = 1;
-    const variant bounded[] = {BATCHED_FULL(0), GREEDY_HALF(0)};
-    check_variants(&c, &o, bounded, quick() ? 1 : 2);
+    const variant bounded[] = {BATCHED_FULL(0), PART_FULL(0), GREEDY_HALF(0)};
+    check_variants(&c, &o, bounded, quick() ? 2 : 3);
     mr_mesh_free(&m);
     report("open boundaries", runs_done - runs0, t0);
 }
@@ -640,12 +647,13 @@ static void test_attribute_seams(void **state)
     const variant all[] = {
         BATCHED_FULL(0.25), BATCHED_FULL(0.1), BATCHED_FULL(0.01),
         BATCHED_HALF(0.1),  GREEDY_FULL(0.1),  GREEDY_HALF(0.01),
+        PART_FULL(0.1),     PART_HALF(0.01),
     };
-    const variant few[] = {BATCHED_FULL(0.1), GREEDY_HALF(0.01)};
+    const variant few[] = {BATCHED_FULL(0.1), GREEDY_HALF(0.01), PART_FULL(0.1)};
     mr_simplify_options o;
     mr_simplify_options_default(&o);
     if (quick())
-        check_variants(&c, &o, few, 2);
+        check_variants(&c, &o, few, 3);
     else
         check_variants(&c, &o, all, sizeof all / sizeof all[0]);
 
@@ -684,9 +692,9 @@ static void test_locked_vertices(void **state)
     mr_simplify_options o;
     mr_simplify_options_default(&o);
     o.vertex_lock = lock;
-    const variant all[] = {BATCHED_FULL(0.25), BATCHED_FULL(0.01), BATCHED_HALF(0.1),
-                           GREEDY_FULL(0.1), GREEDY_HALF(0.01)};
-    check_variants(&c, &o, all, quick() ? 1 : sizeof all / sizeof all[0]);
+    const variant all[] = {BATCHED_FULL(0.25), PART_FULL(0.01), BATCHED_FULL(0.01),
+                           BATCHED_HALF(0.1),  GREEDY_FULL(0.1), GREEDY_HALF(0.01)};
+    check_variants(&c, &o, all, quick() ? 2 : sizeof all / sizeof all[0]);
     free(lock);
     mr_mesh_free(&m);
 
@@ -699,8 +707,9 @@ static void test_locked_vertices(void **state)
     mr_simplify_options_default(&o);
     o.vertex_lock = lock;
     o.lock_border = 1;
-    const variant torus[] = {BATCHED_FULL(0.1), BATCHED_HALF(0.01), GREEDY_FULL(0.25)};
-    check_variants(&c, &o, torus, quick() ? 1 : sizeof torus / sizeof torus[0]);
+    const variant torus[] = {BATCHED_FULL(0.1), PART_HALF(0.1), BATCHED_HALF(0.01),
+                             GREEDY_FULL(0.25)};
+    check_variants(&c, &o, torus, quick() ? 2 : sizeof torus / sizeof torus[0]);
     free(lock);
     mr_mesh_free(&m);
     report("locked vertices", runs_done - runs0, t0);

@@ -78,7 +78,9 @@ def simplify(
     max_error: Optional[float] = ...,
     absolute: bool = ...,
     collapse: Literal["full", "half"] = ...,
-    strategy: Optional[Literal["greedy", "batched", "ppq", "rppq", "fppq", "multiqueue"]] = ...,
+    strategy: Optional[
+        Literal["greedy", "batched", "ppq", "rppq", "fppq", "multiqueue", "partitioned"]
+    ] = ...,
     lock_border: bool = ...,
     boundary_weight: float = ...,
     max_normal_turn: float = ...,
@@ -92,6 +94,7 @@ def simplify(
     filter_levels: int = ...,
     multiqueue_factor: int = ...,
     quality: Literal["default", "best"] = ...,
+    partitions: int = ...,
 ) -> Result: ...
 def read(path: _Path, *, format: Optional[str] = ..., threads: int = ...) -> Mesh: ...
 def write(

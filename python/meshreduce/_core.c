@@ -583,8 +583,8 @@ static int to_double(PyObject *o, const char *name, double *out)
 
 static const char *const collapse_names[] = {"full", "half", NULL};
 static const char *const quality_names[] = {"default", "best", NULL};
-static const char *const strategy_names[] = {"greedy", "batched", "ppq", "rppq",
-                                             "fppq",   "multiqueue", NULL};
+static const char *const strategy_names[] = {"greedy", "batched",    "ppq",         "rppq",
+                                             "fppq",   "multiqueue", "partitioned", NULL};
 static const char *const stop_names[] = {"target", "max_error", "locked", "refused"};
 
 /* locked: a boolean mask of the vertices, or their indices. Fills a
@@ -657,7 +657,8 @@ PyDoc_STRVAR(simplify_doc,
 "         max_error=None, absolute=False, collapse='full', strategy=None,\n"
 "         lock_border=False, boundary_weight=1.0, max_normal_turn=60.0, locked=None,\n"
 "         prune=False, normals=None, texcoords=None, colors=None, threads=0,\n"
-"         progress=None, filter_levels=0, multiqueue_factor=0, quality='default')\n"
+"         progress=None, filter_levels=0, multiqueue_factor=0, quality='default',\n"
+"         partitions=0)\n"
 "--\n"
 "\n"
 "Reduce a triangle mesh by quadric-error edge collapse, as `meshreduce simplify`\n"
@@ -677,8 +678,10 @@ PyDoc_STRVAR(simplify_doc,
 "points (copies of a vertex split by attributes count once).\n"
 "\n"
 "collapse: 'full' (both ends move to the optimal position) or 'half'.\n"
-"strategy: 'batched' (default), 'greedy', or the concurrent 'ppq', 'rppq', 'fppq',\n"
-"'multiqueue' (half-edge collapse only; output may vary with threads).\n"
+"strategy: 'batched' (default), 'greedy', 'partitioned' (slabs along the longest\n"
+"axis, partitions of them: 0 = 16; the output depends on that count, not on the\n"
+"threads), or the concurrent 'ppq', 'rppq', 'fppq', 'multiqueue' (half-edge\n"
+"collapse only; output may vary with threads).\n"
 "lock_border: never move boundary vertices. locked: vertices that never move, a\n"
 "boolean mask of length N or an array of vertex indices. boundary_weight: weight\n"
 "of the quadrics holding boundaries and seams. max_normal_turn: degrees in\n"
@@ -709,20 +712,20 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                              "strategy",  "lock_border",   "boundary_weight", "max_normal_turn",
                              "locked",    "prune",         "normals",         "texcoords",
                              "colors",    "threads",       "progress",        "filter_levels",
-                             "multiqueue_factor", "quality", NULL};
+                             "multiqueue_factor", "quality", "partitions", NULL};
     PyObject *vertices, *triangles, *ratio = Py_None, *vcount = Py_None, *tcount = Py_None,
                                     *max_error = Py_None, *locked = Py_None, *normals = Py_None,
                                     *texcoords = Py_None, *colors = Py_None, *progress = Py_None;
     int absolute = 0, lock_border = 0, prune = 0, threads = 0;
     const char *collapse = "full", *strategy = NULL, *quality = "default";
     double boundary_weight = 1.0, max_normal_turn = 60.0;
-    unsigned int filter_levels = 0, multiqueue_factor = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIs", kwlist, &vertices,
+    unsigned int filter_levels = 0, multiqueue_factor = 0, partitions = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsI", kwlist, &vertices,
                                      &triangles, &ratio, &vcount, &tcount, &max_error, &absolute,
                                      &collapse, &strategy, &lock_border, &boundary_weight,
                                      &max_normal_turn, &locked, &prune, &normals, &texcoords,
                                      &colors, &threads, &progress, &filter_levels,
-                                     &multiqueue_factor, &quality))
+                                     &multiqueue_factor, &quality, &partitions))
         return NULL;
 
     mr_simplify_options o;
@@ -763,12 +766,17 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
     if ((k = choose("quality", quality, quality_names)) < 0)
         return NULL;
     o.quality = k == 0 ? MR_QUALITY_DEFAULT : MR_QUALITY_BEST;
+    if (partitions > MR_PARTITIONS_MAX)
+        return PyErr_Format(PyExc_ValueError, "partitions must be in 0..%d, got %u",
+                            MR_PARTITIONS_MAX, partitions);
+    o.partitions = partitions;
     if (strategy) {
         if ((k = choose("strategy", strategy, strategy_names)) < 0)
             return NULL;
         static const mr_strategy strategies[] = {MR_STRATEGY_GREEDY, MR_STRATEGY_BATCHED,
                                                  MR_STRATEGY_PPQ,    MR_STRATEGY_RPPQ,
-                                                 MR_STRATEGY_FPPQ,   MR_STRATEGY_MULTIQUEUE};
+                                                 MR_STRATEGY_FPPQ,   MR_STRATEGY_MULTIQUEUE,
+                                                 MR_STRATEGY_PARTITIONED};
         o.strategy = strategies[k];
     }
     if (!(boundary_weight >= 0) || !isfinite(boundary_weight))
@@ -858,6 +866,15 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                                      (Py_ssize_t)s.collapses, "priority_updates",
                                      (Py_ssize_t)s.priority_updates, "compactions",
                                      (Py_ssize_t)s.compactions));
+    if (stats && s.partition_passes) /* the partitioned strategy's profile */
+        rc |= set_item(stats, "partitioned",
+                       Py_BuildValue("{s:n,s:n,s:n,s:n,s:n,s:n}", "passes",
+                                     (Py_ssize_t)s.partition_passes, "interior_collapses",
+                                     (Py_ssize_t)s.interior_collapses, "boundary_collapses",
+                                     (Py_ssize_t)s.boundary_collapses, "boundary_sequential",
+                                     (Py_ssize_t)s.boundary_sequential, "tail_collapses",
+                                     (Py_ssize_t)s.tail_collapses, "rebalances",
+                                     (Py_ssize_t)s.rebalances));
     if (!stats || rc || PyDict_Update(d, stats) < 0 ||
         set_item(d, "error", PyFloat_FromDouble(s.max_error)) < 0) {
         Py_XDECREF(stats);

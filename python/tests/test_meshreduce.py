@@ -259,6 +259,7 @@ def test_bad_arrays(vertices, triangles, exc, match):
     ({"ratio": 0.5, "collapse": "quarter"}, ValueError, "collapse must be one of 'full', 'half'"),
     ({"ratio": 0.5, "strategy": "fast"}, ValueError, "strategy must be one of"),
     ({"ratio": 0.5, "quality": "great"}, ValueError, "quality must be one of 'default', 'best'"),
+    ({"ratio": 0.5, "partitions": 5000}, ValueError, "partitions must be in 0..4096"),
     ({"ratio": 0.5, "max_normal_turn": 0}, ValueError, "max_normal_turn"),
     ({"ratio": 0.5, "boundary_weight": -1}, ValueError, "boundary_weight"),
     ({"ratio": 0.5, "threads": -1}, ValueError, "threads must be >= 0"),
@@ -388,10 +389,15 @@ def assert_same(tmp_path, out, r):
      {"vertex_count": 2000, "lock_border": True, "max_normal_turn": 45, "boundary_weight": 2,
       "threads": 1}),
     (["--ratio", "0.05", "--quality", "best"], {"ratio": 0.05, "quality": "best"}),
+    (["--ratio", "0.1", "--strategy", "partitioned", "--partitions", "5"],
+     {"ratio": 0.1, "strategy": "partitioned", "partitions": 5}),
 ])
 def test_bunny_matches_cli(tmp_path, cli_args, kwargs):
     out, r = simplify_both(tmp_path, BUNNY, cli_args, **kwargs)
     assert_same(tmp_path, out, r)
+    if kwargs.get("strategy") == "partitioned":
+        assert out["partitioned"] == r.stats["partitioned"]
+        assert r.stats["partitioned"]["interior_collapses"] > 0
 
 
 SPOT = os.path.join(DATA, "spot.obj")

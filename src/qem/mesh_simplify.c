@@ -426,6 +426,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
     const mr_queued_profile profile = s.profile;
+    const mr_partition_profile pprofile = s.pprofile;
     mr_simplifier_free(&s);
     free(geo);
     free_ctx(&a);
@@ -449,6 +450,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         stats->seconds_collapse = t2 - t1;
         stats->seconds_output = mr_now_seconds() - t2;
         mr_queued_profile_stats(&profile, stats);
+        mr_partition_profile_stats(&pprofile, stats);
     }
     return MR_OK;
 }

@@ -132,6 +132,7 @@ void mr_simplifier_free(mr_simplifier *s)
     free(s->order);
     mr_simplifier_batched_free(s);
     mr_simplifier_queued_free(s);
+    mr_simplifier_partitioned_free(s);
     memset(s, 0, sizeof *s);
 }
 
@@ -279,10 +280,10 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
     if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown collapse kind %d", (int)o->collapse);
-    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_MULTIQUEUE)
+    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_PARTITIONED)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown strategy %d", (int)o->strategy);
-    if (o->strategy >= MR_STRATEGY_PPQ && o->collapse != MR_COLLAPSE_HALF)
+    if (mr_strategy_queued(o->strategy) && o->collapse != MR_COLLAPSE_HALF)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: the concurrent-queue strategies (ppq, rppq, fppq, "
                              "multiqueue) make half-edge collapses only: set "
@@ -295,10 +296,14 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
                              "simplify: the best quality moves the output's vertices off the "
                              "input's; half-edge collapse keeps them: use MR_COLLAPSE_FULL "
                              "(--collapse full)");
-    if (o->strategy >= MR_STRATEGY_PPQ && o->filter_levels > MR_FILTER_MAX_LEVELS)
+    if (mr_strategy_queued(o->strategy) && o->filter_levels > MR_FILTER_MAX_LEVELS)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: %u filter levels: at most %d", o->filter_levels,
                              MR_FILTER_MAX_LEVELS);
+    if (o->strategy == MR_STRATEGY_PARTITIONED && o->partitions > MR_PARTITIONS_MAX)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: %u partitions: at most %d", o->partitions,
+                             MR_PARTITIONS_MAX);
     if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
         o->max_error == 0 && !o->until_error)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -388,7 +393,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     }
 
     s->threads = mr_thread_count(o ? o->threads : 0);
-    if ((!o || o->strategy == MR_STRATEGY_BATCHED) &&
+    if ((!o || o->strategy == MR_STRATEGY_BATCHED || o->strategy == MR_STRATEGY_PARTITIONED) &&
         !order_is_coherent(indices, triangle_count, vertex_count, s->threads)) {
         st = spatial_order(positions, stride, indices, triangle_count, s->lo, s->hi, s->threads,
                            &s->order, err);
@@ -418,7 +423,9 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     s->half = o->collapse == MR_COLLAPSE_HALF;
     s->keep_volume = o->quality == MR_QUALITY_BEST;
     s->batched = o->strategy == MR_STRATEGY_BATCHED;
-    s->queued = o->strategy >= MR_STRATEGY_PPQ ? (int)o->strategy : 0;
+    s->queued = mr_strategy_queued(o->strategy) ? (int)o->strategy : 0;
+    s->partitioned = o->strategy == MR_STRATEGY_PARTITIONED;
+    s->partitions = o->partitions ? o->partitions : MR_PARTITIONS_DEFAULT;
     s->filter_levels = o->filter_levels;
     s->multiqueue_factor = o->multiqueue_factor ? o->multiqueue_factor : 2;
     s->limits.half_edge = s->half;

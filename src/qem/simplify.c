@@ -9,7 +9,9 @@
  * owns only its own queue or candidate arrays and decides which collapses
  * run when: greedy.c (MR_STRATEGY_GREEDY, the sequential reference: one
  * collapse at a time from a heap) and batched.c (MR_STRATEGY_BATCHED, the
- * default: passes over all edges). mr_mesh_simplify (mesh_simplify.c)
+ * default: passes over all edges); partitioned.c (MR_STRATEGY_PARTITIONED:
+ * slabs of vertices applying their interior collapses concurrently) and
+ * parallel/queued.c (the concurrent-queue strategies) are the others. mr_mesh_simplify (mesh_simplify.c)
  * drives the same phases with attribute hooks.
  */
 #include "simplify_internal.h"
@@ -23,6 +25,7 @@ void mr_simplify_options_default(mr_simplify_options *o)
     o->max_normal_turn = 60.0 * 3.14159265358979323846 / 180.0;
     o->filter_levels = 0;     /* from the thread count */
     o->multiqueue_factor = 2;
+    o->partitions = 0;        /* MR_PARTITIONS_DEFAULT */
 }
 
 void mr_simplified_free(mr_simplified *r)
@@ -48,6 +51,8 @@ mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
         return mr_simplifier_batched_init(s, err);
     if (s->queued)
         return mr_simplifier_queued_init(s, err);
+    if (s->partitioned)
+        return mr_simplifier_partitioned_init(s, err);
     return mr_simplifier_greedy_init(s, err);
 }
 
@@ -61,6 +66,7 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
 {
     size_t done = s->batched  ? mr_simplifier_run_batched(s, o, max_error)
                   : s->queued ? mr_simplifier_run_queued(s, o, max_error)
+                  : s->partitioned ? mr_simplifier_run_partitioned(s, o, max_error)
                               : mr_simplifier_run_greedy(s, o, max_error);
     mr_simplifier_finish(s, o, *max_error);
     return done;
@@ -127,6 +133,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
     mr_queued_profile_stats(&s.profile, &out->stats);
+    mr_partition_profile_stats(&s.pprofile, &out->stats);
     mr_simplifier_free(&s);
     if (st != MR_OK)
         return st;

@@ -28,6 +28,21 @@ typedef struct mr_batched mr_batched;
  * mr_simplifier_queued_init to the end of mr_simplifier_run_queued. */
 typedef struct mr_queued mr_queued;
 
+/* partitioned.c's state, from mr_simplifier_partitioned_init to
+ * mr_simplifier_free. */
+typedef struct mr_partitioned mr_partitioned;
+
+/* Is strategy x one of the concurrent-queue ones (parallel/queued.c)? */
+static inline bool mr_strategy_queued(int x)
+{
+    return x >= MR_STRATEGY_PPQ && x <= MR_STRATEGY_MULTIQUEUE;
+}
+
+/* What the partitioned strategy counts (mr_simplify_stats' fields). */
+typedef struct mr_partition_profile {
+    size_t passes, interior, boundary, boundary_seq, tail, rebalances;
+} mr_partition_profile;
+
 /* What the concurrent-queue strategies count, summed over the threads
  * (mr_simplify_stats' profile fields). */
 typedef struct mr_queued_profile {
@@ -49,6 +64,10 @@ struct mr_simplifier {
     unsigned filter_levels, multiqueue_factor; /* its options */
     mr_queued *qd;           /* its state, while it runs */
     mr_queued_profile profile; /* its counts, after the run */
+    int partitioned;         /* MR_STRATEGY_PARTITIONED: partitioned.c */
+    unsigned partitions;     /* its slabs (options.partitions, or the default) */
+    mr_partitioned *pt;      /* its state */
+    mr_partition_profile pprofile; /* its counts, after the run */
     int threads;             /* threads the run may use (options.threads) */
     bool cancelled;          /* the progress callback asked to stop */
     double centre[3], scale, diagonal;
@@ -250,7 +269,21 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err);
 void mr_simplifier_queued_free(mr_simplifier *s);
 size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
                                 double *max_error);
+mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err);
+void mr_simplifier_partitioned_free(mr_simplifier *s);
+size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
+                                     double *max_error);
 /* A run's profile as mr_simplify_stats' fields. */
 void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats);
+void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats *stats);
+/* For the tests: vertex v's slab (or shifted slab), whether edge (a, b)
+ * is interior to a shifted slab (the boundary step's test), and the
+ * candidates a pass of the partitioned strategy would gather now (no cost
+ * limit), each with whether it is interior; returns their number (at most
+ * cap are stored). */
+unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs);
+bool mr_partitioned_shifted_interior(const mr_simplifier *s, uint32_t a, uint32_t b);
+size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,
+                            size_t cap);
 
 #endif
