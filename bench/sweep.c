@@ -193,6 +193,8 @@ static const algorithm algorithms[] = {
      MR_QUALITY_DEFAULT},
     {"meshreduce-best", run_simplify, 0, MR_COLLAPSE_FULL, MR_STRATEGY_BATCHED, 0, 0,
      MR_QUALITY_BEST},
+    {"meshreduce-partitioned", run_simplify, 1, MR_COLLAPSE_FULL, MR_STRATEGY_PARTITIONED, 0, 0,
+     MR_QUALITY_DEFAULT},
     {"meshopt", run_meshopt, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
     {"meshopt-sloppy", run_meshopt, 0, 0, 0, 0, 1, MR_QUALITY_DEFAULT},
     {"openmesh", run_openmesh, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
@@ -411,7 +413,7 @@ int main(int argc, char **argv)
                  "time_median,time_min,time_max,triangles_per_second,"
                  "peak_bytes_per_triangle,hausdorff_rel,rms_rel,vertex_similarity\n");
 
-    printf("%-10s %-16s %3s %6s %10s %9s %9s %7s %9s %9s %6s\n", "mesh", "algorithm", "thr",
+    printf("%-10s %-22s %3s %6s %10s %9s %9s %7s %9s %9s %6s\n", "mesh", "algorithm", "thr",
            "target", "out tris", "median s", "Mtri/s", "B/tri", "Hausdorff", "RMS", "simil");
     for (size_t si = 0; si < sizeof specs / sizeof *specs; si++) {
         if (!loaded[si])
@@ -452,7 +454,7 @@ int main(int argc, char **argv)
                     char simil[16] = "-";
                     if (r.similarity >= 0)
                         snprintf(simil, sizeof simil, "%.3f", r.similarity);
-                    printf("%-10s %-16s %3d %5g%% %10zu %9.4f %9.2f %7.0f %8.4f%% %8.4f%% %6s\n",
+                    printf("%-10s %-22s %3d %5g%% %10zu %9.4f %9.2f %7.0f %8.4f%% %8.4f%% %6s\n",
                            s->name, alg->name, threads, 100 * ts.ratio, r.out.triangle_count,
                            r.time.median,
                            r.time.median > 0 ? in->triangle_count / r.time.median / 1e6 : 0,
