@@ -39,7 +39,7 @@
  * vectorised loop (mr_simplifier_plan_edges), and all of it is spread
  * over the threads.
  */
-#include "simplify_internal.h"
+#include "passes.h"
 
 #include "../core/omp_compat.h"
 
@@ -69,44 +69,6 @@
 
 /* Histogram buckets over the top 16 bits of a key. */
 #define HIST_BUCKETS 65536u
-
-static inline uint32_t float_key(float x)
-{
-    uint32_t u;
-    memcpy(&u, &x, sizeof u);
-    return u; /* costs are >= 0: the bits order as the values */
-}
-
-static inline float key_float(uint32_t u)
-{
-    float x;
-    memcpy(&x, &u, sizeof x);
-    return x;
-}
-
-/*
- * Runs the block once for every live edge of triangle t, as (a, b) along
- * one of its half-edges: an inner edge from the half-edge that runs from
- * its smaller end (its other half-edge runs from the larger one), a
- * boundary edge from its only half-edge, whichever way it runs; an inner
- * edge between two boundary vertices never (its collapse would pinch the
- * surface: mr_collapse_valid refuses it, and as a candidate it would hold
- * back the edges around it -- the spokes of a fanned polygon cost nothing
- * and would block its rim). The
- * inner test is written without a branch (which end is the smaller is a
- * coin toss); `take` is false for the half-edges the block must ignore.
- */
-#define FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, ...)                                   \
-    do {                                                                               \
-        const uint32_t *tri_ = (m)->tris + 3 * (size_t)(t);                            \
-        for (int j_ = 0; j_ < 3; j_++) {                                               \
-            const uint32_t a = tri_[j_], b = tri_[j_ == 2 ? 0 : j_ + 1];               \
-            bool take = a < b;                                                         \
-            if ((m)->flags[a] & (m)->flags[b] & MR_VF_BOUNDARY)                        \
-                take = mr_collapse_edge_triangles((m), a, b) == 1;                     \
-            __VA_ARGS__                                                                \
-        }                                                                              \
-    } while (0)
 
 /* An edge (a, b) of a pass and the bits of its (float) cost. */
 typedef struct mr_candidate {
@@ -278,21 +240,7 @@ void mr_simplifier_batched_free(mr_simplifier *s)
     s->bt = NULL;
 }
 
-/* Collapses still needed to reach the targets. */
-static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g)
-{
-    const mr_collapse_mesh *m = &s->m;
-    size_t needed = m->live_vertices > g->vertices ? m->live_vertices - g->vertices : 0;
-    if (g->triangles) {
-        const size_t t = m->live_triangles > g->triangles
-                             ? (m->live_triangles - g->triangles + 1) / 2
-                             : 0;
-        needed = t < needed ? t : needed;
-    }
-    return needed;
-}
-
-/* Edges block `blk` takes (FOR_EACH_TRIANGLE_EDGE), without their costs. */
+/* Edges block `blk` takes (MR_FOR_EACH_TRIANGLE_EDGE), without their costs. */
 static uint32_t block_edges(const mr_collapse_mesh *m, size_t blk)
 {
     const size_t t0 = blk * BLOCK_TRIANGLES;
@@ -302,7 +250,7 @@ static uint32_t block_edges(const mr_collapse_mesh *m, size_t blk)
     for (size_t t = t0; t < t1; t++) {
         if (m->tris[3 * t] == NONE)
             continue;
-        FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, { n += take; });
+        MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, { n += take; });
     }
     return n;
 }
@@ -331,7 +279,7 @@ static uint32_t gather_block(const mr_simplifier *s, size_t blk, double limit,
         /* an infinite cost is a collapse that must not happen; every    \
          * candidate is stored, those allowed are kept */                 \
         for (size_t i = 0; i < nb; i++) {                                             \
-            out[n] = (mr_candidate){float_key((float)cost[i]), ea[i], eb[i]};         \
+            out[n] = (mr_candidate){mr_float_key((float)cost[i]), ea[i], eb[i]};      \
             n += (cost[i] <= limit) & (cost[i] < INFINITY);                           \
         }                                                                             \
         nb = 0;                                                                       \
@@ -346,7 +294,7 @@ static uint32_t gather_block(const mr_simplifier *s, size_t blk, double limit,
             live |= (uint64_t)(m->tris[3 * (c0 + i)] != NONE) << i;
         for (; live; live &= live - 1) {
             const size_t t = c0 + (size_t)__builtin_ctzll(live);
-            FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
+            MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
                 /* stored always, kept when taken; the quadrics the
                  * batch's cost loop reads are fetched meanwhile */
                 __builtin_prefetch(s->q + b);
@@ -1018,11 +966,11 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
 
         /* This pass's candidates: up to the goal-th cheapest cost, with
          * slack, in gathering order. */
-        const double goal = ceil(share * (double)needed_collapses(s, &g));
+        const double goal = ceil(share * (double)mr_needed_collapses(s, &g));
         bool partial = false;
         if (goal < (double)n) {
             const uint32_t kth = rank_key(s, n, (size_t)goal);
-            const uint32_t lim = float_key(key_float(kth) * PASS_SLACK);
+            const uint32_t lim = mr_float_key(mr_key_float(kth) * PASS_SLACK);
             const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
             size_t kept = 0;
 #pragma omp parallel for schedule(static) reduction(+ : kept) num_threads(bt->threads) \
@@ -1060,7 +1008,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             /* When the winners are more than the target needs, the
              * cheapest go first, and no more than twice the need are
              * tried (the rest stay candidates). */
-            const size_t needed = needed_collapses(s, &g);
+            const size_t needed = mr_needed_collapses(s, &g);
             const bool sorted = wins > needed;
             if (sorted) {
                 sort_by_prio(bt, NULL, bt->wid, wins);

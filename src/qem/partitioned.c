@@ -72,7 +72,7 @@
  * Not done (issue 16): the candidates are gathered anew each pass (as
  * batched.c's) rather than refreshed around the collapses only.
  */
-#include "simplify_internal.h"
+#include "passes.h"
 
 #include "../core/omp_compat.h"
 
@@ -164,20 +164,6 @@ struct mr_partitioned {
     uint32_t *hist;       /* HIST_BUCKETS per thread */
     size_t balanced_live; /* live vertices at the last balance */
 };
-
-static inline uint32_t float_key(float x)
-{
-    uint32_t u;
-    memcpy(&u, &x, sizeof u);
-    return u; /* costs are >= 0: the bits order as the values */
-}
-
-static inline float key_float(uint32_t u)
-{
-    float x;
-    memcpy(&x, &u, sizeof x);
-    return x;
-}
 
 /* The edge id of a candidate: (smaller end, larger end). */
 static inline uint64_t edge_id(const pcand *e)
@@ -382,42 +368,6 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
 
 /* ---- a pass ---------------------------------------------------------------- */
 
-/* Collapses still needed to reach the targets. */
-static size_t needed_collapses(const mr_simplifier *s, const mr_simplify_goal *g)
-{
-    const mr_collapse_mesh *m = &s->m;
-    size_t needed = m->live_vertices > g->vertices ? m->live_vertices - g->vertices : 0;
-    if (g->triangles) {
-        const size_t t = m->live_triangles > g->triangles
-                             ? (m->live_triangles - g->triangles + 1) / 2
-                             : 0;
-        needed = t < needed ? t : needed;
-    }
-    return needed;
-}
-
-/*
- * Runs the block once for every live edge of triangle t, as (a, b) along
- * one of its half-edges: an inner edge from the half-edge that runs from
- * its smaller end, a boundary edge from its only half-edge, an inner edge
- * between two boundary vertices never (batched.c's rule: its collapse
- * would pinch the surface). Lists may hold deleted triangles
- * (mr_collapse_edge_triangles counts right on them).
- */
-#define FOR_EACH_TRIANGLE_EDGE(m, t, a, b, ...)                                         \
-    do {                                                                               \
-        const uint32_t *tri_ = (m)->tris + 3 * (size_t)(t);                            \
-        for (int j_ = 0; j_ < 3; j_++) {                                               \
-            const uint32_t a = tri_[j_], b = tri_[j_ == 2 ? 0 : j_ + 1];               \
-            bool take_ = a < b;                                                        \
-            if ((m)->flags[a] & (m)->flags[b] & MR_VF_BOUNDARY)                        \
-                take_ = mr_collapse_edge_triangles((m), a, b) == 1;                    \
-            if (take_) {                                                               \
-                __VA_ARGS__                                                            \
-            }                                                                          \
-        }                                                                              \
-    } while (0)
-
 /* Triangles [t0, t1) of block blk. */
 static inline void block_range(const mr_partitioned *pt, const mr_collapse_mesh *m, size_t blk,
                                size_t *t0, size_t *t1)
@@ -480,7 +430,7 @@ static void block_gather(mr_simplifier *s, size_t blk, double limit)
         for (size_t f_ = 0; f_ < nb; f_++) {                                          \
             const uint32_t a_ = ea[f_], b_ = eb[f_];                                  \
             const bool in_ = is_pure(pt, a_) && is_pure(pt, b_);                      \
-            out[n] = (pcand){float_key((float)cost[f_]), a_, b_};                     \
+            out[n] = (pcand){mr_float_key((float)cost[f_]), a_, b_};                  \
             const bool keep_ = cost[f_] <= limit && cost[f_] < INFINITY;              \
             cnt[2 * pt->part[a_] + !in_] += keep_;                                    \
             n += keep_;                                                               \
@@ -494,11 +444,13 @@ static void block_gather(mr_simplifier *s, size_t blk, double limit)
             live |= (uint64_t)(m->tris[3 * (c0 + i)] != NONE) << i;
         for (; live; live &= live - 1) {
             const size_t t = c0 + (size_t)__builtin_ctzll(live);
-            FOR_EACH_TRIANGLE_EDGE(m, t, a, b, {
-                __builtin_prefetch(s->q + b);
-                ea[nb] = a;
-                eb[nb] = b;
-                nb++;
+            MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
+                if (take) {
+                    __builtin_prefetch(s->q + b);
+                    ea[nb] = a;
+                    eb[nb] = b;
+                    nb++;
+                }
             });
             if (nb > GATHER_BATCH - 3)
                 FLUSH();
@@ -1058,12 +1010,12 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
         if (n == 0)
             break;
         prof->passes++;
-        const size_t needed = needed_collapses(s, &g);
+        const size_t needed = mr_needed_collapses(s, &g);
         const bool tail = force_tail || needed < (size_t)TAIL_PER_PARTITION * pt->parts;
         const double goal = ceil(share * (double)needed);
         uint32_t lim = UINT32_MAX;
         if (goal < (double)n)
-            lim = float_key(key_float(rank_key(s, n, (size_t)goal)) * PASS_SLACK);
+            lim = mr_float_key(mr_key_float(rank_key(s, n, (size_t)goal)) * PASS_SLACK);
         bool ok = true;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
     reduction(&& : ok)
