@@ -620,6 +620,26 @@ static bool slab_plan(const mr_simplifier *s, pslab *sl)
     return true;
 }
 
+/* Add to sl->demand the list lengths of the ends of its interior
+ * candidates, each vertex once (the refs room its collapses may take). */
+static void add_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl)
+{
+    const pcand *c = sl->buf;
+    for (size_t i = 0; i < sl->nin; i++) {
+        const uint32_t e[2] = {c[i].a, c[i].b};
+        for (int j = 0; j < 2; j++) {
+            if (!(pt->pure[e[j]] & SEEN)) {
+                pt->pure[e[j]] |= SEEN;
+                sl->demand += m->count[e[j]];
+            }
+        }
+    }
+    for (size_t i = 0; i < sl->nin; i++) {
+        pt->pure[c[i].a] &= (uint8_t)~SEEN;
+        pt->pure[c[i].b] &= (uint8_t)~SEEN;
+    }
+}
+
 /* Slab p keeps its candidates with keys up to lim, interior ones sorted
  * (unless `tail`: all go to the global order), and bounds the refs room
  * its collapses can take: the list lengths of the distinct ends (each
@@ -652,19 +672,7 @@ static bool slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
     sort_keys(c, sl->tmp, sl->nin);
     if (!slab_plan(s, sl))
         return false;
-    for (size_t i = 0; i < sl->nin; i++) {
-        const uint32_t e[2] = {c[i].a, c[i].b};
-        for (int j = 0; j < 2; j++) {
-            if (!(pt->pure[e[j]] & SEEN)) {
-                pt->pure[e[j]] |= SEEN;
-                sl->demand += m->count[e[j]];
-            }
-        }
-    }
-    for (size_t i = 0; i < sl->nin; i++) {
-        pt->pure[c[i].a] &= (uint8_t)~SEEN;
-        pt->pure[c[i].b] &= (uint8_t)~SEEN;
-    }
+    add_demand(pt, m, sl);
     return true;
 }
 
@@ -854,23 +862,9 @@ static bool ring_in(const mr_collapse_mesh *m, const uint16_t *part2, uint32_t v
 static bool slab_demand(const mr_simplifier *s, pslab *sl)
 {
     mr_partitioned *pt = s->pt;
-    const mr_collapse_mesh *m = &s->m;
-    const pcand *c = sl->buf;
     sl->demand = 0;
     sl->next = 0;
-    for (size_t i = 0; i < sl->nin; i++) {
-        const uint32_t e[2] = {c[i].a, c[i].b};
-        for (int j = 0; j < 2; j++) {
-            if (!(pt->pure[e[j]] & SEEN)) {
-                pt->pure[e[j]] |= SEEN;
-                sl->demand += m->count[e[j]];
-            }
-        }
-    }
-    for (size_t i = 0; i < sl->nin; i++) {
-        pt->pure[c[i].a] &= (uint8_t)~SEEN;
-        pt->pure[c[i].b] &= (uint8_t)~SEEN;
-    }
+    add_demand(pt, &s->m, sl);
     return slab_plan(s, sl);
 }
 
