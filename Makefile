@@ -104,6 +104,8 @@ bench: build
 	./$(BUILD)/bench/bench_io
 	./$(BUILD)/bench/bench_simplify --csv $(BUILD)/bench/simplify.csv
 	./$(BUILD)/bench/bench_queued --quick
+	if [ -d $(BUILD)/python/meshreduce ]; then PYTHONPATH=$(BUILD)/python /usr/bin/python3 \
+	    bench/bench_python.py --cli $(BUILD)/meshreduce; fi
 
 # The benchmark sweep (meshes x targets x algorithms x threads, with the
 # installed peers; several minutes), then bench/REPORT.md with its plots and
