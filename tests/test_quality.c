@@ -16,6 +16,7 @@
  */
 #include "testutil.h"
 #include "core/omp_compat.h"
+#include "metrics/selfint.h"
 
 #include <math.h>
 #include <stdbool.h>
@@ -370,6 +371,93 @@ static void test_closer_and_sound(void **state)
         print_message("the bunny skipped (../shared/data absent, or MR_TEST_QUICK)\n");
 }
 
+static size_t self_intersections(const mr_mesh *m)
+{
+    size_t n = 0;
+    mr_error err;
+    assert_int_equal(mr_self_intersections(m->positions, m->indices, m->triangle_count, 2, &n,
+                                           &err),
+                     MR_OK);
+    return n;
+}
+
+/* The self-intersection count: triangle pairs by hand, then meshes. */
+static void test_self_intersections(void **state)
+{
+    (void)state;
+    const double a0[3] = {0, 0, 0}, a1[3] = {2, 0, 0}, a2[3] = {0, 2, 0};
+    const double *a[3] = {a0, a1, a2};
+    /* crossing: a vertical triangle through a's inside */
+    const double b0[3] = {0.5, 0.5, -1}, b1[3] = {0.5, 0.5, 1}, b2[3] = {0.6, 0.4, 1};
+    const double *b[3] = {b0, b1, b2};
+    assert_true(mr_triangles_meet(a, b));
+    assert_true(mr_triangles_meet(b, a));
+    /* above: no */
+    const double c0[3] = {0.5, 0.5, 0.1}, c1[3] = {0.5, 0.5, 1}, c2[3] = {0.6, 0.4, 1};
+    const double *c[3] = {c0, c1, c2};
+    assert_false(mr_triangles_meet(a, c));
+    /* coplanar overlap and coplanar apart */
+    const double d0[3] = {0.2, 0.2, 0}, d1[3] = {3, 0.2, 0}, d2[3] = {0.2, 3, 0};
+    const double *d[3] = {d0, d1, d2};
+    assert_true(mr_triangles_meet(a, d));
+    const double e0[3] = {5, 5, 0}, e1[3] = {6, 5, 0}, e2[3] = {5, 6, 0};
+    const double *e[3] = {e0, e1, e2};
+    assert_false(mr_triangles_meet(a, e));
+    /* beside the plane's crossing line but outside the triangle: no */
+    const double f0[3] = {3, 3, -1}, f1[3] = {3, 3, 1}, f2[3] = {3.1, 2.9, 1};
+    const double *f[3] = {f0, f1, f2};
+    assert_false(mr_triangles_meet(a, f));
+
+    /* a sphere has none; a sphere and its copy moved by half the radius
+     * cross along a circle */
+    mr_mesh s1, s2;
+    mr_error err;
+    mr_mesh_init(&s1);
+    mr_mesh_init(&s2);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 2000, 0, &s1, &err), MR_OK);
+    assert_int_equal(self_intersections(&s1), 0);
+    s2.vertex_count = 2 * s1.vertex_count;
+    s2.triangle_count = 2 * s1.triangle_count;
+    s2.positions = malloc(sizeof *s2.positions * 3 * s2.vertex_count);
+    s2.indices = malloc(sizeof *s2.indices * 3 * s2.triangle_count);
+    assert_non_null(s2.positions);
+    assert_non_null(s2.indices);
+    for (size_t i = 0; i < 3 * s1.vertex_count; i++) {
+        s2.positions[i] = s1.positions[i];
+        s2.positions[3 * s1.vertex_count + i] = s1.positions[i] + (i % 3 == 0 ? 0.5f : 0);
+    }
+    for (size_t i = 0; i < 3 * s1.triangle_count; i++) {
+        s2.indices[i] = s1.indices[i];
+        s2.indices[3 * s1.triangle_count + i] = s1.indices[i] + (uint32_t)s1.vertex_count;
+    }
+    assert_true(self_intersections(&s2) > 20);
+    mr_mesh_free(&s1);
+    mr_mesh_free(&s2);
+
+    /* the bunny and the armadillo at 10 %, either quality: none added */
+    const char *files[2] = {"stanford-bunny.obj", "armadillo.obj"};
+    for (int i = 0; i < 2; i++) {
+        const char *path = tu_shared_data(files[i]);
+        mr_mesh in;
+        mr_mesh_init(&in);
+        if (!path || quick() || mr_mesh_read(path, NULL, &in, &err) != MR_OK) {
+            print_message("%s skipped (../shared/data absent, or MR_TEST_QUICK)\n", files[i]);
+            continue;
+        }
+        const size_t before = self_intersections(&in);
+        for (int q = 0; q < 2; q++) {
+            mr_mesh out;
+            simplify(&in, 0.1, q ? MR_QUALITY_BEST : MR_QUALITY_DEFAULT, 2, &out);
+            const size_t after = self_intersections(&out);
+            print_message("%s at 10 %% (%s): %zu self-intersecting pairs (input: %zu)\n",
+                          files[i], q ? "best" : "default", after, before);
+            assert_true(after <= before);
+            mr_mesh_free(&out);
+        }
+        mr_mesh_free(&in);
+    }
+}
+
 static void test_threads(void **state)
 {
     (void)state;
@@ -484,7 +572,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_options),         cmocka_unit_test(test_flat_stays_flat),
         cmocka_unit_test(test_bevel_corners),   cmocka_unit_test(test_closer_and_sound),
-        cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_threads),        cmocka_unit_test(test_self_intersections),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

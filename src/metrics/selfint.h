@@ -1,0 +1,21 @@
+/*
+ * Self-intersections of a triangle mesh (selfint.c). Internal: the tests
+ * and the benchmarks check that a simplification adds none.
+ */
+#ifndef MR_METRICS_SELFINT_H
+#define MR_METRICS_SELFINT_H
+
+#include "../core/internal.h"
+
+/* Do triangles u and v (three points each) meet? Touching counts; in a
+ * common plane, only overlap or crossing edges. */
+bool mr_triangles_meet(const double *u[3], const double *v[3]);
+
+/* The pairs of triangles that share no vertex and meet (packed positions,
+ * indices in range), on up to `threads` threads: the same count on any
+ * number. */
+mr_status mr_self_intersections(const float *positions, const uint32_t *indices,
+                                size_t triangle_count, int threads, size_t *pairs,
+                                mr_error *err);
+
+#endif /* MR_METRICS_SELFINT_H */
