@@ -104,6 +104,7 @@ bench: build
 	./$(BUILD)/bench/bench_io
 	./$(BUILD)/bench/bench_simplify --csv $(BUILD)/bench/simplify.csv
 	./$(BUILD)/bench/bench_queued --quick
+	./$(BUILD)/bench/bench_partitioned --quick
 	if [ -d $(BUILD)/python/meshreduce ]; then PYTHONPATH=$(BUILD)/python /usr/bin/python3 \
 	    bench/bench_python.py --cli $(BUILD)/meshreduce; fi
 
