@@ -144,12 +144,12 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     mr_collapse_mesh *m = &s->m;
     if (stride == 0)
         stride = 3 * sizeof(float);
-    const size_t vc = m->vertex_count;
-    size_t nlive = 0, ivc = 0;
+    /* the working mesh has the input's vertices, so its count is the
+     * input's too */
+    const size_t vc = m->vertex_count, ivc = vc;
+    size_t nlive = 0;
     for (size_t t = 0; t < m->triangle_count; t++)
         nlive += m->tris[3 * t] != MR_COLLAPSE_NONE;
-    for (size_t i = 0; i < 3 * triangle_count; i++)
-        ivc = indices[i] >= ivc ? indices[i] + (size_t)1 : ivc;
     if (nlive == 0 || triangle_count == 0)
         return MR_OK;
     const size_t step = triangle_count > SAMPLES_PER_TRIANGLE * nlive
