@@ -122,26 +122,25 @@ static void interval(const double q[3], const double d[3], double *lo, double *h
     *hi = t1 < t2 ? t2 : t1;
 }
 
+/* The normal n of triangle t's plane and the signed distances d (times
+ * |n|) of the other triangle's points o from it; false when all of o lie
+ * strictly on one side. */
+static bool straddles(const double *t[3], const double *o[3], double n[3], double d[3])
+{
+    double e1[3], e2[3];
+    sub(t[1], t[0], e1);
+    sub(t[2], t[0], e2);
+    cross(e1, e2, n);
+    const double off = -dot(n, t[0]);
+    for (int k = 0; k < 3; k++)
+        d[k] = dot(n, o[k]) + off;
+    return !((d[0] > 0 && d[1] > 0 && d[2] > 0) || (d[0] < 0 && d[1] < 0 && d[2] < 0));
+}
+
 bool mr_triangles_meet(const double *u[3], const double *v[3])
 {
-    double e1[3], e2[3], nv[3], nu[3];
-    sub(v[1], v[0], e1);
-    sub(v[2], v[0], e2);
-    cross(e1, e2, nv);
-    const double dv = -dot(nv, v[0]);
-    double du[3];
-    for (int k = 0; k < 3; k++)
-        du[k] = dot(nv, u[k]) + dv;
-    if ((du[0] > 0 && du[1] > 0 && du[2] > 0) || (du[0] < 0 && du[1] < 0 && du[2] < 0))
-        return false;
-    sub(u[1], u[0], e1);
-    sub(u[2], u[0], e2);
-    cross(e1, e2, nu);
-    const double duu = -dot(nu, u[0]);
-    double dvv[3];
-    for (int k = 0; k < 3; k++)
-        dvv[k] = dot(nu, v[k]) + duu;
-    if ((dvv[0] > 0 && dvv[1] > 0 && dvv[2] > 0) || (dvv[0] < 0 && dvv[1] < 0 && dvv[2] < 0))
+    double nv[3], nu[3], du[3], dvv[3];
+    if (!straddles(v, u, nv, du) || !straddles(u, v, nu, dvv))
         return false;
     if (du[0] == 0 && du[1] == 0 && du[2] == 0)
         return coplanar_meet(nv, u, v);
