@@ -371,14 +371,19 @@ static void test_closer_and_sound(void **state)
         print_message("the bunny skipped (../shared/data absent, or MR_TEST_QUICK)\n");
 }
 
-static size_t self_intersections(const mr_mesh *m)
+static size_t self_intersections_at(const mr_mesh *m, int threads)
 {
     size_t n = 0;
     mr_error err;
-    assert_int_equal(mr_self_intersections(m->positions, m->indices, m->triangle_count, 2, &n,
-                                           &err),
+    assert_int_equal(mr_self_intersections(m->positions, m->indices, m->triangle_count, threads,
+                                           &n, &err),
                      MR_OK);
     return n;
+}
+
+static size_t self_intersections(const mr_mesh *m)
+{
+    return self_intersections_at(m, 2);
 }
 
 /* The self-intersection count: triangle pairs by hand, then meshes. */
@@ -414,7 +419,8 @@ static void test_self_intersections(void **state)
     mr_error err;
     mr_mesh_init(&s1);
     mr_mesh_init(&s2);
-    assert_int_equal(mr_generate(MR_GEN_SPHERE, 2000, 0, &s1, &err), MR_OK);
+    /* above the count's parallel threshold (4096 triangles) */
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 6000, 0, &s1, &err), MR_OK);
     assert_int_equal(self_intersections(&s1), 0);
     s2.vertex_count = 2 * s1.vertex_count;
     s2.triangle_count = 2 * s1.triangle_count;
@@ -430,7 +436,11 @@ static void test_self_intersections(void **state)
         s2.indices[i] = s1.indices[i];
         s2.indices[3 * s1.triangle_count + i] = s1.indices[i] + (uint32_t)s1.vertex_count;
     }
-    assert_true(self_intersections(&s2) > 20);
+    const size_t crossing = self_intersections_at(&s2, 1);
+    assert_true(crossing > 20);
+    const int threads[3] = {2, 3, 8}; /* the same count on any number of threads */
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(self_intersections_at(&s2, threads[i]), crossing);
     mr_mesh_free(&s1);
     mr_mesh_free(&s2);
 
