@@ -80,9 +80,9 @@ static int cmp_float(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* The seam measure of output o (see the top) for `parts` slabs of in. */
-static double seam_ratio(const mr_mesh *in, const mr_tri_bvh *bvh, const mr_simplified *o,
-                         unsigned parts)
+/* The first partition's planes: `parts` - 1 vertex-count quantiles of
+ * in's vertices along the longest axis of their box (*axis). */
+static double *slab_planes(const mr_mesh *in, unsigned parts, int *axis)
 {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < in->vertex_count; v++)
@@ -95,11 +95,10 @@ static double seam_ratio(const mr_mesh *in, const mr_tri_bvh *bvh, const mr_simp
     for (int k = 1; k < 3; k++)
         ax = hi[k] - lo[k] > hi[ax] - lo[ax] ? k : ax;
     float *c = malloc(sizeof *c * in->vertex_count);
-    double *plane = malloc(sizeof *plane * (parts ? parts : 1));
+    double *plane = malloc(sizeof *plane * parts);
     if (!c || !plane) {
-        free(c);
-        free(plane);
-        return -1;
+        fprintf(stderr, "bench_partitioned: out of memory\n");
+        exit(1);
     }
     for (size_t v = 0; v < in->vertex_count; v++)
         c[v] = in->positions[3 * v + (size_t)ax];
@@ -107,6 +106,15 @@ static double seam_ratio(const mr_mesh *in, const mr_tri_bvh *bvh, const mr_simp
     for (unsigned k = 1; k < parts; k++)
         plane[k - 1] = c[(size_t)((double)k / parts * (double)in->vertex_count)];
     free(c);
+    *axis = ax;
+    return plane;
+}
+
+/* The seam measure of output o (see the top): the parts - 1 planes along
+ * axis ax; -1 when every triangle (or none) lies near one. */
+static double seam_ratio(const mr_tri_bvh *bvh, const mr_simplified *o, const double *plane,
+                         unsigned parts, int ax)
+{
     double el = 0;
     for (size_t t = 0; t < o->triangle_count; t++)
         for (int j = 0; j < 3; j++) {
@@ -133,7 +141,6 @@ static double seam_ratio(const mr_mesh *in, const mr_tri_bvh *bvh, const mr_simp
         sum[near] += d;
         n[near]++;
     }
-    free(plane);
     if (!n[0] || !n[1] || !(sum[0] > 0))
         return -1;
     return (sum[1] / (double)n[1]) / (sum[0] / (double)n[0]);
@@ -222,6 +229,8 @@ int main(int argc, char **argv)
         bench_check(mr_tri_bvh_build(&bvh, in.positions, in.indices, in.triangle_count,
                                      omp_get_num_procs(), &err),
                     &err);
+        int axis;
+        double *plane = slab_planes(&in, parts, &axis);
         printf("\nmesh %s: %zu vertices, %zu triangles\n", sp->name, in.vertex_count,
                in.triangle_count);
         printf("%-7s %-12s %3s %9s %8s %8s %9s %9s %9s %6s %5s\n", "target", "strategy", "thr",
@@ -259,7 +268,7 @@ int main(int argc, char **argv)
             double base[2] = {0, 0}, rms[2], hd[2];
             for (int s = 0; s < 2; s++) {
                 distances(&in, &keep[s], samples, &hd[s], &rms[s]);
-                const double seam = seam_ratio(&in, &bvh, &keep[s], parts);
+                const double seam = seam_ratio(&bvh, &keep[s], plane, parts, axis);
                 for (int j = 0; j < nthreads; j++) {
                     const bench_summary sm = bench_summarize(t[s][j], runs);
                     if (j == 0)
@@ -291,6 +300,7 @@ int main(int argc, char **argv)
             mr_simplified_free(&keep[1]);
         }
         free(mo);
+        free(plane);
         mr_tri_bvh_free(&bvh);
         mr_mesh_free(&in);
     }
