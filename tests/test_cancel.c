@@ -6,6 +6,7 @@
  * changes nothing. */
 #include "testutil.h"
 
+#include <stdbool.h>
 #include <string.h>
 
 typedef struct cancel_at {
@@ -35,6 +36,17 @@ static const variant variants[] = {
     {MR_STRATEGY_PARTITIONED, MR_COLLAPSE_FULL, 2}, {MR_STRATEGY_PARTITIONED, MR_COLLAPSE_HALF, 1},
 };
 
+/* The concurrent queues report from the calling thread every 256 of its
+ * own turns: how many reports a run makes depends on how many turns that
+ * thread gets (a loaded machine gave fewer than 5), so only the first
+ * report -- the last one at the latest -- is sure to come. The other
+ * strategies report at fixed counts. */
+static bool reports_vary(const variant *v)
+{
+    return v->strategy == MR_STRATEGY_PPQ || v->strategy == MR_STRATEGY_RPPQ ||
+           v->strategy == MR_STRATEGY_FPPQ || v->strategy == MR_STRATEGY_MULTIQUEUE;
+}
+
 static void options(mr_simplify_options *o, const variant *v, cancel_at *c)
 {
     mr_simplify_options_default(o);
@@ -54,7 +66,8 @@ static void test_cancel_flat_arrays(void **state)
     mr_mesh_init(&m);
     assert_int_equal(mr_generate(MR_GEN_SCAN, 60000, 1, &m, &err), MR_OK);
     for (size_t i = 0; i < sizeof variants / sizeof variants[0]; i++) {
-        cancel_at c = {0, 3, 0};
+        const size_t stop_after = reports_vary(&variants[i]) ? 1 : 3;
+        cancel_at c = {0, stop_after, 0};
         mr_simplify_options o;
         options(&o, &variants[i], &c);
         mr_simplified r;
@@ -63,7 +76,7 @@ static void test_cancel_flat_arrays(void **state)
         assert_int_equal(st, MR_ERR_CANCELLED);
         assert_int_equal(err.status, MR_ERR_CANCELLED);
         tu_assert_contains(err.message, "cancelled by the progress callback");
-        assert_int_equal(c.calls, 3); /* not called again after asking */
+        assert_int_equal(c.calls, stop_after); /* not called again after asking */
         assert_true(c.last < 1.0);
         assert_null(r.positions);
         assert_null(r.indices);
@@ -74,7 +87,9 @@ static void test_cancel_flat_arrays(void **state)
         assert_int_equal(mr_simplify(m.positions, 0, m.vertex_count, m.indices,
                                      m.triangle_count, &o, &r, &err),
                          MR_OK);
-        assert_true(go.calls > 3);
+        assert_true(go.calls >= 1);
+        if (!reports_vary(&variants[i]))
+            assert_true(go.calls > 3);
         assert_true(go.last == 1.0);
         assert_true(r.triangle_count > 0 && r.triangle_count < m.triangle_count / 10);
         mr_simplified_free(&r);
@@ -91,7 +106,8 @@ static void test_cancel_mesh(void **state)
     mr_mesh_init(&m);
     assert_int_equal(mr_generate(MR_GEN_TORUS, 60000, 2, &m, &err), MR_OK);
     for (size_t i = 0; i < sizeof variants / sizeof variants[0]; i++) {
-        for (size_t stop_after = 1; stop_after <= 5; stop_after += 4) {
+        const size_t last_stop = reports_vary(&variants[i]) ? 1 : 5;
+        for (size_t stop_after = 1; stop_after <= last_stop; stop_after += 4) {
             cancel_at c = {0, stop_after, 0};
             mr_simplify_options o;
             options(&o, &variants[i], &c);
