@@ -37,7 +37,8 @@ static const char usage[] =
     "  -o, --output FILE     output file (required)\n"
     "  --collapse full|half  full: both ends move to the optimal position (default);\n"
     "                        half: one end moves onto the other\n"
-    "  --strategy greedy|batched|ppq|rppq|fppq|multiqueue|partitioned\n"
+    "  --strategy greedy|batched|ppq|rppq|fppq|multiqueue|partitioned|\n"
+    "             partitioned-boundary\n"
     "                        batched: passes over all edges, cheapest first, at\n"
     "                        most one collapse per vertex a pass (default);\n"
     "                        greedy: always the single cheapest collapse, from a\n"
@@ -60,9 +61,15 @@ static const char usage[] =
     "                        shifted half a slab where they fit in one, the rest\n"
     "                        in one global order; the same bytes at every thread\n"
     "                        count for a given --partitions\n"
-    "  --partitions P        partitioned: P slabs, 1..4096 (default 16, a constant:\n"
-    "                        not the thread count, so that the output does not\n"
-    "                        depend on it)\n"
+    "                        partitioned-boundary: the same slabs, but each pass\n"
+    "                        takes a batch of collapses whose neighbourhoods do\n"
+    "                        not touch (claims), per slab and then across slabs\n"
+    "                        in one global walk, and applies each batch on every\n"
+    "                        thread; rebalances when counts say the slabs are\n"
+    "                        stale (--stats says which); same-bytes rule as above\n"
+    "  --partitions P        partitioned(-boundary): P slabs, 1..4096 (default 16,\n"
+    "                        a constant: not the thread count, so that the output\n"
+    "                        does not depend on it)\n"
     "  --quality default|best\n"
     "                        best: full collapse only; each survivor also keeps the\n"
     "                        volume around it (Lindstrom-Turk placement) and at the\n"
@@ -266,9 +273,12 @@ static int option(int argc, char **argv, int *i, void *user)
             o->strategy = MR_STRATEGY_MULTIQUEUE;
         else if (v && !strcmp(v, "partitioned"))
             o->strategy = MR_STRATEGY_PARTITIONED;
+        else if (v && !strcmp(v, "partitioned-boundary"))
+            o->strategy = MR_STRATEGY_PARTITIONED_BOUNDARY;
         else
             return cli_usage_error("simplify", "--strategy is greedy, batched, ppq, rppq, "
-                                               "fppq, multiqueue or partitioned");
+                                               "fppq, multiqueue, partitioned or "
+                                               "partitioned-boundary");
     } else if (cli_value(argc, argv, i, "--quality", &v)) {
         if (v && !strcmp(v, "default"))
             o->quality = MR_QUALITY_DEFAULT;
@@ -398,6 +408,13 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
                 "rebalances\n",
                 s->partition_passes, s->interior_collapses, s->boundary_collapses,
                 s->boundary_sequential, s->tail_collapses, s->rebalances);
+    if (s->claim_conflicts || s->rebalance_count || s->rebalance_imbalance ||
+        s->rebalance_boundary || s->rebalance_acceptance) /* the boundary-aware variant's */
+        fprintf(stderr,
+                "claims     %zu candidates deferred (neighbourhood claimed); rebalances by "
+                "trigger: %zu count, %zu imbalance, %zu boundary fraction, %zu acceptance\n",
+                s->claim_conflicts, s->rebalance_count, s->rebalance_imbalance,
+                s->rebalance_boundary, s->rebalance_acceptance);
 }
 
 static void print_json(const cli_io *io, const mr_mesh *result, const cli_times *t,
@@ -429,9 +446,13 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
     if (s->partition_passes) /* the partitioned strategy's profile */
         printf(", \"partitioned\": {\"passes\": %zu, \"interior_collapses\": %zu, "
                "\"boundary_collapses\": %zu, \"boundary_sequential\": %zu, "
-               "\"tail_collapses\": %zu, \"rebalances\": %zu}",
+               "\"tail_collapses\": %zu, \"rebalances\": %zu, \"claim_conflicts\": %zu, "
+               "\"rebalance_triggers\": {\"count\": %zu, \"imbalance\": %zu, "
+               "\"boundary\": %zu, \"acceptance\": %zu}}",
                s->partition_passes, s->interior_collapses, s->boundary_collapses,
-               s->boundary_sequential, s->tail_collapses, s->rebalances);
+               s->boundary_sequential, s->tail_collapses, s->rebalances, s->claim_conflicts,
+               s->rebalance_count, s->rebalance_imbalance, s->rebalance_boundary,
+               s->rebalance_acceptance);
     printf("}\n");
 }
 

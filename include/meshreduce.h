@@ -374,7 +374,18 @@ typedef enum mr_strategy {
      * where their 1-rings fit in one, else in one global cost order on
      * the calling thread. Full or half collapse. For a fixed `partitions`
      * the output is byte-identical at every thread count. */
-    MR_STRATEGY_PARTITIONED
+    MR_STRATEGY_PARTITIONED,
+    /* Its boundary-aware variant: each slab's collapses are chosen first,
+     * as a batch under claims (a collapse joins only when neither end lies
+     * in the closed 1-ring of an end already in it, and no end of one in
+     * its own), then applied together on every thread; the edges across
+     * slabs follow in one global claim walk, in cost order, and are applied
+     * together the same way. The slabs are rebalanced when one of four
+     * counts says they are stale: collapses since the last balance, load
+     * imbalance, the fraction of candidates across slabs, the slabs'
+     * acceptance rate (mr_simplify_stats). Byte-identical output at every
+     * thread count for a fixed `partitions`, as above. */
+    MR_STRATEGY_PARTITIONED_BOUNDARY
 } mr_strategy;
 
 /* Progress of a simplification: the fraction done in [0, 1], from the
@@ -437,7 +448,7 @@ typedef struct mr_simplify_options {
                                    mr_fppq_default_levels) */
     unsigned multiqueue_factor; /* MR_STRATEGY_MULTIQUEUE: heaps per thread
                                    (0 = 2) */
-    unsigned partitions;        /* MR_STRATEGY_PARTITIONED: slabs, 1 ..
+    unsigned partitions;        /* MR_STRATEGY_PARTITIONED(_BOUNDARY): slabs, 1 ..
                                    MR_PARTITIONS_MAX (0 = MR_PARTITIONS_DEFAULT,
                                    a constant: never from the thread count,
                                    so the output does not depend on it) */
@@ -511,6 +522,17 @@ typedef struct mr_simplify_stats {
     size_t tail_collapses;      /* the last ones to the target: every
                                    candidate in one global order */
     size_t rebalances;          /* slabs recomputed as the mesh shrank */
+    /* MR_STRATEGY_PARTITIONED_BOUNDARY's too (0 for the others): */
+    size_t claim_conflicts;     /* candidates deferred to a later pass:
+                                   their neighbourhood met a claimed one */
+    size_t rebalance_count;     /* rebalances by trigger: the live vertices
+                                   halved since the last balance; */
+    size_t rebalance_imbalance; /* one slab's interior candidates 1.5x the
+                                   mean; */
+    size_t rebalance_boundary;  /* the candidates across slabs 1.5x their
+                                   share just after the last balance; */
+    size_t rebalance_acceptance; /* the slabs' acceptance rate half of its
+                                   rate just after the last balance */
 } mr_simplify_stats;
 
 /* The result of a simplification on flat arrays: malloc'd arrays that

@@ -262,7 +262,7 @@ static void test_simplify_cli(void **state)
         {"--ratio 150%", "--ratio needs a fraction", 2},
         {"", "no target given", 2},
         {"--collapse quarter --ratio 0.5", "--collapse is full or half", 2},
-        {"--strategy best --ratio 0.5", "--strategy is greedy, batched, ppq, rppq, fppq, multiqueue or partitioned", 2},
+        {"--strategy best --ratio 0.5", "--strategy is greedy, batched, ppq, rppq, fppq, multiqueue, partitioned or partitioned-boundary", 2},
         {"--triangles 30000", "target of 30000 triangles exceeds the input's 20480", 1},
         {"--max-normal-turn 0 --ratio 0.5", "--max-normal-turn needs degrees", 2},
     };

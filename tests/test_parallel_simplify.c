@@ -46,6 +46,8 @@ typedef struct variant {
 #define GREEDY_HALF(r) {MR_STRATEGY_GREEDY, MR_COLLAPSE_HALF, (r)}
 #define PART_FULL(r) {MR_STRATEGY_PARTITIONED, MR_COLLAPSE_FULL, (r)}
 #define PART_HALF(r) {MR_STRATEGY_PARTITIONED, MR_COLLAPSE_HALF, (r)}
+#define PB_FULL(r) {MR_STRATEGY_PARTITIONED_BOUNDARY, MR_COLLAPSE_FULL, (r)}
+#define PB_HALF(r) {MR_STRATEGY_PARTITIONED_BOUNDARY, MR_COLLAPSE_HALF, (r)}
 
 /* An input and how to simplify it. */
 typedef struct sim_case {
@@ -80,9 +82,10 @@ static bool quick(void)
 
 static const char *strategy_name(mr_strategy s)
 {
-    return s == MR_STRATEGY_GREEDY        ? "greedy"
-           : s == MR_STRATEGY_PARTITIONED ? "partitioned"
-                                          : "batched";
+    return s == MR_STRATEGY_GREEDY                 ? "greedy"
+           : s == MR_STRATEGY_PARTITIONED          ? "partitioned"
+           : s == MR_STRATEGY_PARTITIONED_BOUNDARY ? "partitioned-boundary"
+                                                   : "batched";
 }
 
 static const char *collapse_name(mr_collapse_kind k)
@@ -337,6 +340,7 @@ static void test_data_meshes(void **state)
         const variant all[] = {
             BATCHED_FULL(0.25), BATCHED_FULL(0.1), BATCHED_FULL(0.01),
             BATCHED_HALF(r),    GREEDY_FULL(r),    GREEDY_HALF(r),
+            PART_FULL(r),       PB_FULL(r),
         };
         /* Under MR_TEST_QUICK: the default at one ratio, and every pair
          * only on the meshes above 65,536 vertices, where the per-vertex
@@ -543,9 +547,9 @@ static void test_open_boundaries(void **state)
 
     snprintf(c.name, sizeof c.name, "generated torus, lock_border");
     o.lock_border = 1;
-    const variant border[] = {BATCHED_FULL(0.1), PART_FULL(0.1), BATCHED_HALF(0.01),
-                              GREEDY_FULL(0.25)};
-    check_variants(&c, &o, border, quick() ? 2 : sizeof border / sizeof border[0]);
+    const variant border[] = {BATCHED_FULL(0.1), PART_FULL(0.1), PB_HALF(0.1),
+                              BATCHED_HALF(0.01), GREEDY_FULL(0.25)};
+    check_variants(&c, &o, border, quick() ? 3 : sizeof border / sizeof border[0]);
 
     snprintf(c.name, sizeof c.name, "generated torus, until_error max_error 0.002, prune");
     mr_simplify_options_default(&o);
@@ -647,13 +651,13 @@ static void test_attribute_seams(void **state)
     const variant all[] = {
         BATCHED_FULL(0.25), BATCHED_FULL(0.1), BATCHED_FULL(0.01),
         BATCHED_HALF(0.1),  GREEDY_FULL(0.1),  GREEDY_HALF(0.01),
-        PART_FULL(0.1),     PART_HALF(0.01),
+        PART_FULL(0.1),     PART_HALF(0.01),   PB_FULL(0.1),
     };
-    const variant few[] = {BATCHED_FULL(0.1), GREEDY_HALF(0.01), PART_FULL(0.1)};
+    const variant few[] = {BATCHED_FULL(0.1), GREEDY_HALF(0.01), PART_FULL(0.1), PB_FULL(0.1)};
     mr_simplify_options o;
     mr_simplify_options_default(&o);
     if (quick())
-        check_variants(&c, &o, few, 3);
+        check_variants(&c, &o, few, 4);
     else
         check_variants(&c, &o, all, sizeof all / sizeof all[0]);
 
@@ -692,9 +696,9 @@ static void test_locked_vertices(void **state)
     mr_simplify_options o;
     mr_simplify_options_default(&o);
     o.vertex_lock = lock;
-    const variant all[] = {BATCHED_FULL(0.25), PART_FULL(0.01), BATCHED_FULL(0.01),
+    const variant all[] = {BATCHED_FULL(0.25), PART_FULL(0.01), PB_FULL(0.01), BATCHED_FULL(0.01),
                            BATCHED_HALF(0.1),  GREEDY_FULL(0.1), GREEDY_HALF(0.01)};
-    check_variants(&c, &o, all, quick() ? 2 : sizeof all / sizeof all[0]);
+    check_variants(&c, &o, all, quick() ? 3 : sizeof all / sizeof all[0]);
     free(lock);
     mr_mesh_free(&m);
 

@@ -79,7 +79,16 @@ def simplify(
     absolute: bool = ...,
     collapse: Literal["full", "half"] = ...,
     strategy: Optional[
-        Literal["greedy", "batched", "ppq", "rppq", "fppq", "multiqueue", "partitioned"]
+        Literal[
+            "greedy",
+            "batched",
+            "ppq",
+            "rppq",
+            "fppq",
+            "multiqueue",
+            "partitioned",
+            "partitioned-boundary",
+        ]
     ] = ...,
     lock_border: bool = ...,
     boundary_weight: float = ...,

@@ -583,8 +583,9 @@ static int to_double(PyObject *o, const char *name, double *out)
 
 static const char *const collapse_names[] = {"full", "half", NULL};
 static const char *const quality_names[] = {"default", "best", NULL};
-static const char *const strategy_names[] = {"greedy", "batched",    "ppq",         "rppq",
-                                             "fppq",   "multiqueue", "partitioned", NULL};
+static const char *const strategy_names[] = {
+    "greedy", "batched", "ppq", "rppq", "fppq", "multiqueue", "partitioned", "partitioned-boundary",
+    NULL};
 static const char *const stop_names[] = {"target", "max_error", "locked", "refused"};
 
 /* locked: a boolean mask of the vertices, or their indices. Fills a
@@ -680,8 +681,9 @@ PyDoc_STRVAR(simplify_doc,
 "collapse: 'full' (both ends move to the optimal position) or 'half'.\n"
 "strategy: 'batched' (default), 'greedy', 'partitioned' (slabs along the longest\n"
 "axis, partitions of them: 0 = 16; the output depends on that count, not on the\n"
-"threads), or the concurrent 'ppq', 'rppq', 'fppq', 'multiqueue' (half-edge\n"
-"collapse only; output may vary with threads).\n"
+"threads), 'partitioned-boundary' (the same slabs, collapses taken in batches\n"
+"under claims and rebalanced by counts), or the concurrent 'ppq', 'rppq',\n"
+"'fppq', 'multiqueue' (half-edge collapse only; output may vary with threads).\n"
 "lock_border: never move boundary vertices. locked: vertices that never move, a\n"
 "boolean mask of length N or an array of vertex indices. boundary_weight: weight\n"
 "of the quadrics holding boundaries and seams. max_normal_turn: degrees in\n"
@@ -776,7 +778,8 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
         static const mr_strategy strategies[] = {MR_STRATEGY_GREEDY, MR_STRATEGY_BATCHED,
                                                  MR_STRATEGY_PPQ,    MR_STRATEGY_RPPQ,
                                                  MR_STRATEGY_FPPQ,   MR_STRATEGY_MULTIQUEUE,
-                                                 MR_STRATEGY_PARTITIONED};
+                                                 MR_STRATEGY_PARTITIONED,
+                                                 MR_STRATEGY_PARTITIONED_BOUNDARY};
         o.strategy = strategies[k];
     }
     if (!(boundary_weight >= 0) || !isfinite(boundary_weight))
@@ -868,13 +871,18 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                                      (Py_ssize_t)s.compactions));
     if (stats && s.partition_passes) /* the partitioned strategy's profile */
         rc |= set_item(stats, "partitioned",
-                       Py_BuildValue("{s:n,s:n,s:n,s:n,s:n,s:n}", "passes",
-                                     (Py_ssize_t)s.partition_passes, "interior_collapses",
-                                     (Py_ssize_t)s.interior_collapses, "boundary_collapses",
-                                     (Py_ssize_t)s.boundary_collapses, "boundary_sequential",
-                                     (Py_ssize_t)s.boundary_sequential, "tail_collapses",
-                                     (Py_ssize_t)s.tail_collapses, "rebalances",
-                                     (Py_ssize_t)s.rebalances));
+                       Py_BuildValue("{s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:{s:n,s:n,s:n,s:n}}",
+                                     "passes", (Py_ssize_t)s.partition_passes,
+                                     "interior_collapses", (Py_ssize_t)s.interior_collapses,
+                                     "boundary_collapses", (Py_ssize_t)s.boundary_collapses,
+                                     "boundary_sequential", (Py_ssize_t)s.boundary_sequential,
+                                     "tail_collapses", (Py_ssize_t)s.tail_collapses,
+                                     "rebalances", (Py_ssize_t)s.rebalances, "claim_conflicts",
+                                     (Py_ssize_t)s.claim_conflicts, "rebalance_triggers",
+                                     "count", (Py_ssize_t)s.rebalance_count, "imbalance",
+                                     (Py_ssize_t)s.rebalance_imbalance, "boundary",
+                                     (Py_ssize_t)s.rebalance_boundary, "acceptance",
+                                     (Py_ssize_t)s.rebalance_acceptance));
     if (!stats || rc || PyDict_Update(d, stats) < 0 ||
         set_item(d, "error", PyFloat_FromDouble(s.max_error)) < 0) {
         Py_XDECREF(stats);

@@ -391,13 +391,19 @@ def assert_same(tmp_path, out, r):
     (["--ratio", "0.05", "--quality", "best"], {"ratio": 0.05, "quality": "best"}),
     (["--ratio", "0.1", "--strategy", "partitioned", "--partitions", "5"],
      {"ratio": 0.1, "strategy": "partitioned", "partitions": 5}),
+    (["--ratio", "0.05", "--strategy", "partitioned-boundary", "--partitions", "8"],
+     {"ratio": 0.05, "strategy": "partitioned-boundary", "partitions": 8}),
 ])
 def test_bunny_matches_cli(tmp_path, cli_args, kwargs):
     out, r = simplify_both(tmp_path, BUNNY, cli_args, **kwargs)
     assert_same(tmp_path, out, r)
-    if kwargs.get("strategy") == "partitioned":
+    if kwargs.get("strategy", "").startswith("partitioned"):
         assert out["partitioned"] == r.stats["partitioned"]
         assert r.stats["partitioned"]["interior_collapses"] > 0
+    if kwargs.get("strategy") == "partitioned-boundary":
+        p = r.stats["partitioned"]
+        assert p["claim_conflicts"] > 0
+        assert p["rebalances"] == sum(p["rebalance_triggers"].values())
 
 
 SPOT = os.path.join(DATA, "spot.obj")

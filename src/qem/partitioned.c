@@ -72,98 +72,7 @@
  * Not done (issue 16): the candidates are gathered anew each pass (as
  * batched.c's) rather than refreshed around the collapses only.
  */
-#include "passes.h"
-
-#include "../core/omp_compat.h"
-
-#include <math.h>
-
-#define NONE MR_COLLAPSE_NONE
-
-/* The slack on the goal-th cheapest cost (as batched.c's PASS_SLACK). */
-#define PASS_SLACK 1.5f
-/* Histogram buckets over the top 16 bits of a cost key. */
-#define HIST_BUCKETS 65536u
-/* Bins of the slab quantiles along the axis. */
-#define SLAB_BINS 4096u
-/* Tail passes (one global order, one thread) once fewer collapses than
- * this many per slab are needed. */
-#define TAIL_PER_PARTITION 64
-/* Triangles per gathering block (a constant: the candidates' order must
- * not depend on the thread count). */
-#define BLOCK_TRIANGLES 4096
-/* Edges per call of the vectorised cost planner: gathering, planning. */
-#define GATHER_BATCH 256
-#define PLAN_BATCH 64
-/* How many candidates ahead the three prefetch stages of
- * mr_collapse_prefetch run (as batched.c's). */
-#define PF0 6
-#define PF1 4
-#define PF2 2
-
-/* pure[] bit: counted in the room bound of this pass (a scratch mark). */
-#define SEEN 2u
-
-/* A candidate edge (a, b) -- a the end whose slab gathered it -- and the
- * bits of its (float) cost. */
-typedef struct pcand {
-    uint32_t key, a, b;
-} pcand;
-
-/* A candidate's planned collapse: r goes, k stays, at target. */
-typedef struct pplan {
-    double target[3];
-    double cost;
-    uint32_t r, k;
-} pplan;
-
-/* One slab's state in a pass. */
-typedef struct pslab {
-    pplan *plan;          /* plan[i]: candidate buf[i]'s (interior ones) */
-    size_t pcap;
-    pcand *buf;           /* its candidates: interior ones in buf[0..nin),
-                             the others in buf[c1 - nbd .. c1) */
-    pcand *tmp;           /* the radix sort's scratch */
-    size_t cap, tcap;     /* their sizes */
-    size_t c1;            /* this pass's bound on its candidates (<= cap) */
-    size_t nin, nbd;
-    size_t next;          /* interior: the next candidate to try */
-    size_t demand;        /* refs room bound of what is left */
-    size_t room0, room1;  /* its room in refs this step, [room0, room1) */
-    size_t qv, qt;        /* quotas: vertices, triangles */
-    size_t gone, deleted, made, refused;
-    double worst;
-    bool paused, quota_hit;
-} pslab;
-
-struct mr_partitioned {
-    unsigned parts;
-    int threads;
-    uint16_t *part;       /* per vertex: its slab */
-    uint16_t *part2;      /* per vertex: its shifted slab (parts + 1 of
-                             them, planes halfway between part's) */
-    pslab *slab2;         /* parts + 1: the boundary step's slabs */
-    uint8_t *in2;         /* per boundary candidate: interior to a shifted
-                             slab */
-    uint32_t *impure;     /* per vertex: the gathering (gen) at which one of
-                             its triangles was found to span slabs */
-    uint32_t gen;         /* the gatherings so far */
-    pcand *bcand;         /* the gathering's blocks: 3 * BLOCK_TRIANGLES
-                             candidates each */
-    size_t nblocks;
-    uint32_t *bcount;     /* per block: candidates; then per block and slab
-                             (2 * parts): interior and boundary counts, then
-                             their offsets in the slab's list */
-    size_t in2_cap;
-    uint8_t *pure;        /* per vertex: SEEN */
-    uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
-    pslab *slab;          /* parts */
-    pcand *seq, *seq_tmp; /* the boundary (or tail) candidates, merged;
-                             the radix sort's scratch */
-    size_t seq_cap, seq_tmp_cap;
-    uint32_t *hist;       /* HIST_BUCKETS per thread */
-    size_t balanced_live; /* live vertices at the last balance */
-};
+#include "partitioned.h"
 
 /* The edge id of a candidate: (smaller end, larger end). */
 static inline uint64_t edge_id(const pcand *e)
@@ -183,7 +92,7 @@ static int by_edge(const void *x, const void *y)
  * the same digit), then each run of equal keys by edge id (such runs are
  * short but for the many zero-cost edges of flat parts). The order then
  * comes from the mesh alone, not from where an edge was gathered. */
-static void sort_keys(pcand *c, pcand *tmp, size_t n)
+void mr_part_sort(pcand *c, pcand *tmp, size_t n)
 {
     static const unsigned shift[3] = {0, 11, 22}, bits[3] = {11, 11, 10};
     pcand *src = c, *dst = tmp;
@@ -220,7 +129,7 @@ static void sort_keys(pcand *c, pcand *tmp, size_t n)
 }
 
 /* Room for n entries in *buf (contents dropped). */
-static bool room_for(pcand **buf, size_t *cap, size_t n)
+bool mr_part_room(pcand **buf, size_t *cap, size_t n)
 {
     if (n <= *cap && *buf)
         return true;
@@ -237,7 +146,7 @@ static bool room_for(pcand **buf, size_t *cap, size_t n)
 /* Slabs from the live vertices' current positions: the longest axis of
  * their bounding box, planes at vertex-count quantiles; then the live
  * vertices listed slab by slab (in id order). */
-static void balance(mr_simplifier *s)
+void mr_part_balance(mr_simplifier *s)
 {
     mr_partitioned *pt = s->pt;
     const mr_collapse_mesh *m = &s->m;
@@ -327,10 +236,12 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
                                 sizeof *pt->bcount);
     pt->slab2 = mr_calloc_array((size_t)pt->parts + 1, sizeof *pt->slab2);
     pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
+    if (s->boundary_aware && !(pt->claim = mr_calloc_array(m->vertex_count + 1, 1)))
+        return mr_fail_nomem(err, NULL, m->vertex_count);
     if (!pt->part || !pt->part2 || !pt->impure || !pt->bcand || !pt->bcount || !pt->slab2 ||
         !pt->pure || !pt->mark || !pt->slab || !pt->hist || !m->dead)
         return mr_fail_nomem(err, NULL, m->vertex_count * 12 + m->triangle_count * 36);
-    balance(s);
+    mr_part_balance(s);
     return MR_OK;
 }
 
@@ -362,6 +273,10 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     free(pt->mark);
     free(pt->slab);
     free(pt->hist);
+    free(pt->claim);
+    free(pt->bbatch.acc);
+    free(pt->bplan);
+    free(pt->bstate);
     free(pt);
     s->pt = NULL;
 }
@@ -491,7 +406,7 @@ static void block_scatter(mr_partitioned *pt, size_t blk)
  * Lists are only read (no cleaning). Returns the candidates' number, or 0
  * when out of memory.
  */
-static size_t gather(mr_simplifier *s, double limit)
+size_t mr_part_gather(mr_simplifier *s, double limit)
 {
     mr_partitioned *pt = s->pt;
     const mr_collapse_mesh *m = &s->m;
@@ -521,10 +436,11 @@ static size_t gather(mr_simplifier *s, double limit)
             nbd += cnt[1];
         }
         sl->nin = ni;
+        sl->gathered = ni;
         sl->nbd = nbd;
         sl->c1 = ni + nbd;
         total += ni + nbd;
-        if (!room_for(&sl->buf, &sl->cap, sl->c1) || !room_for(&sl->tmp, &sl->tcap, sl->c1)) {
+        if (!mr_part_room(&sl->buf, &sl->cap, sl->c1) || !mr_part_room(&sl->tmp, &sl->tcap, sl->c1)) {
             ok = false;
             continue;
         }
@@ -548,7 +464,7 @@ static size_t gather(mr_simplifier *s, double limit)
 
 /* The key below which at least rank + 1 of the n candidates lie, to the
  * resolution of the top 16 bits (as batched.c's rank_key). */
-static uint32_t rank_key(mr_simplifier *s, size_t n, size_t rank)
+uint32_t mr_part_rank_key(mr_simplifier *s, size_t n, size_t rank)
 {
     mr_partitioned *pt = s->pt;
     const int nt = n > 65536 ? pt->threads : 1;
@@ -645,7 +561,7 @@ static void add_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl)
  * its collapses can take: the list lengths of the distinct ends (each
  * vertex is an end once a pass, and its list does not grow before).
  * Returns false when out of memory. */
-static bool slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
+bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
 {
     mr_partitioned *pt = s->pt;
     const mr_collapse_mesh *m = &s->m;
@@ -664,12 +580,13 @@ static bool slab_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
     }
     sl->nbd = k;
     sl->next = 0;
+    sl->keep = 0;
     sl->demand = 0;
     if (tail)
         return true;
-    if (!room_for(&sl->tmp, &sl->tcap, sl->nin))
+    if (!mr_part_room(&sl->tmp, &sl->tcap, sl->nin))
         return false;
-    sort_keys(c, sl->tmp, sl->nin);
+    mr_part_sort(c, sl->tmp, sl->nin);
     if (!slab_plan(s, sl))
         return false;
     add_demand(pt, m, sl);
@@ -682,7 +599,7 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
-    const pcand *c = sl->buf;
+    pcand *c = sl->buf;
     size_t at = sl->room0;
     sl->paused = false;
     for (; sl->next < sl->nin; sl->next++) {
@@ -710,6 +627,12 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
         const pcand e = c[sl->next];
         if (pt->mark[e.a] | pt->mark[e.b])
             continue;
+        if (pt->claim && !mr_claim_free(m, pt->claim, e.a, e.b)) {
+            sl->deferred++;
+            sl->plan[sl->keep] = sl->plan[sl->next]; /* to the next round */
+            c[sl->keep++] = e;
+            continue;
+        }
         const pplan *x = &sl->plan[sl->next];
         const uint32_t r = x->r, k = x->k;
         double target[3] = {x->target[0], x->target[1], x->target[2]}, cost = x->cost;
@@ -728,6 +651,8 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
         }
         uint32_t *out = m->refs + at;
         size_t rm;
+        if (pt->claim)
+            mr_claim_take(m, pt->claim, r, k);
         sl->deleted += mr_simplifier_collapse_at(s, r, k, target, out, &rm);
         sl->gone += rm;
         for (size_t q = m->count[k]; q < need; q++)
@@ -746,7 +671,7 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
  * in all (theirs and those after the step): each slab's share, by its
  * candidates, of what is left to the targets, when they could reach it;
  * and their counts reset. */
-static void set_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl, size_t ns,
+void mr_part_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl, size_t ns,
                        size_t all)
 {
     const mr_collapse_mesh *m = &s->m;
@@ -767,14 +692,21 @@ static void set_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab 
 /* The slabs sl[0..ns) apply their candidates concurrently (steps 3 and
  * 4): room in refs handed out by prefix sums, compaction between steps
  * when a slab ran out. Returns the collapses made. */
-static size_t apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double limit, double *worst,
+size_t mr_part_apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double limit, double *worst,
                           bool *quota_hit)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
     const ptrdiff_t np = (ptrdiff_t)ns;
     bool stuck = false;
-    size_t made = 0;
+    /* the slabs' counts so far in this pass (an earlier round's) */
+    size_t gone = 0, deleted = 0, made = 0;
+    for (size_t p = 0; p < ns; p++) {
+        gone += slabs[p].gone;
+        deleted += slabs[p].deleted;
+        made += slabs[p].made;
+    }
+    gone = 0 - gone, deleted = 0 - deleted, made = 0 - made;
     for (;;) {
         size_t want = 0, active = 0, before = 0;
         for (size_t p = 0; p < ns; p++) {
@@ -827,7 +759,6 @@ static size_t apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double limi
             break; /* cannot happen (see above): never loop */
         stuck = after == before;
     }
-    size_t gone = 0, deleted = 0;
     for (size_t p = 0; p < ns; p++) {
         const pslab *sl = &slabs[p];
         gone += sl->gone;
@@ -864,8 +795,18 @@ static bool slab_demand(const mr_simplifier *s, pslab *sl)
     mr_partitioned *pt = s->pt;
     sl->demand = 0;
     sl->next = 0;
+    sl->keep = 0;
     add_demand(pt, &s->m, sl);
     return slab_plan(s, sl);
+}
+
+void mr_part_next_round(mr_simplifier *s, pslab *sl)
+{
+    sl->nin = sl->keep;
+    sl->keep = 0;
+    sl->next = 0;
+    sl->demand = 0;
+    add_demand(s->pt, &s->m, sl);
 }
 
 /*
@@ -916,7 +857,7 @@ static size_t shifted(mr_simplifier *s, size_t n, const mr_simplify_goal *g, dou
         pt->slab2[pt->part2[c[i].a]].nin += in2[i] == 1;
     for (size_t q = 0; q < ns; q++) {
         pslab *sl = &pt->slab2[q];
-        if (!room_for(&sl->buf, &sl->cap, sl->nin))
+        if (!mr_part_room(&sl->buf, &sl->cap, sl->nin))
             return SIZE_MAX;
         sl->c1 = sl->nin;
         sl->nin = 0;
@@ -941,15 +882,15 @@ static size_t shifted(mr_simplifier *s, size_t n, const mr_simplify_goal *g, dou
     size_t nin = 0;
     for (size_t q = 0; q < ns; q++)
         nin += pt->slab2[q].nin;
-    set_quotas(s, g, pt->slab2, ns, nin + rest);
-    *made = apply_slabs(s, pt->slab2, ns, g->limit, worst, quota_hit);
+    mr_part_quotas(s, g, pt->slab2, ns, nin + rest);
+    *made = mr_part_apply_slabs(s, pt->slab2, ns, g->limit, worst, quota_hit);
     return rest;
 }
 
 /* Step 4's rest (or a tail pass): the candidates in seq[0..n), sorted,
  * one at a time on this thread, up to the target. Returns the collapses
  * made. */
-static size_t sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst)
+size_t mr_part_sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst)
 {
     mr_partitioned *pt = s->pt;
     mr_collapse_mesh *m = &s->m;
@@ -975,10 +916,32 @@ static size_t sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, 
     return made;
 }
 
-/* Room for n merged candidates in seq. */
-static bool seq_room(mr_partitioned *pt, size_t n)
+size_t mr_part_merge(mr_simplifier *s, bool tail)
 {
-    return room_for(&pt->seq, &pt->seq_cap, n) && room_for(&pt->seq_tmp, &pt->seq_tmp_cap, n);
+    mr_partitioned *pt = s->pt;
+    size_t ns = 0;
+    for (unsigned p = 0; p < pt->parts; p++)
+        ns += pt->slab[p].nbd + (tail ? pt->slab[p].nin : 0);
+    if (!mr_part_seq_room(pt, ns))
+        return SIZE_MAX;
+    size_t k = 0;
+    for (unsigned p = 0; p < pt->parts; p++) {
+        const pslab *sl = &pt->slab[p];
+        if (tail) {
+            memcpy(pt->seq + k, sl->buf, sl->nin * sizeof *pt->seq);
+            k += sl->nin;
+        }
+        memcpy(pt->seq + k, sl->buf + sl->c1 - sl->nbd, sl->nbd * sizeof *pt->seq);
+        k += sl->nbd;
+    }
+    mr_part_sort(pt->seq, pt->seq_tmp, k);
+    return k;
+}
+
+/* Room for n merged candidates in seq. */
+bool mr_part_seq_room(mr_partitioned *pt, size_t n)
+{
+    return mr_part_room(&pt->seq, &pt->seq_cap, n) && mr_part_room(&pt->seq_tmp, &pt->seq_tmp_cap, n);
 }
 
 size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
@@ -997,10 +960,10 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
     memset(prof, 0, sizeof *prof);
     while (!mr_simplifier_reached(s, &g)) {
         if (2 * m->live_vertices <= pt->balanced_live) {
-            balance(s);
+            mr_part_balance(s);
             prof->rebalances++;
         }
-        const size_t n = gather(s, g.limit);
+        const size_t n = mr_part_gather(s, g.limit);
         if (n == 0)
             break;
         prof->passes++;
@@ -1009,12 +972,12 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
         const double goal = ceil(share * (double)needed);
         uint32_t lim = UINT32_MAX;
         if (goal < (double)n)
-            lim = mr_float_key(mr_key_float(rank_key(s, n, (size_t)goal)) * PASS_SLACK);
+            lim = mr_float_key(mr_key_float(mr_part_rank_key(s, n, (size_t)goal)) * PASS_SLACK);
         bool ok = true;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
     reduction(&& : ok)
         for (ptrdiff_t p = 0; p < np; p++)
-            ok = slab_select(s, (unsigned)p, lim, tail) && ok;
+            ok = mr_part_select(s, (unsigned)p, lim, tail) && ok;
         if (!ok)
             break; /* no memory: stop here */
         size_t nin = 0, nbd = 0;
@@ -1027,8 +990,8 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
         size_t pass_done = 0;
         bool quota_hit = false;
         if (!tail) {
-            set_quotas(s, &g, pt->slab, pt->parts, nin + nbd);
-            const size_t made = apply_slabs(s, pt->slab, pt->parts, g.limit, &worst, &quota_hit);
+            mr_part_quotas(s, &g, pt->slab, pt->parts, nin + nbd);
+            const size_t made = mr_part_apply_slabs(s, pt->slab, pt->parts, g.limit, &worst, &quota_hit);
             prof->interior += made;
             pass_done += made;
             done += made;
@@ -1040,20 +1003,9 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             }
         }
         /* the boundary candidates (a tail pass: all), one global order */
-        const size_t ns = tail ? nin + nbd : nbd;
-        if (!seq_room(pt, ns))
+        size_t k = mr_part_merge(s, tail);
+        if (k == SIZE_MAX)
             break; /* no memory: stop here */
-        size_t k = 0;
-        for (unsigned p = 0; p < pt->parts; p++) {
-            const pslab *sl = &pt->slab[p];
-            if (tail) {
-                memcpy(pt->seq + k, sl->buf, sl->nin * sizeof *pt->seq);
-                k += sl->nin;
-            }
-            memcpy(pt->seq + k, sl->buf + sl->c1 - sl->nbd, sl->nbd * sizeof *pt->seq);
-            k += sl->nbd;
-        }
-        sort_keys(pt->seq, pt->seq_tmp, k);
         if (!tail && !mr_simplifier_reached(s, &g)) {
             size_t made2;
             k = shifted(s, k, &g, &worst, &quota_hit, &made2);
@@ -1063,7 +1015,7 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             pass_done += made2;
             done += made2;
         }
-        const size_t made = sequential(s, k, &g, &worst);
+        const size_t made = mr_part_sequential(s, k, &g, &worst);
         if (tail)
             prof->tail += made;
         else
@@ -1097,6 +1049,11 @@ void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats
     stats->boundary_sequential = p->boundary_seq;
     stats->tail_collapses = p->tail;
     stats->rebalances = p->rebalances;
+    stats->claim_conflicts = p->deferred;
+    stats->rebalance_count = p->trigger[MR_TRIGGER_COUNT];
+    stats->rebalance_imbalance = p->trigger[MR_TRIGGER_IMBALANCE];
+    stats->rebalance_boundary = p->trigger[MR_TRIGGER_BOUNDARY];
+    stats->rebalance_acceptance = p->trigger[MR_TRIGGER_ACCEPTANCE];
 }
 
 unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs)
@@ -1114,7 +1071,7 @@ size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t 
                             size_t cap)
 {
     const mr_partitioned *pt = s->pt;
-    gather(s, INFINITY);
+    mr_part_gather(s, INFINITY);
     size_t n = 0;
     for (unsigned p = 0; p < pt->parts; p++) {
         const pslab *sl = &pt->slab[p];

@@ -280,7 +280,7 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
     if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown collapse kind %d", (int)o->collapse);
-    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_PARTITIONED)
+    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_PARTITIONED_BOUNDARY)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown strategy %d", (int)o->strategy);
     if (mr_strategy_queued(o->strategy) && o->collapse != MR_COLLAPSE_HALF)
@@ -300,7 +300,7 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: %u filter levels: at most %d", o->filter_levels,
                              MR_FILTER_MAX_LEVELS);
-    if (o->strategy == MR_STRATEGY_PARTITIONED && o->partitions > MR_PARTITIONS_MAX)
+    if (o->strategy >= MR_STRATEGY_PARTITIONED && o->partitions > MR_PARTITIONS_MAX)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: %u partitions: at most %d", o->partitions,
                              MR_PARTITIONS_MAX);
@@ -393,7 +393,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     }
 
     s->threads = mr_thread_count(o ? o->threads : 0);
-    if ((!o || o->strategy == MR_STRATEGY_BATCHED || o->strategy == MR_STRATEGY_PARTITIONED) &&
+    if ((!o || o->strategy == MR_STRATEGY_BATCHED || o->strategy >= MR_STRATEGY_PARTITIONED) &&
         !order_is_coherent(indices, triangle_count, vertex_count, s->threads)) {
         st = spatial_order(positions, stride, indices, triangle_count, s->lo, s->hi, s->threads,
                            &s->order, err);
@@ -424,7 +424,8 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     s->keep_volume = o->quality == MR_QUALITY_BEST;
     s->batched = o->strategy == MR_STRATEGY_BATCHED;
     s->queued = mr_strategy_queued(o->strategy) ? (int)o->strategy : 0;
-    s->partitioned = o->strategy == MR_STRATEGY_PARTITIONED;
+    s->partitioned = o->strategy >= MR_STRATEGY_PARTITIONED;
+    s->boundary_aware = o->strategy == MR_STRATEGY_PARTITIONED_BOUNDARY;
     s->partitions = o->partitions ? o->partitions : MR_PARTITIONS_DEFAULT;
     s->filter_levels = o->filter_levels;
     s->multiqueue_factor = o->multiqueue_factor ? o->multiqueue_factor : 2;

@@ -66,6 +66,7 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
 {
     size_t done = s->batched  ? mr_simplifier_run_batched(s, o, max_error)
                   : s->queued ? mr_simplifier_run_queued(s, o, max_error)
+                  : s->boundary_aware ? mr_simplifier_run_partitioned_boundary(s, o, max_error)
                   : s->partitioned ? mr_simplifier_run_partitioned(s, o, max_error)
                               : mr_simplifier_run_greedy(s, o, max_error);
     mr_simplifier_finish(s, o, *max_error);

@@ -41,7 +41,12 @@ static inline bool mr_strategy_queued(int x)
 /* What the partitioned strategy counts (mr_simplify_stats' fields). */
 typedef struct mr_partition_profile {
     size_t passes, interior, boundary, boundary_seq, tail, rebalances;
+    size_t deferred;     /* the boundary-aware variant's claim conflicts */
+    size_t trigger[4];   /* its rebalances by trigger (MR_TRIGGER_*) */
 } mr_partition_profile;
+
+/* The boundary-aware variant's rebalance triggers, as counted. */
+enum { MR_TRIGGER_COUNT, MR_TRIGGER_IMBALANCE, MR_TRIGGER_BOUNDARY, MR_TRIGGER_ACCEPTANCE };
 
 /* What the concurrent-queue strategies count, summed over the threads
  * (mr_simplify_stats' profile fields). */
@@ -64,7 +69,9 @@ struct mr_simplifier {
     unsigned filter_levels, multiqueue_factor; /* its options */
     mr_queued *qd;           /* its state, while it runs */
     mr_queued_profile profile; /* its counts, after the run */
-    int partitioned;         /* MR_STRATEGY_PARTITIONED: partitioned.c */
+    int partitioned;         /* MR_STRATEGY_PARTITIONED(_BOUNDARY): partitioned.c */
+    int boundary_aware;      /* MR_STRATEGY_PARTITIONED_BOUNDARY:
+                                partitioned_boundary.c's run */
     unsigned partitions;     /* its slabs (options.partitions, or the default) */
     mr_partitioned *pt;      /* its state */
     mr_partition_profile pprofile; /* its counts, after the run */
@@ -273,6 +280,8 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err);
 void mr_simplifier_partitioned_free(mr_simplifier *s);
 size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
                                      double *max_error);
+size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplify_options *o,
+                                              double *max_error);
 /* A run's profile as mr_simplify_stats' fields. */
 void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats);
 void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats *stats);

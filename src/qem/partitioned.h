@@ -1,0 +1,228 @@
+/*
+ * What the two partitioned strategies share (partitioned.c: the slabs,
+ * the gathering, the cost threshold and sorting, the quotas and the
+ * sequential tail; partitioned_boundary.c: the boundary-aware variant's
+ * claims and batches). Internal.
+ */
+#ifndef MR_QEM_PARTITIONED_H
+#define MR_QEM_PARTITIONED_H
+
+#include "passes.h"
+
+#include "../core/omp_compat.h"
+
+#include <math.h>
+
+#define NONE MR_COLLAPSE_NONE
+
+/* The slack on the goal-th cheapest cost (as batched.c's PASS_SLACK). */
+#define PASS_SLACK 1.5f
+/* Histogram buckets over the top 16 bits of a cost key. */
+#define HIST_BUCKETS 65536u
+/* Bins of the slab quantiles along the axis. */
+#define SLAB_BINS 4096u
+/* Tail passes (one global order, one thread) once fewer collapses than
+ * this many per slab are needed. */
+#define TAIL_PER_PARTITION 64
+/* Triangles per gathering block (a constant: the candidates' order must
+ * not depend on the thread count). */
+#define BLOCK_TRIANGLES 4096
+/* Edges per call of the vectorised cost planner: gathering, planning. */
+#define GATHER_BATCH 256
+#define PLAN_BATCH 64
+/* How many candidates ahead the three prefetch stages of
+ * mr_collapse_prefetch run (as batched.c's). */
+#define PF0 6
+#define PF1 4
+#define PF2 2
+
+/* pure[] bit: counted in the room bound of this pass (a scratch mark). */
+#define SEEN 2u
+
+/* A candidate edge (a, b) -- a the end whose slab gathered it -- and the
+ * bits of its (float) cost. */
+typedef struct pcand {
+    uint32_t key, a, b;
+} pcand;
+
+/* A candidate's planned collapse: r goes, k stays, at target. */
+typedef struct pplan {
+    double target[3];
+    double cost;
+    uint32_t r, k;
+} pplan;
+
+/* A collapse a claim walk accepted (partitioned_boundary.c): r goes, k
+ * stays, at target; off: where its merged list goes among its batch's
+ * (the sum of the refs room of the collapses before it in the batch). */
+typedef struct paccept {
+    double target[3];
+    double cost;
+    uint32_t r, k;
+    size_t off;
+} paccept;
+
+/* The collapses one claim walk accepted, applied together. */
+typedef struct pbatch {
+    paccept *acc;
+    size_t n, cap;
+    size_t need;          /* their refs room: sum of count[r] + count[k] - 1 */
+} pbatch;
+
+/* One slab's state in a pass. */
+typedef struct pslab {
+    pplan *plan;          /* plan[i]: candidate buf[i]'s (interior ones) */
+    size_t pcap;
+    pcand *buf;           /* its candidates: interior ones in buf[0..nin),
+                             the others in buf[c1 - nbd .. c1) */
+    pcand *tmp;           /* the radix sort's scratch */
+    size_t cap, tcap;     /* their sizes */
+    size_t c1;            /* this pass's bound on its candidates (<= cap) */
+    size_t nin, nbd;
+    size_t next;          /* interior: the next candidate to try */
+    size_t demand;        /* refs room bound of what is left */
+    size_t room0, room1;  /* its room in refs this step, [room0, room1) */
+    size_t qv, qt;        /* quotas: vertices, triangles */
+    size_t gone, deleted, made, refused;
+    double worst;
+    bool paused, quota_hit;
+    size_t gathered;      /* interior candidates gathered (before the
+                             threshold): the load-imbalance trigger's */
+    size_t deferred;      /* claims: candidates whose neighbourhood met a
+                             claimed one (kept in buf[0..keep), with their
+                             plans, for the next round) */
+    size_t keep;
+} pslab;
+
+struct mr_partitioned {
+    unsigned parts;
+    int threads;
+    uint16_t *part;       /* per vertex: its slab */
+    uint16_t *part2;      /* per vertex: its shifted slab (parts + 1 of
+                             them, planes halfway between part's) */
+    pslab *slab2;         /* parts + 1: the boundary step's slabs */
+    uint8_t *in2;         /* per boundary candidate: interior to a shifted
+                             slab */
+    uint32_t *impure;     /* per vertex: the gathering (gen) at which one of
+                             its triangles was found to span slabs */
+    uint32_t gen;         /* the gatherings so far */
+    pcand *bcand;         /* the gathering's blocks: 3 * BLOCK_TRIANGLES
+                             candidates each */
+    size_t nblocks;
+    uint32_t *bcount;     /* per block: candidates; then per block and slab
+                             (2 * parts): interior and boundary counts, then
+                             their offsets in the slab's list */
+    size_t in2_cap;
+    uint8_t *pure;        /* per vertex: SEEN */
+    uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
+    pslab *slab;          /* parts */
+    pcand *seq, *seq_tmp; /* the boundary (or tail) candidates, merged;
+                             the radix sort's scratch */
+    size_t seq_cap, seq_tmp_cap;
+    uint32_t *hist;       /* HIST_BUCKETS per thread */
+    size_t balanced_live; /* live vertices at the last balance */
+    /* partitioned_boundary.c's */
+    uint8_t *claim;       /* per vertex: CLAIM_* bits of this round, or
+                             NULL (the partitioned strategy) */
+    pbatch bbatch;        /* the boundary pass's accepted collapses */
+    pplan *bplan;         /* per merged boundary candidate: its plan, */
+    uint8_t *bstate;      /* and its test (partitioned_boundary.c's B_*) */
+    size_t bcap;
+};
+
+/* claim[] bits: an end of an accepted collapse; in the closed 1-ring of
+ * one (an end is in its own). */
+#define CLAIM_END 1u
+#define CLAIM_RING 2u
+
+/* Is collapse (a, b) free of the claims: neither end claimed (an end of
+ * an accepted collapse, or in the closed 1-ring of one), and no claimed
+ * end among the vertices of their triangles? Lists may hold deleted
+ * triangles (skipped). */
+static inline bool mr_claim_free(const mr_collapse_mesh *m, const uint8_t *claim, uint32_t a,
+                                 uint32_t b)
+{
+    if (claim[a] | claim[b])
+        return false;
+    const uint32_t e[2] = {a, b};
+    for (int j = 0; j < 2; j++) {
+        const uint32_t *list = mr_collapse_vertex_tris(m, e[j]);
+        for (uint32_t i = 0, n = m->count[e[j]]; i < n; i++) {
+            const uint32_t *t = m->tris + (list[i] - list[i] % 3);
+            if (t[0] == NONE)
+                continue;
+            if ((claim[t[0]] | claim[t[1]] | claim[t[2]]) & CLAIM_END)
+                return false;
+        }
+    }
+    return true;
+}
+
+/* Claim collapse (a, b)'s ends and the vertices of their triangles (before
+ * it is applied). */
+static inline void mr_claim_take(const mr_collapse_mesh *m, uint8_t *claim, uint32_t a,
+                                 uint32_t b)
+{
+    const uint32_t e[2] = {a, b};
+    for (int j = 0; j < 2; j++) {
+        const uint32_t *list = mr_collapse_vertex_tris(m, e[j]);
+        for (uint32_t i = 0, n = m->count[e[j]]; i < n; i++) {
+            const uint32_t *t = m->tris + (list[i] - list[i] % 3);
+            if (t[0] == NONE)
+                continue;
+            claim[t[0]] |= CLAIM_RING;
+            claim[t[1]] |= CLAIM_RING;
+            claim[t[2]] |= CLAIM_RING;
+        }
+    }
+    claim[a] = claim[b] = CLAIM_END | CLAIM_RING;
+}
+
+/* ---- partitioned_boundary.c's rebalance triggers (counts only) */
+#define MR_TRIGGER_IMBALANCE_RATIO 1.5
+#define MR_TRIGGER_BOUNDARY_GROWTH 1.25
+#define MR_TRIGGER_ACCEPT_DROP 0.5
+
+typedef struct mr_part_triggers {
+    size_t live;          /* live vertices at the last balance */
+    unsigned passes;      /* passes since */
+    double bfrac, accept; /* the first pass's boundary fraction and
+                             acceptance rate */
+} mr_part_triggers;
+
+/* After a pass (not a tail pass) with `live` vertices left: the trigger
+ * (MR_TRIGGER_*) that asks for a rebalance, or -1. The pass gathered
+ * `gathered` candidates, nbd of them across slabs (the slabs' own counts
+ * in slabs[p].gathered), and made `made` collapses of the `walked`
+ * interior ones it walked. The first pass after a balance sets the
+ * reference rates and never fires. */
+int mr_part_trigger(mr_part_triggers *tr, size_t live, const pslab *slabs, unsigned parts,
+                    size_t gathered, size_t nbd, size_t walked, size_t made);
+
+/* ---- partitioned.c, used by both */
+void mr_part_sort(pcand *c, pcand *tmp, size_t n);
+bool mr_part_room(pcand **buf, size_t *cap, size_t n);
+void mr_part_balance(mr_simplifier *s);
+size_t mr_part_gather(mr_simplifier *s, double limit);
+uint32_t mr_part_rank_key(mr_simplifier *s, size_t n, size_t rank);
+bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail);
+void mr_part_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl, size_t ns,
+                    size_t all);
+size_t mr_part_sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g,
+                          double *worst);
+bool mr_part_seq_room(mr_partitioned *pt, size_t n);
+/* The boundary (all, in a tail pass) candidates of every slab, merged in
+ * one (cost, edge id) order in seq; returns their number, or SIZE_MAX
+ * when out of memory. */
+size_t mr_part_merge(mr_simplifier *s, bool tail);
+/* The slabs sl[0..ns) apply their sorted, planned candidates concurrently,
+ * each in its order on the mesh as it stands (with claims when pt->claim:
+ * the ones a claim defers are kept, see pslab.keep); room in refs by
+ * prefix sums. Returns the collapses made. */
+size_t mr_part_apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double limit,
+                           double *worst, bool *quota_hit);
+/* Slab sl's candidates buf[0..keep) for another round: nin = keep, and
+ * its refs room bound anew (the plans stay: their ends have not moved). */
+void mr_part_next_round(mr_simplifier *s, pslab *sl);
+
+#endif /* MR_QEM_PARTITIONED_H */
