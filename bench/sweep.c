@@ -195,6 +195,8 @@ static const algorithm algorithms[] = {
      MR_QUALITY_BEST},
     {"meshreduce-partitioned", run_simplify, 1, MR_COLLAPSE_FULL, MR_STRATEGY_PARTITIONED, 0, 0,
      MR_QUALITY_DEFAULT},
+    {"meshreduce-part-boundary", run_simplify, 1, MR_COLLAPSE_FULL,
+     MR_STRATEGY_PARTITIONED_BOUNDARY, 0, 0, MR_QUALITY_DEFAULT},
     {"meshopt", run_meshopt, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},
     {"meshopt-sloppy", run_meshopt, 0, 0, 0, 0, 1, MR_QUALITY_DEFAULT},
     {"openmesh", run_openmesh, 0, 0, 0, 0, 0, MR_QUALITY_DEFAULT},

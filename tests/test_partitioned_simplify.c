@@ -730,15 +730,17 @@ static void test_boundary_generated(void **state)
     (void)state;
     strategy = MR_STRATEGY_PARTITIONED_BOUNDARY;
     mr_mesh m;
-    generate(MR_GEN_SCAN, quick() ? 60000 : 150000, &m);
+    generate(MR_GEN_SCAN, quick() ? 40000 : 150000, &m);
     check_mesh("scan", &m, true);
     mr_mesh_free(&m);
     generate(MR_GEN_SPHERE, quick() ? 20000 : 40000, &m);
     check_mesh("sphere", &m, true);
     mr_mesh_free(&m);
-    generate(MR_GEN_TORUS, quick() ? 20000 : 30000, &m);
-    check_mesh("torus with holes", &m, false);
-    mr_mesh_free(&m);
+    if (!quick()) { /* (the quick run's open boundaries: the sheet below) */
+        generate(MR_GEN_TORUS, 30000, &m);
+        check_mesh("torus with holes", &m, false);
+        mr_mesh_free(&m);
+    }
     half_flat(&m, quick() ? 120 : 200);
     mr_simplify_options o;
     options(&o, 16, 1);
@@ -760,10 +762,10 @@ static void test_boundary_generated(void **state)
 static void test_boundary_shared(void **state)
 {
     (void)state;
-    static const char *const names[] = {"stanford-bunny.obj", "fandisk.obj"};
+    static const char *const names[] = {"fandisk.obj", "stanford-bunny.obj"};
     strategy = MR_STRATEGY_PARTITIONED_BOUNDARY;
     size_t found = 0;
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+    for (size_t i = 0; i < (quick() ? 1 : sizeof names / sizeof names[0]); i++) {
         mr_mesh m;
         if (!read_shared(names[i], &m))
             continue;
