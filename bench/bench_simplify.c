@@ -30,6 +30,7 @@
  *   bench_simplify [--runs R] [--quick] [--threads 1,2,...] [--csv FILE]
  *                  [--md FILE] [--samples N] [--data DIR] [--dir DIR]
  *                  [--mesh NAME]... [--others | --no-others] [--keep]
+ *                  [--save DIR]
  *
  * --runs R       timed runs per (mesh, target, algorithm, threads), default
  *                3; the table gives their median, min and max
@@ -53,6 +54,9 @@
  * --others       our other simplifiers too (the default without --quick);
  *                --no-others: only the default simplifier and the peers
  * --keep         keep the temporary files
+ * --save DIR     also write every algorithm's output (the first run's) as
+ *                DIR/MESH-PCT-ALGORITHM.ply (e.g. bunny-10-cgal-lt.ply), for
+ *                `meshreduce render` sheets side by side
  *
  * Exit status 3 when an N-thread output differed from the 1-thread output
  * (or a 1-thread run from the first one): a bug, also printed loudly.
@@ -191,6 +195,7 @@ typedef struct config {
     const char *dir;
     int keep;
     int others;
+    const char *save;         /* --save DIR, or NULL */
     int threads[MAX_THREADS]; /* threads[0] == 1 */
     int n_threads;
     char self[4096];          /* this executable, for --peak-child */
@@ -204,10 +209,31 @@ static int mismatches;
 /* Quality                                                                  */
 /* ------------------------------------------------------------------------ */
 
+/* --save: DIR/MESH-PCT- of the (mesh, target) being measured. */
+static char save_prefix[4400];
+
+/* The surface distance of an output to the input, into r; with --save, the
+ * output written as save_prefix + alg + ".ply" too. */
 static void measure_quality(const config *cfg, const mr_mesh *in, const float *positions,
                             size_t vertex_count, const uint32_t *indices, size_t triangle_count,
-                            row *r)
+                            row *r, const char *alg)
 {
+    if (cfg->save && alg) {
+        mr_mesh out;
+        mr_mesh_init(&out);
+        out.positions = (float *)positions;
+        out.vertex_count = vertex_count;
+        out.indices = (uint32_t *)indices;
+        out.triangle_count = triangle_count;
+        mr_write_options wo;
+        mr_write_options_default(&wo);
+        wo.format = MR_FORMAT_PLY;
+        wo.encoding = MR_ENCODING_BINARY_LE;
+        char path[4500];
+        snprintf(path, sizeof path, "%s%s.ply", save_prefix, alg);
+        mr_error err;
+        bench_check(mr_mesh_write(path, &out, &wo, &err), &err);
+    }
     mr_compare_options opt;
     mr_compare_options_default(&opt);
     opt.samples = cfg->samples;
@@ -398,7 +424,7 @@ static void run_block(const config *cfg, const mr_mesh *in, const char *raw, mes
         r->peak_bytes = peak_of(cfg, raw, ALG_FULL, ratio, cfg->threads[j]);
         if (j == 0 || have_diff[j]) {
             measure_quality(cfg, in, o->positions, o->vertex_count, o->indices,
-                            o->triangle_count, r);
+                            o->triangle_count, r, j == 0 ? alg_name[ALG_FULL] : NULL);
         } else {
             r->hausdorff_rel = ours[0].hausdorff_rel;
             r->rms_rel = ours[0].rms_rel;
@@ -422,7 +448,7 @@ static void run_block(const config *cfg, const mr_mesh *in, const char *raw, mes
             pr[p]->out_vertices = out.vertex_count;
             pr[p]->out_triangles = out.triangle_count;
             measure_quality(cfg, in, out.positions, out.vertex_count, out.indices,
-                            out.triangle_count, pr[p]);
+                            out.triangle_count, pr[p], alg_name[p ? ALG_SLOPPY : ALG_MESHOPT]);
             bench_output_free(&out);
             pr[p]->done = 1;
         }
@@ -454,7 +480,8 @@ static void run_other(const config *cfg, const mr_mesh *in, const char *raw, dou
     r->out_vertices = out.vertex_count;
     r->out_triangles = out.triangle_count;
     r->peak_bytes = peak_of(cfg, raw, alg, ratio, 1);
-    measure_quality(cfg, in, out.positions, out.vertex_count, out.indices, out.triangle_count, r);
+    measure_quality(cfg, in, out.positions, out.vertex_count, out.indices, out.triangle_count, r,
+                    alg_name[alg]);
     mr_simplified_free(&out);
     r->done = 1;
 }
@@ -479,7 +506,7 @@ static void run_openmesh(const config *cfg, const mr_mesh *in, const char *in_pa
         r->out_vertices = out.vertex_count;
         r->out_triangles = out.triangle_count;
         measure_quality(cfg, in, out.positions, out.vertex_count, out.indices,
-                        out.triangle_count, r);
+                        out.triangle_count, r, alg_name[ALG_OPENMESH]);
         r->done = 1;
     }
     bench_output_free(&out);
@@ -498,7 +525,7 @@ static void run_cgal(const config *cfg, const mr_mesh *in, const char *in_path,
         r->out_vertices = out.vertex_count;
         r->out_triangles = out.triangle_count;
         measure_quality(cfg, in, out.positions, out.vertex_count, out.indices,
-                        out.triangle_count, r);
+                        out.triangle_count, r, !strcmp(policy, "lt") ? "cgal-lt" : "cgal-gh");
         r->done = 1;
     }
     bench_output_free(&out);
@@ -708,6 +735,8 @@ static const mesh_spec specs[] = {
     {"fandisk", "fandisk.obj", 0, 0, 0},
     {"homer", "homer.obj", 0, 0, 0},
     {"igea", "igea.ply", 0, 0, 0},
+    {"beast", "beast.obj", 0, 0, 0},
+    {"spot", "spot.obj", 0, 0, 0},
 };
 
 /* Triangles in a random order, the same every run (Fisher-Yates with a
@@ -985,7 +1014,7 @@ static void usage(void)
 {
     fprintf(stderr, "usage: bench_simplify [--runs R] [--quick] [--threads 1,2,...] [--csv FILE] "
                     "[--md FILE] [--samples N] [--data DIR] [--dir DIR] [--mesh NAME]... "
-                    "[--others | --no-others] [--keep]\n");
+                    "[--others | --no-others] [--keep] [--save DIR]\n");
     exit(2);
 }
 
@@ -1071,6 +1100,8 @@ int main(int argc, char **argv)
             cfg.others = 0;
         } else if (!strcmp(argv[i], "--keep")) {
             cfg.keep = 1;
+        } else if (!strcmp(argv[i], "--save") && i + 1 < argc) {
+            cfg.save = argv[++i];
         } else {
             usage();
         }
@@ -1177,6 +1208,9 @@ int main(int argc, char **argv)
             double ratio = target_ratio[ti];
             if (cfg.quick && !(s->quick & (1u << ti)))
                 continue;
+            if (cfg.save)
+                snprintf(save_prefix, sizeof save_prefix, "%s/%s-%g-", cfg.save, s->name,
+                         100 * ratio);
             for (int a = 0; a < ALG_COUNT; a++)
                 for (int j = 0; j < MAX_THREADS; j++) {
                     row *r = &m->rows[ti][a][j];

@@ -147,18 +147,6 @@ static inline uint64_t load_u64(const uint64_t *p, bool par)
     return par ? __atomic_load_n(p, __ATOMIC_RELAXED) : *p;
 }
 
-static inline uint32_t load_u32(const uint32_t *p, bool par)
-{
-    return par ? __atomic_load_n(p, __ATOMIC_RELAXED) : *p;
-}
-
-static inline void store_u32(uint32_t *p, uint32_t v, bool par)
-{
-    if (par)
-        __atomic_store_n(p, v, __ATOMIC_RELAXED);
-    else
-        *p = v;
-}
 
 static inline void store_u64(uint64_t *p, uint64_t v, bool par)
 {
@@ -883,8 +871,9 @@ static size_t find_winners(mr_simplifier *s)
             for (uint32_t j = 0, n = bt->bn[i]; j < n; j++) {
                 const mr_candidate c = cand[j];
                 const uint64_t k = (uint64_t)c.key << 32;
-                const bool win = (load_u64(&best[c.a], SHARED(c.a)) == (k | c.b)) &
-                                 (load_u64(&best[c.b], SHARED(c.b)) == (k | c.a));
+                /* both tests, no branch between them */
+                const bool win = (unsigned)(load_u64(&best[c.a], SHARED(c.a)) == (k | c.b)) &
+                                 (unsigned)(load_u64(&best[c.b], SHARED(c.b)) == (k | c.a));
                 cand[j].key = c.key | (win ? WIN_BIT : 0);
                 wins += win;
             }

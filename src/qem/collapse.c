@@ -32,15 +32,6 @@ static inline bool tri_has(const uint32_t *t, uint32_t x)
     return t[0] == x || t[1] == x || t[2] == x;
 }
 
-/* The vertex of triangle t after / before v. */
-static inline uint32_t tri_next(const uint32_t *t, uint32_t v)
-{
-    return t[0] == v ? t[1] : t[1] == v ? t[2] : t[0];
-}
-static inline uint32_t tri_prev(const uint32_t *t, uint32_t v)
-{
-    return t[0] == v ? t[2] : t[1] == v ? t[0] : t[1];
-}
 
 uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint32_t w)
 {
