@@ -24,6 +24,8 @@
  */
 #include "simplify_internal.h"
 
+#include "../core/omp_compat.h"
+
 #include <math.h>
 
 #define NONE MR_COLLAPSE_NONE
@@ -143,13 +145,18 @@ static void attr_apply(const mr_simplifier *s, uint32_t r, uint32_t k, const dou
 /* ---- seam setup ---------------------------------------------------------------- */
 
 /* Flag seam vertices, lock the complex ones, add the seam edges'
- * constraint quadrics. Returns the number of seam vertices. */
+ * constraint quadrics. Returns the number of seam vertices. Each vertex
+ * writes only its own flags and quadric (and reads lists, triangles and
+ * corners): the vertices run on every thread, with the same result. */
 static size_t setup_seams(mr_simplifier *s)
 {
     size_t seam_vertices = 0;
     mr_collapse_mesh *m = &s->m;
     attr_ctx *a = s->attr;
-    for (size_t vi = 0; vi < m->vertex_count; vi++) {
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+#pragma omp parallel for schedule(dynamic, 4096) num_threads(s->threads) \
+    if (s->threads > 1 && nv > 65536) reduction(+ : seam_vertices)
+    for (ptrdiff_t vi = 0; vi < nv; vi++) {
         const uint32_t v = (uint32_t)vi;
         if (m->flags[v] & (MR_VF_REMOVED | MR_VF_NONMANIFOLD))
             continue;
@@ -262,7 +269,11 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         free_ctx(&a);
         return st;
     }
-    for (size_t c = 0; c < 3 * tc; c++) {
+    const int nth = mr_thread_count(options ? options->threads : 0);
+    const bool par = nth > 1 && tc > 65536;
+    const ptrdiff_t ncorners = (ptrdiff_t)(3 * tc), nvc = (ptrdiff_t)vc, ntc = (ptrdiff_t)tc;
+#pragma omp parallel for schedule(static) num_threads(nth) if (par)
+    for (ptrdiff_t c = 0; c < ncorners; c++) {
         gidx[c] = geo[in->indices[c]];
         a.corner[c] = in->indices[c];
     }
@@ -308,7 +319,8 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
             free_ctx(&a);
             return mr_fail_nomem(err, NULL, 3 * tc * sizeof *corner);
         }
-        for (size_t t = 0; t < tc; t++)
+#pragma omp parallel for schedule(static) num_threads(nth) if (par)
+        for (ptrdiff_t t = 0; t < ntc; t++)
             memcpy(corner + 3 * t, a.corner + 3 * (size_t)s.order[t], 3 * sizeof *corner);
         free(a.corner);
         a.corner = corner;
@@ -327,7 +339,8 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     if (!s.attr_apply) {
         /* wedge of each geometric vertex, kept in geo (no longer needed) */
         const mr_collapse_mesh *m0 = &s.m;
-        for (size_t v = 0; v < vc; v++)
+#pragma omp parallel for schedule(static) num_threads(nth) if (par)
+        for (ptrdiff_t v = 0; v < nvc; v++)
             if (!(m0->flags[v] & MR_VF_REMOVED) && m0->count[v] > 0)
                 geo[v] = a.corner[mr_collapse_vertex_tris(m0, (uint32_t)v)[0]];
     }
@@ -364,12 +377,15 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
 
     /* Output: one vertex per surviving wedge, in input order. */
     const mr_collapse_mesh *m = &s.m;
-    if (!s.attr_apply)
-        for (size_t c = 0; c < 3 * tc; c++)
+    if (!s.attr_apply) {
+#pragma omp parallel for schedule(static) num_threads(nth) if (par)
+        for (ptrdiff_t c = 0; c < ncorners; c++)
             if (m->tris[c - c % 3] != NONE)
                 a.corner[c] = geo[m->tris[c]];
+    }
     uint32_t *remap = geo; /* reused: wedge -> output vertex */
-    for (size_t v = 0; v < vc; v++)
+#pragma omp parallel for schedule(static) num_threads(nth) if (par)
+    for (ptrdiff_t v = 0; v < nvc; v++)
         remap[v] = NONE;
     size_t nt = 0;
     for (size_t t = 0; t < tc; t++) {
