@@ -426,6 +426,19 @@ static double rms_of(const mr_mesh *m, const mr_simplified *r)
     return res.rms;
 }
 
+/* The RMS distance of y's output over x's (both run on m), printed; y's
+ * within `bound` times x's. */
+static void rms_within(const char *name, const mr_mesh *m, double ratio, const char *xname,
+                       const mr_simplified *x, const char *yname, const mr_simplified *y,
+                       double bound)
+{
+    const double a = rms_of(m, x), b = rms_of(m, y);
+    print_message("%s at %g: RMS %s %.6g, %s %.6g (%+.2f %%)\n", name, ratio, xname, a, yname,
+                  b, 100.0 * (b / a - 1));
+    assert_int_equal(y->vertex_count, x->vertex_count);
+    assert_true(b <= bound * a);
+}
+
 static void check_one_partition(const char *name, const mr_mesh *m, size_t nratios)
 {
     static const double ratios[] = {0.1, 0.01};
@@ -439,29 +452,32 @@ static void check_one_partition(const char *name, const mr_mesh *m, size_t nrati
         o.target_ratio = ratios[i];
         run(m, &o, &one);
         assert_int_equal(one.stats.boundary_collapses, 0);
-        assert_int_equal(one.vertex_count, def.vertex_count);
-        const double a = rms_of(m, &def), b = rms_of(m, &one);
-        print_message("%s at %g: RMS default %.6g, one partition %.6g (%+.2f %%)\n", name,
-                      ratios[i], a, b, 100.0 * (b / a - 1));
-        assert_true(b <= 1.01 * a);
+        rms_within(name, m, ratios[i], "default", &def, "one partition", &one, 1.01);
         mr_simplified_free(&def);
         mr_simplified_free(&one);
     }
 }
 
-static void test_one_partition(void **state)
+/* check(name, mesh, ratios) on the bunny (when present) and a generated
+ * scan. */
+static void on_bunny_and_scan(void (*check)(const char *, const mr_mesh *, size_t))
 {
-    (void)state;
     mr_mesh m;
     if (read_shared("stanford-bunny.obj", &m)) {
-        check_one_partition("bunny", &m, 2);
+        check("bunny", &m, 2);
         mr_mesh_free(&m);
     }
     /* (the quick scan's 1 % -- 200 vertices -- is too coarse to compare
      * within 1 %) */
     generate(MR_GEN_SCAN, quick() ? 40000 : 200000, &m);
-    check_one_partition("scan", &m, quick() ? 1 : 2);
+    check("scan", &m, quick() ? 1 : 2);
     mr_mesh_free(&m);
+}
+
+static void test_one_partition(void **state)
+{
+    (void)state;
+    on_bunny_and_scan(check_one_partition);
 }
 
 /* ---- options and CLI ---------------------------------------------------------- */
@@ -799,11 +815,7 @@ static void check_boundary_quality(const char *name, const mr_mesh *m, size_t nr
         run(m, &o, &one);
         strategy = MR_STRATEGY_PARTITIONED;
         assert_int_equal(one.stats.boundary_collapses, 0);
-        assert_int_equal(bnd.vertex_count, part.vertex_count);
-        const double a = rms_of(m, &part), b = rms_of(m, &bnd);
-        print_message("%s at %g: RMS partitioned %.6g, boundary-aware %.6g (%+.2f %%)\n", name,
-                      ratios[i], a, b, 100.0 * (b / a - 1));
-        assert_true(b <= 1.05 * a);
+        rms_within(name, m, ratios[i], "partitioned", &part, "boundary-aware", &bnd, 1.05);
         mr_simplified_free(&part);
         mr_simplified_free(&bnd);
         mr_simplified_free(&one);
@@ -813,14 +825,7 @@ static void check_boundary_quality(const char *name, const mr_mesh *m, size_t nr
 static void test_boundary_quality(void **state)
 {
     (void)state;
-    mr_mesh m;
-    if (read_shared("stanford-bunny.obj", &m)) {
-        check_boundary_quality("bunny", &m, 2);
-        mr_mesh_free(&m);
-    }
-    generate(MR_GEN_SCAN, quick() ? 40000 : 200000, &m);
-    check_boundary_quality("scan", &m, quick() ? 1 : 2);
-    mr_mesh_free(&m);
+    on_bunny_and_scan(check_boundary_quality);
 }
 
 int main(void)

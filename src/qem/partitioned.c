@@ -944,6 +944,40 @@ bool mr_part_seq_room(mr_partitioned *pt, size_t n)
     return mr_part_room(&pt->seq, &pt->seq_cap, n) && mr_part_room(&pt->seq_tmp, &pt->seq_tmp_cap, n);
 }
 
+bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bool force_tail,
+                   mr_part_pass *ps)
+{
+    mr_partitioned *pt = s->pt;
+    const ptrdiff_t np = (ptrdiff_t)pt->parts;
+    const bool par = pt->threads > 1 && np > 1;
+    ps->n = mr_part_gather(s, g->limit);
+    if (ps->n == 0)
+        return false;
+    const size_t needed = mr_needed_collapses(s, g);
+    ps->tail = force_tail || needed < (size_t)TAIL_PER_PARTITION * pt->parts;
+    const double goal = ceil(share * (double)needed);
+    uint32_t lim = UINT32_MAX;
+    if (goal < (double)ps->n)
+        lim = mr_float_key(mr_key_float(mr_part_rank_key(s, ps->n, (size_t)goal)) * PASS_SLACK);
+    ps->nbd_all = 0;
+    for (unsigned p = 0; p < pt->parts; p++)
+        ps->nbd_all += pt->slab[p].nbd;
+    bool ok = true;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
+    reduction(&& : ok)
+    for (ptrdiff_t p = 0; p < np; p++)
+        ok = mr_part_select(s, (unsigned)p, lim, ps->tail) && ok;
+    if (!ok)
+        return false; /* no memory: stop here */
+    ps->nin = ps->nbd = 0;
+    for (unsigned p = 0; p < pt->parts; p++) {
+        ps->nin += pt->slab[p].nin;
+        ps->nbd += pt->slab[p].nbd;
+    }
+    memset(pt->mark, 0, s->m.vertex_count);
+    return true;
+}
+
 size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
                                      double *max_error)
 {
@@ -955,58 +989,33 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
     size_t next_report = g.planned / 100 + 1, done = 0;
     double worst = 0, share = 1.0;
     bool force_tail = false;
-    const ptrdiff_t np = (ptrdiff_t)pt->parts;
-    const bool par = pt->threads > 1 && np > 1;
     memset(prof, 0, sizeof *prof);
     while (!mr_simplifier_reached(s, &g)) {
         if (2 * m->live_vertices <= pt->balanced_live) {
             mr_part_balance(s);
             prof->rebalances++;
         }
-        const size_t n = mr_part_gather(s, g.limit);
-        if (n == 0)
+        mr_part_pass ps;
+        if (!mr_part_begin(s, &g, share, force_tail, &ps))
             break;
         prof->passes++;
-        const size_t needed = mr_needed_collapses(s, &g);
-        const bool tail = force_tail || needed < (size_t)TAIL_PER_PARTITION * pt->parts;
-        const double goal = ceil(share * (double)needed);
-        uint32_t lim = UINT32_MAX;
-        if (goal < (double)n)
-            lim = mr_float_key(mr_key_float(mr_part_rank_key(s, n, (size_t)goal)) * PASS_SLACK);
-        bool ok = true;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
-    reduction(&& : ok)
-        for (ptrdiff_t p = 0; p < np; p++)
-            ok = mr_part_select(s, (unsigned)p, lim, tail) && ok;
-        if (!ok)
-            break; /* no memory: stop here */
-        size_t nin = 0, nbd = 0;
-        for (unsigned p = 0; p < pt->parts; p++) {
-            nin += pt->slab[p].nin;
-            nbd += pt->slab[p].nbd;
-        }
-        const bool partial = nin + nbd < n;
-        memset(pt->mark, 0, m->vertex_count);
         size_t pass_done = 0;
         bool quota_hit = false;
-        if (!tail) {
-            mr_part_quotas(s, &g, pt->slab, pt->parts, nin + nbd);
-            const size_t made = mr_part_apply_slabs(s, pt->slab, pt->parts, g.limit, &worst, &quota_hit);
+        if (!ps.tail) {
+            mr_part_quotas(s, &g, pt->slab, pt->parts, ps.nin + ps.nbd);
+            const size_t made =
+                mr_part_apply_slabs(s, pt->slab, pt->parts, g.limit, &worst, &quota_hit);
             prof->interior += made;
             pass_done += made;
             done += made;
-            if (o->progress && done >= next_report) {
-                if (mr_simplifier_progress(s, o,
-                                           g.planned ? (double)done / (double)g.planned : 1.0))
-                    break; /* cancelled */
-                next_report = done + g.planned / 100 + 1;
-            }
+            if (mr_part_progress(s, o, &g, done, &next_report))
+                break; /* cancelled */
         }
         /* the boundary candidates (a tail pass: all), one global order */
-        size_t k = mr_part_merge(s, tail);
+        size_t k = mr_part_merge(s, ps.tail);
         if (k == SIZE_MAX)
             break; /* no memory: stop here */
-        if (!tail && !mr_simplifier_reached(s, &g)) {
+        if (!ps.tail && !mr_simplifier_reached(s, &g)) {
             size_t made2;
             k = shifted(s, k, &g, &worst, &quota_hit, &made2);
             if (k == SIZE_MAX)
@@ -1016,25 +1025,17 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             done += made2;
         }
         const size_t made = mr_part_sequential(s, k, &g, &worst);
-        if (tail)
+        if (ps.tail)
             prof->tail += made;
         else
             prof->boundary_seq += made;
         pass_done += made;
         done += made;
-        if (o->progress && done >= next_report) {
-            if (mr_simplifier_progress(s, o, g.planned ? (double)done / (double)g.planned : 1.0))
-                break; /* cancelled */
-            next_report = done + g.planned / 100 + 1;
-        }
+        if (mr_part_progress(s, o, &g, done, &next_report))
+            break; /* cancelled */
         force_tail = quota_hit;
-        if (pass_done == 0) {
-            if (!partial)
-                break; /* nothing valid is left */
-            share *= 4; /* the cheapest are all invalid: look further */
-        } else {
-            share = 1.0;
-        }
+        if (!mr_part_next(pass_done, &ps, &share))
+            break; /* nothing valid is left */
     }
     mr_simplifier_progress(s, o, 1.0);
     *max_error = mr_simplifier_error(s, o, sqrt(worst));

@@ -135,26 +135,34 @@ struct mr_partitioned {
 #define CLAIM_END 1u
 #define CLAIM_RING 2u
 
+/* Runs the block with t set to each live triangle of a and then of b (a
+ * list may hold deleted triangles: skipped). */
+#define MR_FOR_EACH_RING_TRIANGLE(m, a, b, t, ...)                                      \
+    do {                                                                               \
+        const uint32_t e_[2] = {(a), (b)};                                             \
+        for (int j_ = 0; j_ < 2; j_++) {                                               \
+            const uint32_t *list_ = mr_collapse_vertex_tris((m), e_[j_]);              \
+            for (uint32_t i_ = 0, n_ = (m)->count[e_[j_]]; i_ < n_; i_++) {            \
+                const uint32_t *t = (m)->tris + (list_[i_] - list_[i_] % 3);           \
+                if (t[0] == NONE)                                                      \
+                    continue;                                                          \
+                __VA_ARGS__                                                            \
+            }                                                                          \
+        }                                                                              \
+    } while (0)
+
 /* Is collapse (a, b) free of the claims: neither end claimed (an end of
  * an accepted collapse, or in the closed 1-ring of one), and no claimed
- * end among the vertices of their triangles? Lists may hold deleted
- * triangles (skipped). */
+ * end among the vertices of their triangles? */
 static inline bool mr_claim_free(const mr_collapse_mesh *m, const uint8_t *claim, uint32_t a,
                                  uint32_t b)
 {
     if (claim[a] | claim[b])
         return false;
-    const uint32_t e[2] = {a, b};
-    for (int j = 0; j < 2; j++) {
-        const uint32_t *list = mr_collapse_vertex_tris(m, e[j]);
-        for (uint32_t i = 0, n = m->count[e[j]]; i < n; i++) {
-            const uint32_t *t = m->tris + (list[i] - list[i] % 3);
-            if (t[0] == NONE)
-                continue;
-            if ((claim[t[0]] | claim[t[1]] | claim[t[2]]) & CLAIM_END)
-                return false;
-        }
-    }
+    MR_FOR_EACH_RING_TRIANGLE(m, a, b, t, {
+        if ((claim[t[0]] | claim[t[1]] | claim[t[2]]) & CLAIM_END)
+            return false;
+    });
     return true;
 }
 
@@ -163,18 +171,11 @@ static inline bool mr_claim_free(const mr_collapse_mesh *m, const uint8_t *claim
 static inline void mr_claim_take(const mr_collapse_mesh *m, uint8_t *claim, uint32_t a,
                                  uint32_t b)
 {
-    const uint32_t e[2] = {a, b};
-    for (int j = 0; j < 2; j++) {
-        const uint32_t *list = mr_collapse_vertex_tris(m, e[j]);
-        for (uint32_t i = 0, n = m->count[e[j]]; i < n; i++) {
-            const uint32_t *t = m->tris + (list[i] - list[i] % 3);
-            if (t[0] == NONE)
-                continue;
-            claim[t[0]] |= CLAIM_RING;
-            claim[t[1]] |= CLAIM_RING;
-            claim[t[2]] |= CLAIM_RING;
-        }
-    }
+    MR_FOR_EACH_RING_TRIANGLE(m, a, b, t, {
+        claim[t[0]] |= CLAIM_RING;
+        claim[t[1]] |= CLAIM_RING;
+        claim[t[2]] |= CLAIM_RING;
+    });
     claim[a] = claim[b] = CLAIM_END | CLAIM_RING;
 }
 
@@ -215,6 +216,47 @@ bool mr_part_seq_room(mr_partitioned *pt, size_t n);
  * one (cost, edge id) order in seq; returns their number, or SIZE_MAX
  * when out of memory. */
 size_t mr_part_merge(mr_simplifier *s, bool tail);
+
+/* What a pass's start found (mr_part_begin). */
+typedef struct mr_part_pass {
+    size_t n;        /* candidates gathered */
+    size_t nbd_all;  /* of those across slabs */
+    size_t nin, nbd; /* under the pass's threshold: interior, across */
+    bool tail;       /* a tail pass: every candidate in one order */
+} mr_part_pass;
+
+/* A pass's start, the same in both strategies: gather, the cost threshold
+ * (the goal-th cheapest key -- goal: the collapses still needed, times
+ * `share` -- times PASS_SLACK), each slab's selection, the marks cleared.
+ * A tail pass when force_tail or few collapses are left. False when
+ * nothing is left to gather or memory ran out: the run ends. */
+bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bool force_tail,
+                   mr_part_pass *ps);
+
+/* Report progress once `done` collapses pass *next (then moved on a
+ * hundredth of the plan); true when the callback asked to stop. */
+static inline bool mr_part_progress(mr_simplifier *s, const mr_simplify_options *o,
+                                    const mr_simplify_goal *g, size_t done, size_t *next)
+{
+    if (!o->progress || done < *next)
+        return false;
+    *next = done + g->planned / 100 + 1;
+    return mr_simplifier_progress(s, o, g->planned ? (double)done / (double)g->planned : 1.0);
+}
+
+/* After a pass that made `made` collapses: false when the run is over
+ * (nothing valid was left under the threshold, and it held every
+ * candidate); else the next pass's share of the goal (widened 4x after a
+ * pass that made nothing: the cheapest were all invalid). */
+static inline bool mr_part_next(size_t made, const mr_part_pass *ps, double *share)
+{
+    if (made) {
+        *share = 1.0;
+        return true;
+    }
+    *share *= 4;
+    return ps->nin + ps->nbd < ps->n;
+}
 /* The slabs sl[0..ns) apply their sorted, planned candidates concurrently,
  * each in its order on the mesh as it stands (with claims when pt->claim:
  * the ones a claim defers are kept, see pslab.keep); room in refs by

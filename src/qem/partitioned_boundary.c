@@ -231,6 +231,31 @@ static bool apply_batch(mr_simplifier *s, pbatch *b)
 /* bstate[]: a boundary candidate's test before the walk. */
 enum { B_SKIP, B_VALID, B_WALK };
 
+/* The lists, triangles, quadrics and claims of the boundary candidates a
+ * few turns after seq[i] (of seq[0..n)), in stages (the merged order jumps
+ * about the mesh); with `state`, those it skips left out. */
+static inline void prefetch_ahead(const mr_simplifier *s, size_t i, size_t n,
+                                  const uint8_t *state)
+{
+    const mr_partitioned *pt = s->pt;
+    const mr_collapse_mesh *m = &s->m;
+    static const size_t ahead[3] = {PF0, PF1, PF2};
+    for (int st = 0; st < 3; st++) {
+        const size_t j = i + ahead[st];
+        if (j >= n || (state && state[j] == B_SKIP))
+            continue;
+        const pcand y = pt->seq[j];
+        mr_collapse_prefetch(m, y.a, st);
+        mr_collapse_prefetch(m, y.b, st);
+        if (st == 1) {
+            __builtin_prefetch(s->q + y.a);
+            __builtin_prefetch(s->q + y.b);
+            __builtin_prefetch(pt->claim + y.a);
+            __builtin_prefetch(pt->claim + y.b);
+        }
+    }
+}
+
 /* Step 3's tests, on every thread, on the mesh as it stands (no collapse
  * runs meanwhile, and the walk changes nothing before its batch is
  * applied, so each result is the one the walk would find): each candidate
@@ -258,20 +283,7 @@ static bool boundary_test(mr_simplifier *s, size_t n, double limit)
 #pragma omp parallel for schedule(dynamic, 256) num_threads(pt->threads) \
     if (pt->threads > 1 && nn > 4096)
     for (ptrdiff_t i = 0; i < nn; i++) {
-        static const ptrdiff_t ahead[3] = {PF0, PF1, PF2};
-        for (int st = 0; st < 3; st++) {
-            if (i + ahead[st] < nn) {
-                const pcand y = pt->seq[i + ahead[st]];
-                mr_collapse_prefetch(m, y.a, st);
-                mr_collapse_prefetch(m, y.b, st);
-                if (st == 1) {
-                    __builtin_prefetch(s->q + y.a);
-                    __builtin_prefetch(s->q + y.b);
-                    __builtin_prefetch(m->pos + 3 * (size_t)y.a);
-                    __builtin_prefetch(m->pos + 3 * (size_t)y.b);
-                }
-            }
-        }
+        prefetch_ahead(s, (size_t)i, (size_t)nn, NULL);
         const pcand e = pt->seq[i];
         if (pt->mark[e.a] | pt->mark[e.b]) {
             pt->bstate[i] = B_SKIP;
@@ -313,20 +325,7 @@ static bool boundary_claim(mr_simplifier *s, size_t *n, const mr_simplify_goal *
             keep = 0; /* the targets: no next round */
             break;
         }
-        /* the lists and triangles of the candidates a few turns ahead,
-         * in stages (the walk jumps about the mesh) */
-        static const size_t ahead[3] = {PF0, PF1, PF2};
-        for (int st = 0; st < 3; st++) {
-            if (i + ahead[st] < *n && pt->bstate[i + ahead[st]] != B_SKIP) {
-                const pcand y = pt->seq[i + ahead[st]];
-                mr_collapse_prefetch(m, y.a, st);
-                mr_collapse_prefetch(m, y.b, st);
-                if (st == 1) {
-                    __builtin_prefetch(pt->claim + y.a);
-                    __builtin_prefetch(pt->claim + y.b);
-                }
-            }
-        }
+        prefetch_ahead(s, i, *n, pt->bstate);
         if (pt->bstate[i] == B_SKIP)
             continue; /* an end moved this pass, or not allowed */
         const pcand e = pt->seq[i];
@@ -406,38 +405,15 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
             tr = (mr_part_triggers){m->live_vertices, 0, 0, 0};
             rebalance = false;
         }
-        const size_t n = mr_part_gather(s, g.limit);
-        if (n == 0)
+        mr_part_pass ps;
+        if (!mr_part_begin(s, &g, share, force_tail, &ps))
             break;
         prof->passes++;
-        const size_t needed = mr_needed_collapses(s, &g);
-        const bool tail = force_tail || needed < (size_t)TAIL_PER_PARTITION * pt->parts;
-        const double goal = ceil(share * (double)needed);
-        uint32_t lim = UINT32_MAX;
-        if (goal < (double)n)
-            lim = mr_float_key(mr_key_float(mr_part_rank_key(s, n, (size_t)goal)) * PASS_SLACK);
-        size_t nbd_all = 0;
-        for (unsigned p = 0; p < pt->parts; p++)
-            nbd_all += pt->slab[p].nbd;
-        bool ok = true;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(pt->threads) if (par) \
-    reduction(&& : ok)
-        for (ptrdiff_t p = 0; p < np; p++)
-            ok = mr_part_select(s, (unsigned)p, lim, tail) && ok;
-        if (!ok)
-            break; /* no memory: stop here */
-        size_t nin = 0, nbd = 0;
-        for (unsigned p = 0; p < pt->parts; p++) {
-            nin += pt->slab[p].nin;
-            nbd += pt->slab[p].nbd;
-        }
-        const bool partial = nin + nbd < n;
-        memset(pt->mark, 0, m->vertex_count);
         size_t pass_done = 0, made_in = 0;
-        bool quota_hit = false;
-        if (!tail) {
+        bool quota_hit = false, ok = true;
+        if (!ps.tail) {
             /* steps 1 and 2 */
-            mr_part_quotas(s, &g, pt->slab, pt->parts, nin + nbd);
+            mr_part_quotas(s, &g, pt->slab, pt->parts, ps.nin + ps.nbd);
             for (unsigned round = 0; round < ROUNDS; round++) {
                 memset(pt->claim, 0, m->vertex_count);
                 for (unsigned p = 0; p < pt->parts; p++)
@@ -459,18 +435,14 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
             prof->interior += made_in;
             pass_done += made_in;
             done += made_in;
-            if (o->progress && done >= next_report) {
-                if (mr_simplifier_progress(s, o,
-                                           g.planned ? (double)done / (double)g.planned : 1.0))
-                    break; /* cancelled */
-                next_report = done + g.planned / 100 + 1;
-            }
+            if (mr_part_progress(s, o, &g, done, &next_report))
+                break; /* cancelled */
         }
         /* step 3 (a tail pass: step 4 on all the candidates) */
-        size_t k = mr_part_merge(s, tail);
+        size_t k = mr_part_merge(s, ps.tail);
         if (k == SIZE_MAX)
             break; /* no memory: stop here */
-        if (tail) {
+        if (ps.tail) {
             const size_t made = mr_part_sequential(s, k, &g, &worst);
             prof->tail += made;
             pass_done += made;
@@ -492,27 +464,19 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
             if (!ok)
                 break; /* no memory: stop here */
         }
-        if (o->progress && done >= next_report) {
-            if (mr_simplifier_progress(s, o, g.planned ? (double)done / (double)g.planned : 1.0))
-                break; /* cancelled */
-            next_report = done + g.planned / 100 + 1;
-        }
+        if (mr_part_progress(s, o, &g, done, &next_report))
+            break; /* cancelled */
         force_tail = quota_hit;
-        if (!tail) {
-            const int why = mr_part_trigger(&tr, m->live_vertices, pt->slab, pt->parts, n,
-                                            nbd_all, nin, made_in);
+        if (!ps.tail) {
+            const int why = mr_part_trigger(&tr, m->live_vertices, pt->slab, pt->parts, ps.n,
+                                            ps.nbd_all, ps.nin, made_in);
             if (why >= 0) {
                 prof->trigger[why]++;
                 rebalance = true;
             }
         }
-        if (pass_done == 0) {
-            if (!partial)
-                break; /* nothing valid is left */
-            share *= 4; /* the cheapest are all invalid: look further */
-        } else {
-            share = 1.0;
-        }
+        if (!mr_part_next(pass_done, &ps, &share))
+            break; /* nothing valid is left */
     }
     mr_simplifier_progress(s, o, 1.0);
     *max_error = mr_simplifier_error(s, o, sqrt(worst));
