@@ -92,7 +92,7 @@ static int by_edge(const void *x, const void *y)
  * the same digit), then each run of equal keys by edge id (such runs are
  * short but for the many zero-cost edges of flat parts). The order then
  * comes from the mesh alone, not from where an edge was gathered. */
-void mr_part_sort(pcand *c, pcand *tmp, size_t n)
+static void mr_part_sort(pcand *c, pcand *tmp, size_t n)
 {
     static const unsigned shift[3] = {0, 11, 22}, bits[3] = {11, 11, 10};
     pcand *src = c, *dst = tmp;
@@ -129,7 +129,7 @@ void mr_part_sort(pcand *c, pcand *tmp, size_t n)
 }
 
 /* Room for n entries in *buf (contents dropped). */
-bool mr_part_room(pcand **buf, size_t *cap, size_t n)
+static bool mr_part_room(pcand **buf, size_t *cap, size_t n)
 {
     if (n <= *cap && *buf)
         return true;
@@ -406,7 +406,7 @@ static void block_scatter(mr_partitioned *pt, size_t blk)
  * Lists are only read (no cleaning). Returns the candidates' number, or 0
  * when out of memory.
  */
-size_t mr_part_gather(mr_simplifier *s, double limit)
+static size_t mr_part_gather(mr_simplifier *s, double limit)
 {
     mr_partitioned *pt = s->pt;
     const mr_collapse_mesh *m = &s->m;
@@ -464,7 +464,7 @@ size_t mr_part_gather(mr_simplifier *s, double limit)
 
 /* The key below which at least rank + 1 of the n candidates lie, to the
  * resolution of the top 16 bits (as batched.c's rank_key). */
-uint32_t mr_part_rank_key(mr_simplifier *s, size_t n, size_t rank)
+static uint32_t mr_part_rank_key(mr_simplifier *s, size_t n, size_t rank)
 {
     mr_partitioned *pt = s->pt;
     const int nt = n > 65536 ? pt->threads : 1;
@@ -561,7 +561,7 @@ static void add_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl)
  * its collapses can take: the list lengths of the distinct ends (each
  * vertex is an end once a pass, and its list does not grow before).
  * Returns false when out of memory. */
-bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
+static bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
 {
     mr_partitioned *pt = s->pt;
     const mr_collapse_mesh *m = &s->m;
@@ -916,6 +916,12 @@ size_t mr_part_sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g,
     return made;
 }
 
+/* Room for n merged candidates in seq. */
+static bool mr_part_seq_room(mr_partitioned *pt, size_t n)
+{
+    return mr_part_room(&pt->seq, &pt->seq_cap, n) && mr_part_room(&pt->seq_tmp, &pt->seq_tmp_cap, n);
+}
+
 size_t mr_part_merge(mr_simplifier *s, bool tail)
 {
     mr_partitioned *pt = s->pt;
@@ -938,11 +944,6 @@ size_t mr_part_merge(mr_simplifier *s, bool tail)
     return k;
 }
 
-/* Room for n merged candidates in seq. */
-bool mr_part_seq_room(mr_partitioned *pt, size_t n)
-{
-    return mr_part_room(&pt->seq, &pt->seq_cap, n) && mr_part_room(&pt->seq_tmp, &pt->seq_tmp_cap, n);
-}
 
 bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bool force_tail,
                    mr_part_pass *ps)

@@ -201,17 +201,11 @@ int mr_part_trigger(mr_part_triggers *tr, size_t live, const pslab *slabs, unsig
                     size_t gathered, size_t nbd, size_t walked, size_t made);
 
 /* ---- partitioned.c, used by both */
-void mr_part_sort(pcand *c, pcand *tmp, size_t n);
-bool mr_part_room(pcand **buf, size_t *cap, size_t n);
 void mr_part_balance(mr_simplifier *s);
-size_t mr_part_gather(mr_simplifier *s, double limit);
-uint32_t mr_part_rank_key(mr_simplifier *s, size_t n, size_t rank);
-bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail);
 void mr_part_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl, size_t ns,
                     size_t all);
 size_t mr_part_sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g,
                           double *worst);
-bool mr_part_seq_room(mr_partitioned *pt, size_t n);
 /* The boundary (all, in a tail pass) candidates of every slab, merged in
  * one (cost, edge id) order in seq; returns their number, or SIZE_MAX
  * when out of memory. */

@@ -124,10 +124,9 @@ static void accept(mr_partitioned *pt, const mr_collapse_mesh *m, pbatch *b, uin
     b->need += (size_t)m->count[r] + m->count[k] - 1;
 }
 
-/* An item of a batch's application: collapses [i0, i1) of batch b, their
- * merged lists from refs + base on. */
+/* An item of a batch's application: its collapses [i0, i1), their merged
+ * lists from refs + base on (need entries in all). */
 typedef struct pitem {
-    pbatch *b;
     size_t i0, i1, need, base;
 } pitem;
 
@@ -167,7 +166,7 @@ static bool apply_batch(mr_simplifier *s, pbatch *b)
     for (size_t j = 0; j < ni; j++) {
         const size_t i0 = j * APPLY_ITEM, i1 = b->n - i0 < APPLY_ITEM ? b->n : i0 + APPLY_ITEM;
         const size_t end = i1 < b->n ? b->acc[i1].off : b->need;
-        items[j] = (pitem){b, i0, i1, end - b->acc[i0].off, 0};
+        items[j] = (pitem){i0, i1, end - b->acc[i0].off, 0};
     }
     size_t gone = 0, deleted = 0;
     for (size_t k0 = 0; k0 < ni;) {
@@ -183,10 +182,10 @@ static bool apply_batch(mr_simplifier *s, pbatch *b)
             /* too big for the room even after compaction: one at a time */
             const pitem *it = &items[k0];
             for (size_t i = it->i0; i < it->i1; i++) {
-                const size_t need = acc_need(it->b, i);
+                const size_t need = acc_need(b, i);
                 if (m->refs_size + need > m->refs_capacity)
                     mr_collapse_compact(m);
-                apply_one(s, &it->b->acc[i], need, m->refs + m->refs_size, &gone, &deleted);
+                apply_one(s, &b->acc[i], need, m->refs + m->refs_size, &gone, &deleted);
                 m->refs_size += need;
             }
             k0++;
@@ -198,14 +197,14 @@ static bool apply_batch(mr_simplifier *s, pbatch *b)
     if (pt->threads > 1 && hi - lo > 1) reduction(+ : gone, deleted)
         for (ptrdiff_t q = lo; q < hi; q++) {
             const pitem *it = &items[q];
-            const size_t first = it->b->acc[it->i0].off;
+            const size_t first = b->acc[it->i0].off;
             for (size_t i = it->i0; i < it->i1; i++) {
                 /* the collapses a few turns ahead, in stages (the walk's
                  * cache lines are long gone) */
                 static const size_t ahead[3] = {PF0, PF1, PF2};
                 for (int st = 0; st < 3; st++) {
                     if (i + ahead[st] < it->i1) {
-                        const paccept *y = &it->b->acc[i + ahead[st]];
+                        const paccept *y = &b->acc[i + ahead[st]];
                         mr_collapse_prefetch(m, y->r, st);
                         mr_collapse_prefetch(m, y->k, st);
                         if (st == 1) {
@@ -215,8 +214,8 @@ static bool apply_batch(mr_simplifier *s, pbatch *b)
                         }
                     }
                 }
-                const paccept *x = &it->b->acc[i];
-                apply_one(s, x, acc_need(it->b, i), m->refs + it->base + (x->off - first),
+                const paccept *x = &b->acc[i];
+                apply_one(s, x, acc_need(b, i), m->refs + it->base + (x->off - first),
                           &gone, &deleted);
             }
         }
