@@ -1,7 +1,15 @@
+/* madvise and MADV_HUGEPAGE (Linux) are beyond POSIX */
+#define _DEFAULT_SOURCE 1
+
 /* Error records and the library's small shared utilities. */
 #include "internal.h"
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 #include <stdio.h>
+#include <string.h>
 #include <time.h>
 
 #include "omp_compat.h"
@@ -74,12 +82,61 @@ mr_status mr_fail_nomem(mr_error *err, const char *name, size_t bytes)
                          bytes);
 }
 
+/*
+ * Large arrays on huge pages where the system offers them on request
+ * (Linux transparent huge pages in "madvise" or "always" mode): a 2 MiB
+ * page costs one page fault where 4 KiB pages cost 512, and one TLB entry
+ * instead of 512 -- the simplifiers read their arrays at random. A block
+ * gets the huge pages inside it, and the one it ends in when that wastes
+ * at most an eighth of the block (so the resident memory grows by at most
+ * that). Measured on a 2-core KVM guest, where a 4 KiB page fault cost
+ * about 12 us: `meshreduce simplify` of a 1M-triangle scan to 10 % went
+ * from 37,500 page faults to 1,450 and from 1.48 to 0.79 s (1 thread), 0.89
+ * to 0.51 s (2 threads). MR_HUGE_PAGES=0 in the environment turns it off
+ * (for comparisons). Elsewhere, or when madvise refuses, these are plain
+ * blocks; every block is freed by free() as any other.
+ */
+#define HUGE_PAGE ((size_t)2 << 20)
+
+static bool huge_pages(void)
+{
+    static int on = -1; /* unknown yet; every thread finds the same answer */
+    int v = __atomic_load_n(&on, __ATOMIC_RELAXED);
+    if (v < 0) {
+        const char *e = getenv("MR_HUGE_PAGES");
+        v = !(e && strcmp(e, "0") == 0);
+        __atomic_store_n(&on, v, __ATOMIC_RELAXED);
+    }
+    return v;
+}
+
+/* How much of a block of `bytes` to put on huge pages (0: none). */
+static size_t huge_span(size_t bytes)
+{
+    const size_t up = (bytes + HUGE_PAGE - 1) & ~(HUGE_PAGE - 1);
+    return up - bytes <= bytes / 8 ? up : bytes & ~(HUGE_PAGE - 1);
+}
+
+static void *alloc_bytes(size_t bytes)
+{
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    const size_t huge = huge_span(bytes);
+    if (huge && huge_pages()) {
+        void *p = NULL;
+        if (posix_memalign(&p, HUGE_PAGE, huge > bytes ? huge : bytes) != 0)
+            return NULL;
+        (void)madvise(p, huge, MADV_HUGEPAGE); /* a hint: may fail */
+        return p;
+    }
+#endif
+    return malloc(bytes ? bytes : 1);
+}
+
 void *mr_alloc_array(size_t count, size_t size)
 {
     if (size && count > SIZE_MAX / size)
         return NULL;
-    size_t bytes = count * size;
-    return malloc(bytes ? bytes : 1);
+    return alloc_bytes(count * size);
 }
 
 void *mr_calloc_array(size_t count, size_t size)
@@ -88,6 +145,15 @@ void *mr_calloc_array(size_t count, size_t size)
         return NULL;
     if (!count || !size)
         return calloc(1, 1);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    const size_t bytes = count * size;
+    if (huge_span(bytes) && huge_pages()) {
+        void *p = alloc_bytes(bytes);
+        if (p)
+            memset(p, 0, bytes);
+        return p;
+    }
+#endif
     return calloc(count, size);
 }
 
@@ -96,7 +162,19 @@ void *mr_realloc_array(void *p, size_t count, size_t size)
     if (size && count > SIZE_MAX / size)
         return NULL;
     size_t bytes = count * size;
-    return realloc(p, bytes ? bytes : 1);
+    if (!p)
+        return alloc_bytes(bytes);
+    void *q = realloc(p, bytes ? bytes : 1);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    /* grown in place or moved: the whole huge pages inside it */
+    if (q && bytes >= 2 * HUGE_PAGE && huge_pages()) {
+        const uintptr_t a = ((uintptr_t)q + HUGE_PAGE - 1) & ~(uintptr_t)(HUGE_PAGE - 1);
+        const uintptr_t b = ((uintptr_t)q + bytes) & ~(uintptr_t)(HUGE_PAGE - 1);
+        if (b > a)
+            (void)madvise((void *)a, b - a, MADV_HUGEPAGE);
+    }
+#endif
+    return q;
 }
 
 int mr_thread_count(int requested)
