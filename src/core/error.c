@@ -96,6 +96,8 @@ mr_status mr_fail_nomem(mr_error *err, const char *name, size_t bytes)
  * (for comparisons). Elsewhere, or when madvise refuses, these are plain
  * blocks; every block is freed by free() as any other.
  */
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#define MR_HUGE 1
 #define HUGE_PAGE ((size_t)2 << 20)
 
 static bool huge_pages(void)
@@ -116,10 +118,11 @@ static size_t huge_span(size_t bytes)
     const size_t up = (bytes + HUGE_PAGE - 1) & ~(HUGE_PAGE - 1);
     return up - bytes <= bytes / 8 ? up : bytes & ~(HUGE_PAGE - 1);
 }
+#endif
 
 static void *alloc_bytes(size_t bytes)
 {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#ifdef MR_HUGE
     const size_t huge = huge_span(bytes);
     if (huge && huge_pages()) {
         void *p = NULL;
@@ -145,7 +148,7 @@ void *mr_calloc_array(size_t count, size_t size)
         return NULL;
     if (!count || !size)
         return calloc(1, 1);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#ifdef MR_HUGE
     const size_t bytes = count * size;
     if (huge_span(bytes) && huge_pages()) {
         void *p = alloc_bytes(bytes);
@@ -165,7 +168,7 @@ void *mr_realloc_array(void *p, size_t count, size_t size)
     if (!p)
         return alloc_bytes(bytes);
     void *q = realloc(p, bytes ? bytes : 1);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#ifdef MR_HUGE
     /* grown in place or moved: the whole huge pages inside it */
     if (q && bytes >= 2 * HUGE_PAGE && huge_pages()) {
         const uintptr_t a = ((uintptr_t)q + HUGE_PAGE - 1) & ~(uintptr_t)(HUGE_PAGE - 1);
