@@ -251,9 +251,7 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     if (!pt)
         return;
     for (unsigned p = 0; pt->slab && p < pt->parts; p++) {
-        free(pt->slab[p].buf);
-        free(pt->slab[p].tmp);
-        free(pt->slab[p].plan);
+        free(pt->slab[p].plan); /* buf and tmp: the arena's */
     }
     for (unsigned p = 0; pt->slab2 && p <= pt->parts; p++) {
         free(pt->slab2[p].buf);
@@ -261,6 +259,8 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
         free(pt->slab2[p].plan);
     }
     free(pt->slab2);
+    free(pt->arena_buf);
+    free(pt->arena_tmp);
     free(pt->part2);
     free(pt->impure);
     free(pt->bcand);
@@ -424,9 +424,9 @@ static size_t mr_part_gather(mr_simplifier *s, double limit)
             block_gather(s, (size_t)i, limit);
     }
     /* per slab: interior candidates block by block from 0, then the
-     * boundary ones */
-    bool ok = true;
-    size_t total = 0;
+     * boundary ones; each slab's lists a slice of the arena (contents
+     * dropped: sliced again every pass) */
+    size_t total = 0, need = 0;
     for (size_t p = 0; p < np; p++) {
         pslab *sl = &pt->slab[p];
         size_t ni = 0, nbd = 0;
@@ -440,10 +440,26 @@ static size_t mr_part_gather(mr_simplifier *s, double limit)
         sl->nbd = nbd;
         sl->c1 = ni + nbd;
         total += ni + nbd;
-        if (!mr_part_room(&sl->buf, &sl->cap, sl->c1) || !mr_part_room(&sl->tmp, &sl->tcap, sl->c1)) {
-            ok = false;
-            continue;
+        need += sl->c1 + 1;
+    }
+    if (need > pt->arena_cap) {
+        free(pt->arena_buf);
+        free(pt->arena_tmp);
+        pt->arena_cap = need + need / 8;
+        pt->arena_buf = mr_alloc_array(pt->arena_cap, sizeof *pt->arena_buf);
+        pt->arena_tmp = mr_alloc_array(pt->arena_cap, sizeof *pt->arena_tmp);
+        if (!pt->arena_buf || !pt->arena_tmp) {
+            pt->arena_cap = 0;
+            return 0;
         }
+    }
+    for (size_t p = 0, off = 0; p < np; p++) {
+        pslab *sl = &pt->slab[p];
+        sl->buf = pt->arena_buf + off;
+        sl->tmp = pt->arena_tmp + off;
+        sl->cap = sl->tcap = sl->c1 + 1;
+        off += sl->c1 + 1;
+        const size_t ni = sl->nin;
         uint32_t oi = 0, ob = (uint32_t)ni;
         for (size_t i = 0; i < pt->nblocks; i++) {
             uint32_t *cnt = pt->bcount + pt->nblocks + i * 2 * np + 2 * p;
@@ -454,8 +470,6 @@ static size_t mr_part_gather(mr_simplifier *s, double limit)
             ob += cb;
         }
     }
-    if (!ok)
-        return 0;
 #pragma omp parallel for schedule(static) num_threads(pt->threads) if (par)
     for (ptrdiff_t i = 0; i < nb; i++)
         block_scatter(pt, (size_t)i);
@@ -584,9 +598,7 @@ static bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail
     sl->demand = 0;
     if (tail)
         return true;
-    if (!mr_part_room(&sl->tmp, &sl->tcap, sl->nin))
-        return false;
-    mr_part_sort(c, sl->tmp, sl->nin);
+    mr_part_sort(c, sl->tmp, sl->nin); /* tmp holds c1 >= nin */
     if (!slab_plan(s, sl))
         return false;
     add_demand(pt, m, sl);

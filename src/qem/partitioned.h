@@ -115,7 +115,11 @@ struct mr_partitioned {
     size_t in2_cap;
     uint8_t *pure;        /* per vertex: SEEN */
     uint8_t *mark;        /* per vertex: an end of a collapse of this pass */
-    pslab *slab;          /* parts */
+    pslab *slab;          /* parts; their buf and tmp are slices of: */
+    pcand *arena_buf, *arena_tmp; /* one block each for all slabs (one
+                             allocation, on huge pages, instead of 2 *
+                             parts small ones page-faulted 4 KiB at a time) */
+    size_t arena_cap;
     pcand *seq, *seq_tmp; /* the boundary (or tail) candidates, merged;
                              the radix sort's scratch */
     size_t seq_cap, seq_tmp_cap;
