@@ -457,8 +457,7 @@ static size_t mr_part_gather(mr_simplifier *s, double limit)
         pslab *sl = &pt->slab[p];
         sl->buf = pt->arena_buf + off;
         sl->tmp = pt->arena_tmp + off;
-        sl->cap = sl->tcap = sl->c1 + 1;
-        off += sl->c1 + 1;
+        off += sl->c1 + 1; /* + 1: never an empty arena */
         const size_t ni = sl->nin;
         uint32_t oi = 0, ob = (uint32_t)ni;
         for (size_t i = 0; i < pt->nblocks; i++) {
@@ -955,7 +954,6 @@ size_t mr_part_merge(mr_simplifier *s, bool tail)
     mr_part_sort(pt->seq, pt->seq_tmp, k);
     return k;
 }
-
 
 bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bool force_tail,
                    mr_part_pass *ps)

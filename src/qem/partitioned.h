@@ -74,10 +74,12 @@ typedef struct pslab {
     pplan *plan;          /* plan[i]: candidate buf[i]'s (interior ones) */
     size_t pcap;
     pcand *buf;           /* its candidates: interior ones in buf[0..nin),
-                             the others in buf[c1 - nbd .. c1) */
-    pcand *tmp;           /* the radix sort's scratch */
-    size_t cap, tcap;     /* their sizes */
-    size_t c1;            /* this pass's bound on its candidates (<= cap) */
+                             the others in buf[c1 - nbd .. c1); a slab's a
+                             slice of arena_buf, a shifted slab's its own */
+    pcand *tmp;           /* a slab's radix sort scratch (of arena_tmp,
+                             c1 long) */
+    size_t cap;           /* a shifted slab's buf size */
+    size_t c1;            /* this pass's bound on its candidates */
     size_t nin, nbd;
     size_t next;          /* interior: the next candidate to try */
     size_t demand;        /* refs room bound of what is left */
