@@ -159,6 +159,190 @@ static size_t run_merge(const mr_kernels *k, inputs *in, uint64_t *sig)
     return H;
 }
 
+/* ---- quadric storage: array of structures against structure of arrays --- */
+
+/*
+ * The simplifier keeps a vertex's quadric as one 44-byte record
+ * (mr_quadricf, an array of structures). A structure of arrays (11 float
+ * arrays) would let a kernel load a coefficient of 8 vertices as one vector
+ * when the vertices are consecutive, but a collapse's vertices are not:
+ * each edge names two vertices anywhere in the mesh. The two operations
+ * that read quadrics by vertex id, timed on both layouts with the same
+ * arithmetic, over a generated scan's edges (out of cache):
+ *   - gather: the batched cost's inputs of 64 edges (both ends' quadrics
+ *     and positions into the batch's rows: the library's gather,
+ *     mr_cost_pack_inputs, on records; one row at a time on the arrays),
+ *     then the cost kernel;
+ *   - merge: a collapse's r += k (mr_merge_body), one edge after another.
+ * In mesh order (the set-up's pass: neighbouring edges share vertices) and
+ * shuffled (the collapses' order: by cost, scattered over the mesh).
+ */
+typedef struct soa_quadrics {
+    float *c[11];
+} soa_quadrics;
+
+static void gather_soa(const soa_quadrics *q, const float *pos, const uint32_t *u,
+                       const uint32_t *w, size_t n, float *in)
+{
+    /* row by row: each row one coefficient of every edge's end */
+    for (int k = 0; k < 11; k++) {
+        const float *c = q->c[k];
+        float *ru = in + (size_t)(FREE_QU + k) * MR_COST_BATCH,
+              *rw = in + (size_t)(FREE_QW + k) * MR_COST_BATCH;
+        for (size_t l = 0; l < n; l++) {
+            ru[l] = c[u[l]];
+            rw[l] = c[w[l]];
+        }
+    }
+    for (size_t l = 0; l < n; l++)
+        for (int k = 0; k < 3; k++) {
+            in[(size_t)(FREE_PU + k) * MR_COST_BATCH + l] = pos[3 * (size_t)u[l] + k];
+            in[(size_t)(FREE_PW + k) * MR_COST_BATCH + l] = pos[3 * (size_t)w[l] + k];
+        }
+}
+
+static void merge_soa(soa_quadrics *q, uint32_t k, uint32_t r, const mr_kernels *kern,
+                      const double dk[3], const double dr[3])
+{
+    mr_quadricf a, b;
+    float *fa = &a.a00, *fb = &b.a00;
+    for (int i = 0; i < 11; i++) {
+        fa[i] = q->c[i][k];
+        fb[i] = q->c[i][r];
+    }
+    kern->merge(&a, &b, dk, dr);
+    for (int i = 0; i < 11; i++)
+        q->c[i][k] = fa[i];
+}
+
+enum { LAYOUT_AOS = 0, LAYOUT_SOA = 1 };
+
+/* One pass of op (0 gather + cost, 1 merge) over the edges on layout L;
+ * returns a signature of the results. */
+static uint64_t layout_pass(int op, int L, mr_quadricf *aos, soa_quadrics *soa,
+                            const float *pos, const uint32_t *u, const uint32_t *w, size_t ne,
+                            const mr_kernels *kern, float *in)
+{
+    static const double box[3] = {0.5, 0.5, 0.5}, dk[3] = {1e-4, -2e-4, 3e-4},
+                        dr[3] = {-3e-4, 1e-4, 2e-4};
+    double cost[MR_COST_BATCH], x[3 * MR_COST_BATCH], sum = 0;
+    if (op == 0) {
+        for (size_t e = 0; e < ne; e += MR_COST_BATCH) {
+            const size_t n = ne - e < MR_COST_BATCH ? ne - e : MR_COST_BATCH;
+            if (L == LAYOUT_AOS)
+                mr_cost_pack_inputs(aos, pos, u + e, w + e, n, in);
+            else
+                gather_soa(soa, pos, u + e, w + e, n, in);
+            kern->free_costs(in, n, cost, x, box);
+            sum += cost[0] + cost[n - 1];
+        }
+    } else {
+        for (size_t e = 0; e < ne; e++) {
+            if (L == LAYOUT_AOS)
+                kern->merge(&aos[u[e]], &aos[w[e]], dk, dr);
+            else
+                merge_soa(soa, u[e], w[e], kern, dk, dr);
+        }
+    }
+    uint64_t h;
+    memcpy(&h, &sum, sizeof h);
+    return h;
+}
+
+static void bench_layout(const mr_mesh *mesh, const mr_kernels *kern, int runs)
+{
+    const size_t nv = mesh->vertex_count, ne = 3 * mesh->triangle_count;
+    /* one record and one float of padding: the library's gather reads 12
+     * floats of a quadric and 4 of a position */
+    mr_quadricf *aos = malloc((nv + 1) * sizeof *aos);
+    soa_quadrics soa;
+    float *soa_block = malloc(11 * nv * sizeof(float));
+    float *pos = calloc(3 * nv + 1, sizeof(float));
+    uint32_t *u = malloc(ne * sizeof *u), *w = malloc(ne * sizeof *w);
+    uint32_t *su = malloc(ne * sizeof *su), *sw = malloc(ne * sizeof *sw);
+    float *in = malloc(FREE_INPUTS * MR_COST_BATCH * sizeof(float));
+    if (!aos || !soa_block || !pos || !u || !w || !su || !sw || !in) {
+        fprintf(stderr, "bench_kernels: out of memory\n");
+        exit(1);
+    }
+    for (int k = 0; k < 11; k++)
+        soa.c[k] = soa_block + (size_t)k * nv;
+    for (size_t v = 0; v < nv; v++) {
+        random_quadric(&aos[v]);
+        for (int k = 0; k < 3; k++)
+            pos[3 * v + k] = (float)rnd();
+    }
+    /* every triangle's three edges (an inner edge twice: the set-up's pass
+     * meets it from both sides), and the same shuffled */
+    for (size_t t = 0; t < mesh->triangle_count; t++)
+        for (int c = 0; c < 3; c++) {
+            u[3 * t + c] = mesh->indices[3 * t + c];
+            w[3 * t + c] = mesh->indices[3 * t + (c + 1) % 3];
+        }
+    memcpy(su, u, ne * sizeof *u);
+    memcpy(sw, w, ne * sizeof *w);
+    for (size_t i = ne - 1; i > 0; i--) {
+        const size_t j = (size_t)((rnd() + 0.5) * (double)(i + 1)) % (i + 1);
+        uint32_t t = su[i];
+        su[i] = su[j];
+        su[j] = t;
+        t = sw[i];
+        sw[i] = sw[j];
+        sw[j] = t;
+    }
+    printf("\nquadric storage (%zu vertices: %.1f MiB of quadrics; %zu edges; %s path): "
+           "ns per edge, median (min) of %d alternating passes\n",
+           nv, (double)nv * sizeof *aos / 1048576.0, ne, kern->name, runs);
+    printf("%-22s %-12s %10s %10s %10s %10s %9s %5s\n", "operation", "edge order", "AoS ns",
+           "min", "SoA ns", "min", "SoA/AoS", "same");
+    static const char *opname[2] = {"gather + cost (64)", "merge (one at a time)"};
+    for (int op = 0; op < 2; op++)
+        for (int order = 0; order < 2; order++) {
+            const uint32_t *eu = order ? su : u, *ew = order ? sw : w;
+            double t[2][64];
+            uint64_t sig[2];
+            for (int r = 0; r < runs; r++)
+                for (int L = 0; L < 2; L++) {
+                    if (op == 1) { /* the same quadrics before every merge pass */
+                        rng_state = 0x9E3779B97F4A7C15ull;
+                        for (size_t v = 0; v < nv; v++)
+                            random_quadric(&aos[v]);
+                        for (int k = 0; k < 11; k++)
+                            for (size_t v = 0; v < nv; v++)
+                                soa.c[k][v] = (&aos[v].a00)[k];
+                    } else if (r == 0 && L == 0)
+                        for (int k = 0; k < 11; k++)
+                            for (size_t v = 0; v < nv; v++)
+                                soa.c[k][v] = (&aos[v].a00)[k];
+                    const double t0 = bench_now();
+                    sig[L] = layout_pass(op, L, aos, &soa, pos, eu, ew, ne, kern, in);
+                    t[L][r] = (bench_now() - t0) / (double)ne * 1e9;
+                    if (op == 1) { /* the merged quadrics' bits */
+                        uint64_t h = 0xCBF29CE484222325ull;
+                        for (size_t v = 0; v < nv; v += 97) {
+                            mr_quadricf f;
+                            for (int k = 0; k < 11; k++)
+                                (&f.a00)[k] = L ? soa.c[k][v] : (&aos[v].a00)[k];
+                            h = mix(h, &f, sizeof f);
+                        }
+                        sig[L] = h;
+                    }
+                }
+            const bench_summary a = bench_summarize(t[0], runs), s = bench_summarize(t[1], runs);
+            printf("%-22s %-12s %10.2f %10.2f %10.2f %10.2f %8.2fx %5s\n", opname[op],
+                   order ? "shuffled" : "mesh", a.median, a.min, s.median, s.min,
+                   s.median / a.median, sig[0] == sig[1] ? "yes" : "NO");
+        }
+    free(aos);
+    free(soa_block);
+    free(pos);
+    free(u);
+    free(w);
+    free(su);
+    free(sw);
+    free(in);
+}
+
 typedef struct kernel_case {
     const char *name, *unit;
     kernel_run run;
@@ -281,6 +465,8 @@ int main(int argc, char **argv)
     /* end to end */
     mr_mesh mesh;
     bench_load_mesh(NULL, NULL, triangles, 0, &mesh, NULL, NULL);
+    bench_layout(&mesh, mr_kernels_get(), runs);
+
     printf("\nend to end: mr_simplify, generated scan (%zu vertices, %zu triangles) to %g of "
            "its vertices; median (min) of %d alternating runs\n",
            mesh.vertex_count, mesh.triangle_count, ratio, runs);

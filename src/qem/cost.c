@@ -26,16 +26,17 @@ static inline void load_quadric(const mr_simplifier *s, uint32_t v, mr_quadric *
     mr_quadric_load(q, &s->q[v]);
 }
 
-/* Gathers free_cost's inputs for edge (u, w) into in[k * st]. */
-static inline void free_cost_inputs(const mr_simplifier *s, uint32_t u, uint32_t w, float *in,
-                                    size_t st)
+/* Gathers free_cost's inputs for edge (u, w) of the quadrics q and
+ * positions pos into in[k * st]. */
+static inline void free_cost_inputs_at(const mr_quadricf *q, const float *pos, uint32_t u,
+                                       uint32_t w, float *in, size_t st)
 {
-    const float *qu = &s->q[u].a00, *qw = &s->q[w].a00;
+    const float *qu = &q[u].a00, *qw = &q[w].a00;
     for (int k = 0; k < 11; k++) {
         in[(size_t)(FREE_QU + k) * st] = qu[k];
         in[(size_t)(FREE_QW + k) * st] = qw[k];
     }
-    const float *pu = s->m.pos + 3 * (size_t)u, *pw = s->m.pos + 3 * (size_t)w;
+    const float *pu = pos + 3 * (size_t)u, *pw = pos + 3 * (size_t)w;
     for (int k = 0; k < 3; k++) {
         in[(size_t)(FREE_PU + k) * st] = pu[k];
         in[(size_t)(FREE_PW + k) * st] = pw[k];
@@ -85,7 +86,7 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
     const uint8_t fu = m->flags[u], fw = m->flags[w];
     if (!((fu | fw) & PINNING)) {
         float in[FREE_INPUTS];
-        free_cost_inputs(s, u, w, in, 1);
+        free_cost_inputs_at(s->q, s->m.pos, u, w, in, 1);
         return mr_free_cost(in, 1, x, 1, s->box);
     }
     const bool gu = may_go_onto(fu, fw), gw = may_go_onto(fw, fu);
@@ -234,15 +235,15 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
  * rows in[k * COST_BATCH + l]: four edges at a time, each quadric (11
  * floats, read as 12) and position (3, read as 4) loaded as vectors and
  * transposed into four lanes of each row. The same floats as
- * free_cost_inputs, a third of the instructions.
+ * free_cost_inputs_at, a third of the instructions.
  */
-static void pack_inputs(const mr_simplifier *s, const uint32_t *u, const uint32_t *w, size_t n,
-                        float *in)
+void mr_cost_pack_inputs(const mr_quadricf *quadrics, const float *pos, const uint32_t *u,
+                         const uint32_t *w, size_t n, float *in)
 {
     size_t l = 0;
 #if defined(__SSE2__)
-    const float *q = &s->q[0].a00, *pos = s->m.pos;
-    const size_t qs = sizeof *s->q / sizeof(float);
+    const float *q = &quadrics[0].a00;
+    const size_t qs = sizeof *quadrics / sizeof(float);
     for (; l + 4 <= n; l += 4) {
         for (int end = 0; end < 2; end++) {
             const uint32_t *id = end ? w + l : u + l;
@@ -274,7 +275,7 @@ static void pack_inputs(const mr_simplifier *s, const uint32_t *u, const uint32_
     }
 #endif
     for (; l < n; l++)
-        free_cost_inputs(s, u[l], w[l], in + l, COST_BATCH);
+        free_cost_inputs_at(quadrics, pos, u[l], w[l], in + l, COST_BATCH);
 }
 
 /* Edge i of mr_simplifier_plan_edges through the one-edge path. */
@@ -319,7 +320,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
                 lr[l] = ea < eb ? eb : ea;
                 lk[l] = ea < eb ? ea : eb;
             }
-            pack_inputs(s, lr, lk, nl, in);
+            mr_cost_pack_inputs(s->q, s->m.pos, lr, lk, nl, in);
             kern->free_costs(in, nl, cost + i0, x, s->box);
             if (r) {
                 for (size_t l = 0; l < nl; l++) {
@@ -347,7 +348,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
             lk[nl] = ea < eb ? ea : eb;
             lane[nl++] = (uint32_t)(i - i0);
         }
-        pack_inputs(s, lr, lk, nl, in);
+        mr_cost_pack_inputs(s->q, s->m.pos, lr, lk, nl, in);
         kern->free_costs(in, nl, out, x, s->box);
         for (size_t l = 0; l < nl; l++) {
             const size_t i = i0 + lane[l];

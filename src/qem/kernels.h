@@ -30,6 +30,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 /* Edges per batch of mr_kernels.free_costs. */
 #define MR_COST_BATCH 64
@@ -233,6 +234,12 @@ typedef struct mr_kernels {
     /* the merge of two quadrics (mr_merge_body); k may not alias r */
     void (*merge)(mr_quadricf *k, const mr_quadricf *r, const double dk[3], const double dr[3]);
 } mr_kernels;
+
+/* free_costs' inputs of the edges (u[l], w[l]), l < n <= MR_COST_BATCH, of
+ * the quadrics q and positions pos (3 floats a vertex) into the batch's rows
+ * in[k * MR_COST_BATCH + l] (src/qem/cost.c). */
+void mr_cost_pack_inputs(const mr_quadricf *q, const float *pos, const uint32_t *u,
+                         const uint32_t *w, size_t n, float *in);
 
 /* The kernels of path p, or NULL when the build or the CPU lacks it. */
 const mr_kernels *mr_kernels_path(int p);
