@@ -27,6 +27,18 @@
  * seam, locked and non-manifold vertices stay where the collapses left
  * them.
  *
+ * The first sweep finds each sample's nearest triangle in a hierarchy
+ * (exact); the later ones walk from the last sweep's answer (walk_nearest:
+ * a few point-triangle distances instead of a descent through the tree),
+ * since a sweep moves the vertices by a fraction of an edge. A walk stops
+ * at a local minimum, which is not always the nearest triangle (a sample
+ * between two sheets of a thin part): measured on 8 data meshes at 25, 10
+ * and 1 %, four walked sweeps after the first gave RMS distances 0-2 %
+ * above four exact ones in 40-75 % of the time at 25 and 10 %; six sweeps
+ * with walks (an odd count leaves the Jacobi steps' overshoot in place:
+ * five measured worse than four) are within -1.5..+0.4 % of four exact
+ * ones in about 60-75 % of their time.
+ *
  * Measured on the bunny, the armadillo, the nefertiti and the homer at
  * 10 % and 1 % (with the volume-preserving placement): RMS distance 14-40
  * % lower than MR_QUALITY_DEFAULT's; the input samples alone also raised
@@ -48,7 +60,8 @@
 
 #include <math.h>
 
-#define ITERATIONS 4
+#define ITERATIONS 6
+#define WALK_STEPS 8
 #define DAMPING 0.05
 #define SAMPLES_PER_TRIANGLE 16
 #define OUT_SAMPLES 4 /* per output triangle */
@@ -138,6 +151,86 @@ static inline void add_pull(const pull *p, double beta, double a[6], double b[3]
     b[2] += g * p->n[2];
 }
 
+/* Squared distance from p to triangle t of (pos, tris), its closest point
+ * c, and the corners that point leans on: bit j set when c's barycentric
+ * coordinate j is clearly above zero (7: inside; on an edge, its two ends;
+ * at a corner, that corner; 0 for a sliver, whose coordinates say
+ * nothing). */
+static double tri_dist_region(const float *pos, const uint32_t *tris, uint32_t t,
+                              const double p[3], double c[3], unsigned *region)
+{
+    const uint32_t *tv = tris + 3 * (size_t)t;
+    double a[3], b[3], cc[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = pos[3 * (size_t)tv[0] + k];
+        b[k] = pos[3 * (size_t)tv[1] + k];
+        cc[k] = pos[3 * (size_t)tv[2] + k];
+    }
+    const double d = mr_point_triangle_dist2(p, a, b, cc, c);
+    const double e0[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double e1[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
+    const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double d00 = e0[0] * e0[0] + e0[1] * e0[1] + e0[2] * e0[2];
+    const double d01 = e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2];
+    const double d11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    const double d20 = e2[0] * e0[0] + e2[1] * e0[1] + e2[2] * e0[2];
+    const double d21 = e2[0] * e1[0] + e2[1] * e1[1] + e2[2] * e1[2];
+    const double den = d00 * d11 - d01 * d01;
+    if (!(den > 1e-14 * d00 * d11)) {
+        *region = 0;
+        return d;
+    }
+    const double bb = (d11 * d20 - d01 * d21) / den, bc = (d00 * d21 - d01 * d20) / den;
+    const double eps = 1e-6;
+    *region = (1 - bb - bc > eps ? 1u : 0u) | (bb > eps ? 2u : 0u) | (bc > eps ? 4u : 0u);
+    return d;
+}
+
+/*
+ * The nearest triangle to p near triangle `from` of (pos, tris), by a
+ * walk: while the closest point lies on an edge or a corner of the current
+ * triangle, the triangles around those corners (lists by vertex, as
+ * by_vertex builds them) are tried and the nearest taken, at most
+ * WALK_STEPS times; a point inside a triangle is a local minimum. Sets c;
+ * returns the triangle. The order of the tries is fixed, ties keep the
+ * earlier one: the same answer on any thread.
+ */
+static uint32_t walk_nearest(const float *pos, const uint32_t *tris, const uint32_t *start,
+                             const uint32_t *list, uint32_t from, const double p[3], double c[3])
+{
+    unsigned region;
+    double best = tri_dist_region(pos, tris, from, p, c, &region);
+    uint32_t cur = from;
+    for (int step = 0; step < WALK_STEPS && region != 7; step++) {
+        uint32_t next = cur;
+        unsigned next_region = region;
+        const uint32_t *cv = tris + 3 * (size_t)cur;
+        for (int j = 0; j < 3; j++) {
+            if (region && !(region & (1u << j)))
+                continue;
+            for (uint32_t e = start[cv[j]]; e < start[cv[j] + 1]; e++) {
+                const uint32_t t = list[e] / 3;
+                if (t == cur)
+                    continue;
+                double q[3];
+                unsigned r;
+                const double d = tri_dist_region(pos, tris, t, p, q, &r);
+                if (d < best) {
+                    best = d;
+                    next = t;
+                    next_region = r;
+                    memcpy(c, q, sizeof q);
+                }
+            }
+        }
+        if (next == cur)
+            break;
+        cur = next;
+        region = next_region;
+    }
+    return cur;
+}
+
 mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
                                const uint32_t *indices, size_t triangle_count, mr_error *err)
 {
@@ -156,7 +249,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                             ? triangle_count / (SAMPLES_PER_TRIANGLE * nlive)
                             : 1;
     const size_t ns = (triangle_count + step - 1) / step, no = OUT_SAMPLES * nlive;
-    if (3 * ns > UINT32_MAX || 3 * nlive > UINT32_MAX)
+    if (3 * ns > UINT32_MAX || 3 * nlive > UINT32_MAX || 3 * triangle_count > UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
                              "simplify: too many triangles for the surface fit");
     uint32_t *live = mr_alloc_array(3 * nlive, sizeof *live);
@@ -167,14 +260,16 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     uint32_t *list = mr_alloc_array(3 * ns, sizeof *list);
     uint32_t *tstart = mr_alloc_array(vc + 1, sizeof *tstart);
     uint32_t *tlist = mr_alloc_array(3 * nlive, sizeof *tlist);
+    uint32_t *istart = mr_alloc_array(ivc + 1, sizeof *istart);
+    uint32_t *ilist = mr_alloc_array(3 * triangle_count, sizeof *ilist);
     float *ipos = mr_alloc_array(3 * ivc, sizeof *ipos);
     float *next = mr_alloc_array(3 * vc, sizeof *next);
     uint8_t *moved = mr_alloc_array(vc, 1);
     mr_tri_bvh ibvh;
     bool have_ibvh = false;
     mr_status st = MR_OK;
-    if (!live || !sp || !in_pull || !out_pull || !start || !list || !tstart || !tlist || !ipos ||
-        !next || !moved) {
+    if (!live || !sp || !in_pull || !out_pull || !start || !list || !tstart || !tlist ||
+        !istart || !ilist || !ipos || !next || !moved) {
         st = mr_fail_nomem(err, "simplify: surface fit",
                            ns * (4 * sizeof *sp + sizeof *in_pull + 3 * sizeof *list));
         goto done;
@@ -183,6 +278,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
         if (m->tris[3 * t] != MR_COLLAPSE_NONE)
             memcpy(live + 3 * k++, m->tris + 3 * t, 3 * sizeof *live);
     by_vertex(vc, nlive, live, NULL, tstart, tlist); /* the output's triangles stay */
+    by_vertex(ivc, triangle_count, indices, NULL, istart, ilist);
     for (size_t i = 0; i < no; i++)
         out_pull[i].tri = MR_NO_HINT;
 
@@ -218,9 +314,11 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
         MR_VF_BOUNDARY | MR_VF_LOCKED | MR_VF_NONMANIFOLD | MR_VF_SEAM | MR_VF_REMOVED;
     for (int it = 0; it < ITERATIONS; it++) {
         mr_tri_bvh obvh;
-        st = mr_tri_bvh_build(&obvh, m->pos, live, nlive, s->threads, err);
-        if (st != MR_OK)
-            goto done;
+        if (it == 0) { /* later sweeps walk */
+            st = mr_tri_bvh_build(&obvh, m->pos, live, nlive, s->threads, err);
+            if (st != MR_OK)
+                goto done;
+        }
         /* the input's samples against the output */
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(s->threads) if (par && nsi > 4096)
         for (ptrdiff_t i = 0; i < nsi; i++) {
@@ -228,7 +326,10 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             const double *p = sp + 4 * i;
             uint32_t tri;
             double c[3], n[3], l2;
-            mr_tri_bvh_nearest(&obvh, p, h->tri, &tri, c);
+            if (it == 0)
+                mr_tri_bvh_nearest(&obvh, p, h->tri, &tri, c);
+            else
+                tri = walk_nearest(m->pos, live, tstart, tlist, h->tri, p, c);
             const uint32_t *tv = live + 3 * (size_t)tri;
             const float *a = m->pos + 3 * (size_t)tv[0], *b = m->pos + 3 * (size_t)tv[1],
                         *cc = m->pos + 3 * (size_t)tv[2];
@@ -258,7 +359,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             h->r = h->n[0] * (c[0] - p[0]) + h->n[1] * (c[1] - p[1]) + h->n[2] * (c[2] - p[2]);
             h->w = p[3];
         }
-        mr_tri_bvh_free(&obvh);
+        if (it == 0)
+            mr_tri_bvh_free(&obvh);
         /* the output's samples against the input */
         const ptrdiff_t nl = (ptrdiff_t)nlive;
 #pragma omp parallel for schedule(dynamic, 256) num_threads(s->threads) if (par && nl > 1024)
@@ -277,7 +379,10 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                 pull *o = &out_pull[OUT_SAMPLES * (size_t)t + (size_t)k];
                 double q[3], mn[3], ml2;
                 uint32_t itri;
-                mr_tri_bvh_nearest(&ibvh, p, o->tri, &itri, q);
+                if (it == 0)
+                    mr_tri_bvh_nearest(&ibvh, p, o->tri, &itri, q);
+                else
+                    itri = walk_nearest(ipos, indices, istart, ilist, o->tri, p, q);
                 tri_normal(ipos, indices + 3 * (size_t)itri, mn, &ml2);
                 o->tri = itri;
                 o->w = 0;
@@ -370,6 +475,8 @@ done:
     free(list);
     free(tstart);
     free(tlist);
+    free(istart);
+    free(ilist);
     free(ipos);
     free(next);
     free(moved);
