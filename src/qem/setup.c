@@ -424,6 +424,33 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     s->keep_volume = o->quality == MR_QUALITY_BEST;
     s->batched = o->strategy == MR_STRATEGY_BATCHED;
     s->queued = mr_strategy_queued(o->strategy) ? (int)o->strategy : 0;
+    /* the edge strategies plan through mr_simplifier_plan_edge; the
+     * queued ones rank vertices by quadric cost (mr_simplifier_plan) */
+    s->memoryless = s->keep_volume && !s->half && !s->queued;
+    s->memoryless_limit = INFINITY;
+    s->memoryless_scale = 1;
+    if (s->memoryless) {
+        if (o->max_error > 0) {
+            const double rel = mr_simplifier_normalised(s, o, o->max_error);
+            s->memoryless_limit = rel * rel;
+        }
+        double area = 0;
+        for (size_t t = 0; t < m->triangle_count; t++) {
+            const uint32_t *tv = m->tris + 3 * t;
+            if (tv[0] == MR_COLLAPSE_NONE)
+                continue;
+            const float *a = m->pos + 3 * (size_t)tv[0], *b = m->pos + 3 * (size_t)tv[1],
+                        *c = m->pos + 3 * (size_t)tv[2];
+            const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+            const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                                 u[0] * v[1] - u[1] * v[0]};
+            area += sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        }
+        const double mean = area / (double)m->live_triangles; /* twice the mean area */
+        if (mean > 0)
+            s->memoryless_scale = 1 / (mean * mean);
+    }
     s->partitioned = o->strategy >= MR_STRATEGY_PARTITIONED;
     s->boundary_aware = o->strategy == MR_STRATEGY_PARTITIONED_BOUNDARY;
     s->partitions = o->partitions ? o->partitions : MR_PARTITIONS_DEFAULT;
@@ -481,7 +508,8 @@ void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
     g->limit = INFINITY;
     if (o->max_error > 0) {
         const double rel = mr_simplifier_normalised(s, o, o->max_error);
-        g->limit = rel * rel;
+        /* memoryless plans test the bound themselves (MR_MEMORYLESS_OVER) */
+        g->limit = s->memoryless ? 0.5 * MR_MEMORYLESS_OVER : rel * rel;
     }
     /* Progress: the share of the collapses the vertex target needs. */
     size_t planned = m->live_vertices > target_v ? m->live_vertices - target_v : 0;

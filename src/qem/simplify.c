@@ -69,6 +69,8 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
                   : s->boundary_aware ? mr_simplifier_run_partitioned_boundary(s, o, max_error)
                   : s->partitioned ? mr_simplifier_run_partitioned(s, o, max_error)
                               : mr_simplifier_run_greedy(s, o, max_error);
+    if (s->memoryless) /* its costs are no distances */
+        *max_error = mr_simplifier_error(s, o, mr_simplifier_vertex_error(s));
     mr_simplifier_finish(s, o, *max_error);
     return done;
 }

@@ -61,6 +61,12 @@ struct mr_simplifier {
     int half;
     int keep_volume;         /* MR_QUALITY_BEST: volume-preserving targets
                                 (mr_simplifier_keep_volume) */
+    int memoryless;          /* MR_QUALITY_BEST with an edge strategy:
+                                Lindstrom-Turk's placement and cost
+                                (cost.c, mr_simplifier_plan_edge) */
+    double memoryless_scale; /* its costs' unit: 1 / (2 mean triangle area)^2 */
+    double memoryless_limit; /* the error bound (normalised, squared) its
+                                plans test themselves, or INFINITY */
     int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
     mr_greedy *greedy;       /* else greedy.c's, while it runs */
     mr_batched *bt;          /* else batched.c's */
@@ -213,9 +219,18 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
  * cost finite and within limit, the mesh's tests (mr_collapse_valid) and
  * the attribute hook's? The one test every strategy makes. */
 /* Move a planned full collapse's target to keep the enclosed volume
- * (MR_QUALITY_BEST; cost.c), its cost to that point's. */
+ * (MR_QUALITY_BEST; cost.c), its cost to that point's. Nothing to do in
+ * the memoryless mode, whose plans keep the volume already. */
 void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
                                double *cost);
+/* The memoryless mode's cost of a collapse past the error bound: finite, so
+ * that the stop reason says "error bound", and above the goal's limit
+ * (mr_simplifier_targets) in that mode. */
+#define MR_MEMORYLESS_OVER 1e300
+/* The largest error the collapses left (normalised distance): in the
+ * memoryless mode the strategies' costs are no distances, so the run
+ * reports the vertices' quadric errors instead (cost.c). */
+double mr_simplifier_vertex_error(const mr_simplifier *s);
 
 /* Fit the output's vertices to the input's surface (MR_QUALITY_BEST's last
  * step, after the strategy; refine.c): the input as mr_simplifier_init got
