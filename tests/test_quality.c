@@ -189,12 +189,15 @@ static void make_bevel_cube(int n, double e, mr_mesh *m)
     assert_int_equal(mr_mesh_orient(m, NULL, NULL, &err), MR_OK);
 }
 
-/* To `ratio` of the vertices, or to `triangles` triangles when not 0. */
-static void simplify_to(const mr_mesh *in, double ratio, size_t triangles, mr_simplify_quality q,
-                        int threads, mr_mesh *out)
+/* To `ratio` of the vertices, or to `triangles` triangles when not 0;
+ * strategy < 0: the default one. */
+static void simplify_with(const mr_mesh *in, double ratio, size_t triangles, int strategy,
+                          mr_simplify_quality q, int threads, mr_mesh *out)
 {
     mr_simplify_options o;
     mr_simplify_options_default(&o);
+    if (strategy >= 0)
+        o.strategy = (mr_strategy)strategy;
     o.target_ratio = triangles ? 0 : ratio;
     o.target_triangles = triangles;
     o.quality = q;
@@ -221,7 +224,7 @@ static void simplify_to(const mr_mesh *in, double ratio, size_t triangles, mr_si
 static void simplify(const mr_mesh *in, double ratio, mr_simplify_quality q, int threads,
                      mr_mesh *out)
 {
-    simplify_to(in, ratio, 0, q, threads, out);
+    simplify_with(in, ratio, 0, -1, q, threads, out);
 }
 
 static mr_compare_result distance(const mr_mesh *ref, const mr_mesh *test)
@@ -351,7 +354,7 @@ static void test_closer_and_sound(void **state)
             simplify(&in[i], ratios[r], MR_QUALITY_DEFAULT, 2, &a);
             /* at the same size (best keeps more boundary vertices: more
              * triangles at the same vertex count) */
-            simplify_to(&in[i], 0, a.triangle_count, MR_QUALITY_BEST, 2, &b);
+            simplify_with(&in[i], 0, a.triangle_count, -1, MR_QUALITY_BEST, 2, &b);
             /* a collapse removes one triangle or two: the count may land
              * one below */
             assert_true(b.triangle_count <= a.triangle_count &&
@@ -499,6 +502,23 @@ static void test_threads(void **state)
         mr_mesh_free(&out);
     }
     mr_mesh_free(&ref);
+    mr_mesh_free(&scan);
+
+    /* the other edge strategies' memoryless collapses (their plans read
+     * the fans: in the partitioned ones, on every slab at once) */
+    assert_int_equal(mr_generate(MR_GEN_SCAN, quick() ? 40000 : 100000, 5, &scan, &err), MR_OK);
+    const mr_strategy strategies[3] = {MR_STRATEGY_GREEDY, MR_STRATEGY_PARTITIONED,
+                                                MR_STRATEGY_PARTITIONED_BOUNDARY};
+    for (int k = 0; k < 3; k++) {
+        simplify_with(&scan, 0.05, 0, (int)strategies[k], MR_QUALITY_BEST, 1, &ref);
+        for (int t = 1; t < 4; t++) {
+            mr_mesh out;
+            simplify_with(&scan, 0.05, 0, (int)strategies[k], MR_QUALITY_BEST, threads[t], &out);
+            tu_assert_mesh_equal(&ref, &out);
+            mr_mesh_free(&out);
+        }
+        mr_mesh_free(&ref);
+    }
     mr_mesh_free(&scan);
 
     /* with attributes and seams (mr_mesh_simplify): a sphere with texture
