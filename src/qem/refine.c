@@ -245,6 +245,39 @@ static uint32_t walk_nearest(const float *pos, const uint32_t *tris, const uint3
     return cur;
 }
 
+/* The input as the output's samples see it: positions, triangles, their
+ * lists by vertex, the hierarchy. */
+typedef struct input_surface {
+    const float *pos;
+    const uint32_t *tris, *start, *list;
+    const mr_tri_bvh *bvh;
+} input_surface;
+
+/* Output point p's pull towards the input: its nearest input triangle (in
+ * the hierarchy when exact, else by a walk from o->tri) and the residual
+ * along that triangle's normal, with weight w (none for a degenerate
+ * triangle or no weight). */
+static void input_pull(const input_surface *in, bool exact, const double p[3], double w,
+                       pull *o)
+{
+    double q[3], mn[3], ml2;
+    uint32_t itri;
+    if (exact)
+        mr_tri_bvh_nearest(in->bvh, p, o->tri, &itri, q);
+    else
+        itri = walk_nearest(in->pos, in->tris, in->start, in->list, o->tri, p, q);
+    tri_normal(in->pos, in->tris + 3 * (size_t)itri, mn, &ml2);
+    o->tri = itri;
+    o->w = 0;
+    if (!(ml2 > 0) || !(w > 0))
+        return;
+    const double ml = sqrt(ml2);
+    for (int z = 0; z < 3; z++)
+        o->n[z] = mn[z] / ml;
+    o->r = o->n[0] * (p[0] - q[0]) + o->n[1] * (p[1] - q[1]) + o->n[2] * (p[2] - q[2]);
+    o->w = w;
+}
+
 mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
                                const uint32_t *indices, size_t triangle_count, mr_error *err)
 {
@@ -313,6 +346,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     if (st != MR_OK)
         goto done;
     have_ibvh = true;
+    const input_surface in = {ipos, indices, istart, ilist, &ibvh};
 #pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nsi > 65536)
     for (ptrdiff_t i = 0; i < nsi; i++) {
         const uint32_t *tv = indices + 3 * (size_t)i * step;
@@ -393,23 +427,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                 const double p[3] = {be[0] * a[0] + be[1] * b[0] + be[2] * c[0],
                                      be[0] * a[1] + be[1] * b[1] + be[2] * c[1],
                                      be[0] * a[2] + be[1] * b[2] + be[2] * c[2]};
-                pull *o = &out_pull[OUT_SAMPLES * (size_t)t + (size_t)k];
-                double q[3], mn[3], ml2;
-                uint32_t itri;
-                if (it == 0)
-                    mr_tri_bvh_nearest(&ibvh, p, o->tri, &itri, q);
-                else
-                    itri = walk_nearest(ipos, indices, istart, ilist, o->tri, p, q);
-                tri_normal(ipos, indices + 3 * (size_t)itri, mn, &ml2);
-                o->tri = itri;
-                o->w = 0;
-                if (!(ml2 > 0) || !(area > 0))
-                    continue;
-                const double ml = sqrt(ml2);
-                for (int z = 0; z < 3; z++)
-                    o->n[z] = mn[z] / ml;
-                o->r = o->n[0] * (p[0] - q[0]) + o->n[1] * (p[1] - q[1]) + o->n[2] * (p[2] - q[2]);
-                o->w = area / OUT_SAMPLES;
+                input_pull(&in, it == 0, p, area / OUT_SAMPLES,
+                           &out_pull[OUT_SAMPLES * (size_t)t + (size_t)k]);
             }
         }
         /* the output's vertices against the input */
@@ -427,21 +446,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                 area += 0.5 * sqrt(l2);
             }
             const double p[3] = {m->pos[3 * v], m->pos[3 * v + 1], m->pos[3 * v + 2]};
-            double q[3], mn[3], ml2;
-            uint32_t itri;
-            if (it == 0)
-                mr_tri_bvh_nearest(&ibvh, p, o->tri, &itri, q);
-            else
-                itri = walk_nearest(ipos, indices, istart, ilist, o->tri, p, q);
-            tri_normal(ipos, indices + 3 * (size_t)itri, mn, &ml2);
-            o->tri = itri;
-            if (!(ml2 > 0) || !(area > 0))
-                continue;
-            const double ml = sqrt(ml2);
-            for (int z = 0; z < 3; z++)
-                o->n[z] = mn[z] / ml;
-            o->r = o->n[0] * (p[0] - q[0]) + o->n[1] * (p[1] - q[1]) + o->n[2] * (p[2] - q[2]);
-            o->w = VERTEX_WEIGHT * area / 3;
+            input_pull(&in, it == 0, p, VERTEX_WEIGHT * area / 3, o);
         }
         by_vertex(vc, ns, live, in_pull, start, list);
         /* each vertex's least-squares move */
