@@ -543,9 +543,10 @@ void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, d
  * free. */
 #define MEMORY_WEIGHT 0.1
 /* The farthest the memoryless target may lie from the quadric's, in edge
- * lengths: at the tip of a thin part the swept volumes are least far out
- * beyond it (a claw's tip on the armadillo at 10 %: 0.47 % of the
- * diagonal off the input, against 0.42 % with this bound). */
+ * lengths: a bound where the swept volumes leave a direction nearly free.
+ * On the bunny, the armadillo, the nefertiti and the homer at 25, 10 and
+ * 1 %, the worst RMS distance against CGAL's Lindstrom-Turk was 0.991x
+ * with it, 1.015x without, 1.08-1.16x with a quarter or half an edge. */
 #define MEMORYLESS_REACH 1.0
 /* The cost of a collapse with a pinned end (boundary, seam, locked), in
  * the swept volumes' unit: its quadric cost (which holds the boundary)
