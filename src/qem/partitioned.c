@@ -254,8 +254,7 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
         free(pt->slab[p].plan); /* buf and tmp: the arena's */
     }
     for (unsigned p = 0; pt->slab2 && p <= pt->parts; p++) {
-        free(pt->slab2[p].buf);
-        free(pt->slab2[p].tmp);
+        free(pt->slab2[p].buf); /* their tmp stays NULL */
         free(pt->slab2[p].plan);
     }
     free(pt->slab2);

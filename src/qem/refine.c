@@ -313,27 +313,25 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     if (3 * ns > UINT32_MAX || 3 * nlive > UINT32_MAX || 3 * triangle_count > UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
                              "simplify: too many triangles for the surface fit");
+    /* The input's hierarchy first, then the samples' arrays: its build's
+     * scratch and the samples never take memory at once. */
     uint32_t *live = mr_alloc_array(3 * nlive, sizeof *live);
-    double *sp = mr_alloc_array(4 * ns, sizeof *sp); /* x y z area */
-    pull *in_pull = mr_alloc_array(ns, sizeof *in_pull);
-    pull *out_pull = mr_alloc_array(no, sizeof *out_pull);
-    pull *v_pull = mr_alloc_array(vc, sizeof *v_pull);
-    uint32_t *start = mr_alloc_array(vc + 1, sizeof *start);
-    uint32_t *list = mr_alloc_array(3 * ns, sizeof *list);
     uint32_t *tstart = mr_alloc_array(vc + 1, sizeof *tstart);
     uint32_t *tlist = mr_alloc_array(3 * nlive, sizeof *tlist);
     uint32_t *istart = mr_alloc_array(ivc + 1, sizeof *istart);
     uint32_t *ilist = mr_alloc_array(3 * triangle_count, sizeof *ilist);
     float *ipos = mr_alloc_array(3 * ivc, sizeof *ipos);
-    float *next = mr_alloc_array(3 * vc, sizeof *next);
-    uint8_t *moved = mr_alloc_array(vc, 1);
+    double *sp = NULL; /* x y z area */
+    pull *in_pull = NULL, *out_pull = NULL, *v_pull = NULL;
+    uint32_t *start = NULL, *list = NULL, *vout = NULL;
+    float *next = NULL;
+    uint8_t *moved = NULL;
     mr_tri_bvh ibvh;
     bool have_ibvh = false;
     mr_status st = MR_OK;
-    if (!live || !sp || !in_pull || !out_pull || !v_pull || !start || !list || !tstart || !tlist ||
-        !istart || !ilist || !ipos || !next || !moved) {
+    if (!live || !tstart || !tlist || !istart || !ilist || !ipos) {
         st = mr_fail_nomem(err, "simplify: surface fit",
-                           ns * (4 * sizeof *sp + sizeof *in_pull + 3 * sizeof *list));
+                           4 * (3 * nlive + 3 * triangle_count + 2 * vc) + 12 * ivc);
         goto done;
     }
     for (size_t t = 0, k = 0; t < m->triangle_count; t++)
@@ -341,12 +339,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             memcpy(live + 3 * k++, m->tris + 3 * t, 3 * sizeof *live);
     by_vertex(vc, nlive, live, NULL, tstart, tlist); /* the output's triangles stay */
     by_vertex(ivc, triangle_count, indices, NULL, istart, ilist);
-    for (size_t i = 0; i < no; i++)
-        out_pull[i].tri = MR_NO_HINT;
-    for (size_t v = 0; v < vc; v++)
-        v_pull[v].tri = MR_NO_HINT;
 
-    /* the input in normalised coordinates, its hierarchy, its samples */
+    /* the input in normalised coordinates, its hierarchy */
     const ptrdiff_t niv = (ptrdiff_t)ivc, nsi = (ptrdiff_t)ns;
     const bool par = s->threads > 1;
 #pragma omp parallel for schedule(static) num_threads(s->threads) if (par && niv > 65536)
@@ -361,6 +355,34 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
         goto done;
     have_ibvh = true;
     const input_surface in = {ipos, indices, istart, ilist, &ibvh};
+
+    /* the samples: the input's, the output's triangles' and vertices' (the
+     * output's vertices are those with triangles, in id order) */
+    size_t nout = 0;
+    for (size_t v = 0; v < vc; v++)
+        nout += tstart[v] < tstart[v + 1];
+    sp = mr_alloc_array(4 * ns, sizeof *sp);
+    in_pull = mr_alloc_array(ns, sizeof *in_pull);
+    out_pull = mr_alloc_array(no, sizeof *out_pull);
+    v_pull = mr_alloc_array(nout, sizeof *v_pull);
+    vout = mr_alloc_array(nout, sizeof *vout);
+    start = mr_alloc_array(vc + 1, sizeof *start);
+    list = mr_alloc_array(3 * ns, sizeof *list);
+    next = mr_alloc_array(3 * vc, sizeof *next);
+    moved = mr_alloc_array(vc, 1);
+    if (!sp || !in_pull || !out_pull || !v_pull || !vout || !start || !list || !next || !moved) {
+        st = mr_fail_nomem(err, "simplify: surface fit",
+                           ns * (4 * sizeof *sp + sizeof *in_pull + 3 * sizeof *list) +
+                               no * sizeof *out_pull + nout * (sizeof *v_pull + 4) + 17 * vc);
+        goto done;
+    }
+    for (size_t i = 0; i < no; i++)
+        out_pull[i].tri = MR_NO_HINT;
+    for (size_t v = 0, i = 0; v < vc; v++)
+        if (tstart[v] < tstart[v + 1])
+            vout[i++] = (uint32_t)v;
+    for (size_t i = 0; i < nout; i++)
+        v_pull[i].tri = MR_NO_HINT;
 #pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nsi > 65536)
     for (ptrdiff_t i = 0; i < nsi; i++) {
         const uint32_t *tv = indices + 3 * (size_t)i * step;
@@ -438,12 +460,13 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             }
         }
         /* the output's vertices against the input */
-        const ptrdiff_t nvv = (ptrdiff_t)vc;
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(s->threads) if (par && nvv > 4096)
-        for (ptrdiff_t v = 0; v < nvv; v++) {
-            pull *o = &v_pull[v];
+        const ptrdiff_t nvo = (ptrdiff_t)nout;
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(s->threads) if (par && nvo > 4096)
+        for (ptrdiff_t i = 0; i < nvo; i++) {
+            const uint32_t v = vout[i];
+            pull *o = &v_pull[i];
             o->w = 0;
-            if (tstart[v] == tstart[v + 1] || (m->flags[v] & stay))
+            if (m->flags[v] & stay)
                 continue;
             double area = 0;
             for (uint32_t e = tstart[v]; e < tstart[v + 1]; e++) {
@@ -456,9 +479,9 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
         }
         by_vertex(vc, ns, live, in_pull, start, list);
         /* each vertex's least-squares move */
-        const ptrdiff_t nv = (ptrdiff_t)vc;
-#pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nv > 16384)
-        for (ptrdiff_t v = 0; v < nv; v++) {
+#pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nvo > 16384)
+        for (ptrdiff_t i = 0; i < nvo; i++) {
+            const size_t v = vout[i];
             memcpy(next + 3 * v, m->pos + 3 * v, 3 * sizeof *next);
             moved[v] = 0;
             if (m->flags[v] & stay)
@@ -475,8 +498,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                     if (o->w > 0)
                         add_pull(o, out_beta[k][tlist[e] % 3], a, b);
                 }
-            if (v_pull[v].w > 0)
-                add_pull(&v_pull[v], 1.0, a, b);
+            if (v_pull[i].w > 0)
+                add_pull(&v_pull[i], 1.0, a, b);
             const double tr = a[0] + a[3] + a[5];
             if (!(tr > 0))
                 continue;
@@ -519,11 +542,13 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                 again = true;
             }
         }
-        for (size_t v = 0; v < vc; v++)
+        for (size_t i = 0; i < nout; i++) {
+            const size_t v = vout[i];
             if (moved[v]) {
                 memcpy(m->pos + 3 * v, next + 3 * v, 3 * sizeof *next);
                 m->flags[v] |= MR_VF_MOVED;
             }
+        }
     }
 done:
     if (have_ibvh)
@@ -533,6 +558,7 @@ done:
     free(in_pull);
     free(out_pull);
     free(v_pull);
+    free(vout);
     free(start);
     free(list);
     free(tstart);

@@ -136,6 +136,15 @@ void mr_simplifier_free(mr_simplifier *s)
     memset(s, 0, sizeof *s);
 }
 
+void mr_simplifier_release_run(mr_simplifier *s)
+{
+    free(s->q);
+    s->q = NULL;
+    mr_simplifier_batched_free(s);
+    mr_simplifier_queued_free(s);
+    mr_simplifier_partitioned_free(s);
+}
+
 static bool is_finite(double x) { return x == x && x - x == 0; }
 
 /* The low 10 bits of x spread to every third bit. */

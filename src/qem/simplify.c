@@ -115,6 +115,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     double max_error;
     size_t collapses = mr_simplifier_run(&s, options, &max_error);
     if (options->quality == MR_QUALITY_BEST && !s.cancelled) {
+        mr_simplifier_release_run(&s);
         st = mr_simplifier_refine(&s, positions, stride, indices, triangle_count, err);
         if (st != MR_OK) {
             mr_simplifier_free(&s);
@@ -129,8 +130,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     /* Only the mesh is needed from here: release the rest before the
      * output is allocated (it would set the peak). The greedy strategy's
      * heap went at the end of its run. */
-    free(s.q);
-    s.q = NULL;
+    mr_simplifier_release_run(&s);
     st = mr_simplifier_output(&s, positions, stride, out, err);
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const mr_simplify_stop stop = s.stop;

@@ -232,6 +232,10 @@ void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, d
  * reports the vertices' quadric errors instead (cost.c). */
 double mr_simplifier_vertex_error(const mr_simplifier *s);
 
+/* Release what only the run needed -- the quadrics and the strategy's
+ * state -- keeping the mesh (before the surface fit, whose arrays would
+ * otherwise come on top of them). */
+void mr_simplifier_release_run(mr_simplifier *s);
 /* Fit the output's vertices to the input's surface (MR_QUALITY_BEST's last
  * step, after the strategy; refine.c): the input as mr_simplifier_init got
  * it. */
