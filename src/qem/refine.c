@@ -87,14 +87,26 @@ static const double out_beta[OUT_SAMPLES][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3},
                                                 {1.0 / 6, 1.0 / 6, 2.0 / 3}};
 
 /* One sample's pull: unit direction, residual along it, weight (0: none),
- * and for an input sample its nearest output triangle and coordinates. */
+ * and for an input sample its nearest output triangle and coordinates
+ * (the first two; the third is one less both). Floats: 32 bytes a sample,
+ * a million and more on large inputs; the sums are in doubles. */
 typedef struct pull {
-    double n[3], r, w;
-    float beta[3];
+    float n[3], r, w;
+    float beta[2];
     uint32_t tri; /* the nearest triangle, the next sweep's hint: input
                      samples, an index into the live triangles; output
                      samples, an input triangle */
 } pull;
+
+/* Input sample i's point: the centroid of its triangle tv (the same
+ * doubles each sweep, from the input's float positions). */
+static inline void sample_point(const float *ipos, const uint32_t *tv, double p[3])
+{
+    for (int k = 0; k < 3; k++)
+        p[k] = ((double)ipos[3 * (size_t)tv[0] + (size_t)k] + ipos[3 * (size_t)tv[1] + (size_t)k] +
+                ipos[3 * (size_t)tv[2] + (size_t)k]) /
+               3;
+}
 
 /* Normal (twice the area) of triangle (a, b, c) and its squared length. */
 static void normal_of(const float *a, const float *b, const float *c, double n[3], double *len2)
@@ -153,16 +165,17 @@ static void by_vertex(size_t vc, size_t items, const uint32_t *live, const pull 
  * equations (a: 6 entries of the symmetric matrix, b: 3). */
 static inline void add_pull(const pull *p, double beta, double a[6], double b[3])
 {
-    const double f = p->w * beta * beta, g = -p->w * beta * p->r;
-    a[0] += f * p->n[0] * p->n[0];
-    a[1] += f * p->n[0] * p->n[1];
-    a[2] += f * p->n[0] * p->n[2];
-    a[3] += f * p->n[1] * p->n[1];
-    a[4] += f * p->n[1] * p->n[2];
-    a[5] += f * p->n[2] * p->n[2];
-    b[0] += g * p->n[0];
-    b[1] += g * p->n[1];
-    b[2] += g * p->n[2];
+    const double w = p->w, n0 = p->n[0], n1 = p->n[1], n2 = p->n[2];
+    const double f = w * beta * beta, g = -w * beta * p->r;
+    a[0] += f * n0 * n0;
+    a[1] += f * n0 * n1;
+    a[2] += f * n0 * n2;
+    a[3] += f * n1 * n1;
+    a[4] += f * n1 * n2;
+    a[5] += f * n2 * n2;
+    b[0] += g * n0;
+    b[1] += g * n1;
+    b[2] += g * n2;
 }
 
 /* The coordinates of point x of triangle (a, b, c)'s plane along its edges,
@@ -286,10 +299,13 @@ static void input_pull(const input_surface *in, bool exact, const double p[3], d
     if (!(ml2 > 0) || !(w > 0))
         return;
     const double ml = sqrt(ml2);
-    for (int z = 0; z < 3; z++)
-        o->n[z] = mn[z] / ml;
-    o->r = o->n[0] * (p[0] - q[0]) + o->n[1] * (p[1] - q[1]) + o->n[2] * (p[2] - q[2]);
-    o->w = w;
+    double n[3];
+    for (int z = 0; z < 3; z++) {
+        n[z] = mn[z] / ml;
+        o->n[z] = (float)n[z];
+    }
+    o->r = (float)(n[0] * (p[0] - q[0]) + n[1] * (p[1] - q[1]) + n[2] * (p[2] - q[2]));
+    o->w = (float)w;
 }
 
 mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
@@ -321,7 +337,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     uint32_t *istart = mr_alloc_array(ivc + 1, sizeof *istart);
     uint32_t *ilist = mr_alloc_array(3 * triangle_count, sizeof *ilist);
     float *ipos = mr_alloc_array(3 * ivc, sizeof *ipos);
-    double *sp = NULL; /* x y z area */
+    float *sarea = NULL; /* the input samples' areas */
     pull *in_pull = NULL, *out_pull = NULL, *v_pull = NULL;
     uint32_t *start = NULL, *list = NULL, *vout = NULL;
     float *next = NULL;
@@ -361,7 +377,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     size_t nout = 0;
     for (size_t v = 0; v < vc; v++)
         nout += tstart[v] < tstart[v + 1];
-    sp = mr_alloc_array(4 * ns, sizeof *sp);
+    sarea = mr_alloc_array(ns, sizeof *sarea);
     in_pull = mr_alloc_array(ns, sizeof *in_pull);
     out_pull = mr_alloc_array(no, sizeof *out_pull);
     v_pull = mr_alloc_array(nout, sizeof *v_pull);
@@ -370,9 +386,9 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     list = mr_alloc_array(3 * ns, sizeof *list);
     next = mr_alloc_array(3 * vc, sizeof *next);
     moved = mr_alloc_array(vc, 1);
-    if (!sp || !in_pull || !out_pull || !v_pull || !vout || !start || !list || !next || !moved) {
+    if (!sarea || !in_pull || !out_pull || !v_pull || !vout || !start || !list || !next || !moved) {
         st = mr_fail_nomem(err, "simplify: surface fit",
-                           ns * (4 * sizeof *sp + sizeof *in_pull + 3 * sizeof *list) +
+                           ns * (sizeof *sarea + sizeof *in_pull + 3 * sizeof *list) +
                                no * sizeof *out_pull + nout * (sizeof *v_pull + 4) + 17 * vc);
         goto done;
     }
@@ -385,15 +401,9 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
         v_pull[i].tri = MR_NO_HINT;
 #pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nsi > 65536)
     for (ptrdiff_t i = 0; i < nsi; i++) {
-        const uint32_t *tv = indices + 3 * (size_t)i * step;
         double n[3], l2;
-        tri_normal(ipos, tv, n, &l2);
-        for (int k = 0; k < 3; k++)
-            sp[4 * i + k] = ((double)ipos[3 * (size_t)tv[0] + (size_t)k] +
-                             ipos[3 * (size_t)tv[1] + (size_t)k] +
-                             ipos[3 * (size_t)tv[2] + (size_t)k]) /
-                            3;
-        sp[4 * i + 3] = 0.5 * sqrt(l2);
+        tri_normal(ipos, indices + 3 * (size_t)i * step, n, &l2);
+        sarea[i] = (float)(0.5 * sqrt(l2));
         in_pull[i].tri = UINT32_MAX;
     }
 
@@ -410,7 +420,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(s->threads) if (par && nsi > 4096)
         for (ptrdiff_t i = 0; i < nsi; i++) {
             pull *h = &in_pull[i];
-            const double *p = sp + 4 * i;
+            double p[3];
+            sample_point(ipos, indices + 3 * (size_t)i * step, p);
             uint32_t tri;
             double c[3], n[3], l2;
             if (it == 0)
@@ -425,18 +436,19 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             const double da[3] = {a[0], a[1], a[2]}, db[3] = {b[0], b[1], b[2]},
                          dc[3] = {cc[0], cc[1], cc[2]};
             double bb = 0, bc = 0;
-            if (!(l2 > 0) || !(edge_coords(da, db, dc, c, 0, &bb, &bc) > 0) || !(p[3] > 0)) {
+            if (!(l2 > 0) || !(edge_coords(da, db, dc, c, 0, &bb, &bc) > 0) || !(sarea[i] > 0)) {
                 h->w = 0; /* no pull */
                 continue;
             }
             const double l = sqrt(l2);
             h->beta[0] = (float)(1 - bb - bc);
             h->beta[1] = (float)bb;
-            h->beta[2] = (float)bc;
-            for (int k = 0; k < 3; k++)
-                h->n[k] = n[k] / l;
-            h->r = h->n[0] * (c[0] - p[0]) + h->n[1] * (c[1] - p[1]) + h->n[2] * (c[2] - p[2]);
-            h->w = p[3];
+            for (int k = 0; k < 3; k++) {
+                n[k] /= l;
+                h->n[k] = (float)n[k];
+            }
+            h->r = (float)(n[0] * (c[0] - p[0]) + n[1] * (c[1] - p[1]) + n[2] * (c[2] - p[2]));
+            h->w = sarea[i];
         }
         if (it == 0)
             mr_tri_bvh_free(&obvh);
@@ -489,8 +501,9 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             double a[6] = {0, 0, 0, 0, 0, 0}, b[3] = {0, 0, 0};
             for (uint32_t e = start[v]; e < start[v + 1]; e++) {
                 const pull *h = &in_pull[list[e] / 3];
+                const uint32_t j = list[e] % 3;
                 if (h->w > 0)
-                    add_pull(h, h->beta[list[e] % 3], a, b);
+                    add_pull(h, j < 2 ? h->beta[j] : 1.0 - h->beta[0] - h->beta[1], a, b);
             }
             for (uint32_t e = tstart[v]; e < tstart[v + 1]; e++)
                 for (int k = 0; k < OUT_SAMPLES; k++) {
@@ -554,7 +567,7 @@ done:
     if (have_ibvh)
         mr_tri_bvh_free(&ibvh);
     free(live);
-    free(sp);
+    free(sarea);
     free(in_pull);
     free(out_pull);
     free(v_pull);
