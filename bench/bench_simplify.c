@@ -24,8 +24,9 @@
  *                   on a closed mesh); the same 20 s budget as OpenMesh.
  * Without --quick (or with --others), also our other simplifiers on one
  * thread: meshreduce-half (batched, half collapse), mr-greedy-full and
- * mr-greedy-half (the sequential greedy reference), meshreduce-best (the
- * default with --quality best).
+ * mr-greedy-half (the sequential greedy reference), and meshreduce-best
+ * (the default with --quality best) at every --threads count, its speedup
+ * and sameness against its own 1-thread run.
  *
  *   bench_simplify [--runs R] [--quick] [--threads 1,2,...] [--csv FILE]
  *                  [--md FILE] [--samples N] [--data DIR] [--dir DIR]
@@ -317,20 +318,20 @@ static const char *difference(const mr_simplified *a, const mr_simplified *b, ch
     return NULL;
 }
 
-static void report_mismatch(const char *mesh, double ratio, int threads, int run,
-                            const char *what)
+static void report_mismatch(const char *alg, const char *mesh, double ratio, int threads,
+                            int run, const char *what)
 {
     char msg[512];
     if (threads == 1)
         snprintf(msg, sizeof msg,
-                 "*** BUG: meshreduce-full on 1 thread, %s to %g %%: run %d differs from run 1 "
+                 "*** BUG: %s on 1 thread, %s to %g %%: run %d differs from run 1 "
                  "(%s): not deterministic ***",
-                 mesh, 100 * ratio, run + 1, what);
+                 alg, mesh, 100 * ratio, run + 1, what);
     else
         snprintf(msg, sizeof msg,
-                 "*** BUG: meshreduce-full on %d threads, %s to %g %%: run %d is not "
+                 "*** BUG: %s on %d threads, %s to %g %%: run %d is not "
                  "byte-identical to the 1-thread output (first difference: %s) ***",
-                 threads, mesh, 100 * ratio, run + 1, what);
+                 alg, threads, mesh, 100 * ratio, run + 1, what);
     fprintf(stderr, "%s\n", msg);
     printf("%s\n", msg);
     fflush(stdout);
@@ -399,7 +400,7 @@ static void run_block(const config *cfg, const mr_mesh *in, const char *raw, mes
             if (what) {
                 if (ours[j].same)
                     mismatches++;
-                report_mismatch(m->name, ratio, cfg->threads[j], k, what);
+                report_mismatch(alg_name[ALG_FULL], m->name, ratio, cfg->threads[j], k, what);
                 ours[j].same = 0;
                 if (!have_diff[j]) {
                     diff[j] = out;
@@ -459,12 +460,14 @@ static void run_block(const config *cfg, const mr_mesh *in, const char *raw, mes
     free(times);
 }
 
-/* One of our other simplifiers on 1 thread, its runs back to back. */
-static void run_other(const config *cfg, const mr_mesh *in, const char *raw, double ratio,
-                      int alg, size_t triangles, row *r)
+/* One of our other simplifiers on `threads` threads, its runs back to
+ * back; the last output kept in *keep, or compared with *ref (r->same). */
+static void run_other(const config *cfg, const mr_mesh *in, const char *raw, const char *name,
+                      double ratio, int alg, size_t triangles, int threads, mr_simplified *keep,
+                      const mr_simplified *ref, row *r)
 {
     mr_simplify_options opt;
-    options_for(alg, ratio, 1, &opt);
+    options_for(alg, ratio, threads, &opt);
     if (triangles) { /* asked for this many triangles instead */
         opt.target_ratio = 0;
         opt.target_triangles = triangles;
@@ -478,15 +481,27 @@ static void run_other(const config *cfg, const mr_mesh *in, const char *raw, dou
         times[k] = simplify_once(in, &opt, &out);
     }
     r->runs = cfg->runs;
-    r->threads = 1;
+    r->threads = threads;
     r->time = bench_summarize(times, cfg->runs);
     free(times);
     r->out_vertices = out.vertex_count;
     r->out_triangles = out.triangle_count;
-    r->peak_bytes = peak_of(cfg, raw, alg, ratio, 1);
+    r->peak_bytes = peak_of(cfg, raw, alg, ratio, threads);
     measure_quality(cfg, in, out.positions, out.vertex_count, out.indices, out.triangle_count, r,
                     alg_name[alg]);
-    mr_simplified_free(&out);
+    if (ref) { /* the last run's output against the 1-thread one */
+        char buf[160];
+        const char *what = difference(ref, &out, buf, sizeof buf);
+        r->same = what == NULL;
+        if (what) {
+            mismatches++;
+            report_mismatch(alg_name[alg], name, ratio, threads, cfg->runs - 1, what);
+        }
+    }
+    if (keep)
+        *keep = out;
+    else
+        mr_simplified_free(&out);
     r->done = 1;
 }
 
@@ -544,7 +559,7 @@ static int row_order(const config *cfg, int *alg, int *ti)
 {
     int n = 0;
     for (int a = 0; a < ALG_COUNT; a++)
-        for (int j = 0; j < (a == ALG_FULL ? cfg->n_threads : 1); j++) {
+        for (int j = 0; j < (a == ALG_FULL || a == ALG_BEST ? cfg->n_threads : 1); j++) {
             alg[n] = a;
             ti[n] = j;
             n++;
@@ -593,7 +608,13 @@ static void row_texts(const mesh_result *m, int ti, int a, int j, row_text *t)
         if (mo->done)
             fmt_ratio(t->mo, sizeof t->mo, mo->time.median, r->time.median);
         snprintf(t->same, sizeof t->same, "%s", r->same ? "yes" : "no");
-    } else if (ours->done) {
+    } else if (a == ALG_BEST && j > 0) { /* against its own 1-thread run */
+        const row *one = &m->rows[ti][ALG_BEST][0];
+        if (one->done)
+            fmt_ratio(t->speedup, sizeof t->speedup, one->time.median, r->time.median);
+        snprintf(t->same, sizeof t->same, "%s", r->same ? "yes" : "no");
+    }
+    if (a != ALG_FULL && ours->done) {
         fmt_ratio(t->rt, sizeof t->rt, r->time.median, ours->time.median);
         fmt_ratio(t->rh, sizeof t->rh, r->hausdorff_rel, ours->hausdorff_rel);
         fmt_ratio(t->rr, sizeof t->rr, r->rms_rel, ours->rms_rel);
@@ -672,12 +693,14 @@ static void write_csv_rows(FILE *f, const config *cfg, const mesh_result *m)
             csv_num(f, r->rms_rel, r->rms_rel >= 0);
             /* added columns */
             fprintf(f, ",%d", r->runs);
-            int full = a == ALG_FULL;
-            csv_num(f, r->time.median > 0 ? ours->time.median / r->time.median : 0,
-                    full && ours->done && r->time.median > 0);
+            const int full = a == ALG_FULL, best_n = a == ALG_BEST && j > 0;
+            /* speedup: against the same simplifier's 1-thread run */
+            const row *one = full ? ours : best_n ? &m->rows[ti][ALG_BEST][0] : NULL;
+            csv_num(f, one && r->time.median > 0 ? one->time.median / r->time.median : 0,
+                    one && one->done && r->time.median > 0);
             csv_num(f, r->time.median > 0 ? mo->time.median / r->time.median : 0,
                     full && mo->done && r->time.median > 0);
-            fprintf(f, ",%s", full ? (r->same ? "yes" : "no") : "");
+            fprintf(f, ",%s", full || best_n ? (r->same ? "yes" : "no") : "");
             fprintf(f, ",%s,", model);
             if (cfg->cpu.physical > 0)
                 fprintf(f, "%d", cfg->cpu.physical);
@@ -952,17 +975,19 @@ static int collect_bars(const config *cfg, const mesh_result *res, int n, bar *b
     {
         bar *b = &bars[nb++];
         snprintf(b->name, sizeof b->name,
-                 "output byte-identical at every thread count (all meshes and targets)");
+                 "output byte-identical at every thread count (all meshes and targets; "
+                 "default and best)");
         int total = 0, same = 0;
         for (int i = 0; i < n; i++)
             for (int ti = 0; ti < TARGET_COUNT; ti++)
-                for (int j = 0; j < cfg->n_threads; j++) {
-                    const row *r = &res[i].rows[ti][ALG_FULL][j];
-                    if (!r->done)
-                        continue;
-                    total++;
-                    same += r->same == 1;
-                }
+                for (int j = 0; j < cfg->n_threads; j++)
+                    for (int a = 0; a < 2; a++) { /* the default, and best past 1 thread */
+                        const row *r = &res[i].rows[ti][a ? ALG_BEST : ALG_FULL][j];
+                        if (!r->done || (a && j == 0))
+                            continue;
+                        total++;
+                        same += r->same == 1;
+                    }
         if (total) {
             snprintf(b->measured, sizeof b->measured, "%d of %d rows yes", same, total);
             b->met = same == total;
@@ -1231,12 +1256,22 @@ int main(int argc, char **argv)
                 for (int a = ALG_HALF; a <= ALG_BEST; a++) {
                     /* best at the default's triangle count, as the peers
                      * (its collapses keep more boundary vertices, so the
-                     * same vertex count has more triangles) */
-                    run_other(&cfg, &mesh, raw, ratio, a,
-                              a == ALG_BEST ? m->rows[ti][ALG_FULL][0].out_triangles : 0,
-                              &m->rows[ti][a][0]);
-                    print_row(m, ti, a, 0);
-                    fflush(stdout);
+                     * same vertex count has more triangles), and at every
+                     * thread count asked, its output against its own at 1
+                     * thread (the first) */
+                    const int nt = a == ALG_BEST ? cfg.n_threads : 1;
+                    mr_simplified one;
+                    memset(&one, 0, sizeof one);
+                    for (int j = 0; j < nt; j++) {
+                        run_other(&cfg, &mesh, raw, m->name, ratio, a,
+                                  a == ALG_BEST ? m->rows[ti][ALG_FULL][0].out_triangles : 0,
+                                  a == ALG_BEST ? cfg.threads[j] : 1,
+                                  j == 0 && nt > 1 ? &one : NULL, j > 0 ? &one : NULL,
+                                  &m->rows[ti][a][j]);
+                        print_row(m, ti, a, j);
+                        fflush(stdout);
+                    }
+                    mr_simplified_free(&one);
                 }
             if (!cfg.others || (!bench_have_openmesh() && !bench_have_cgal()))
                 continue;

@@ -88,8 +88,9 @@ static const double out_beta[OUT_SAMPLES][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3},
 
 /* One sample's pull: unit direction, residual along it, weight (0: none),
  * and for an input sample its nearest output triangle and coordinates
- * (the first two; the third is one less both). Floats: 32 bytes a sample,
- * a million and more on large inputs; the sums are in doubles. */
+ * (the first two; the third is 1 minus their sum). Floats: 32 bytes a
+ * sample, of which there are a million and more on large inputs; the
+ * normal equations are summed in doubles. */
 typedef struct pull {
     float n[3], r, w;
     float beta[2];
