@@ -67,6 +67,15 @@
 #define MAX_ROUNDS 4
 #define MAX_ROUNDS_TOTAL 64
 
+/* Live triangles from which a gather runs on every thread, and winners
+ * from which their plans do: below, starting the team costs more than
+ * the edges' quadric costs. The memoryless plans (MR_QUALITY_BEST) read
+ * both ends' fans and cost about ten times as much each. */
+#define GATHER_PAR 65536
+#define GATHER_PAR_MEMORYLESS 4096
+#define PLAN_PAR 2048
+#define PLAN_PAR_MEMORYLESS 256
+
 /* Histogram buckets over the top 16 bits of a key. */
 #define HIST_BUCKETS 65536u
 
@@ -306,7 +315,8 @@ static size_t gather(mr_simplifier *s, double limit)
     mr_batched *bt = s->bt;
     const mr_collapse_mesh *m = &s->m;
     const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
-    const bool par = bt->threads > 1 && m->live_triangles > 65536;
+    const bool par = bt->threads > 1 &&
+                     m->live_triangles > (s->memoryless ? GATHER_PAR_MEMORYLESS : GATHER_PAR);
 #pragma omp parallel for schedule(static) num_threads(bt->threads) if (par)
     for (ptrdiff_t i = 0; i < nb; i++)
         bt->bn[i] = block_edges(m, (size_t)i);
@@ -727,7 +737,8 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
     mr_batched *bt = s->bt;
     mr_collapse_mesh *m = &s->m;
     const int nt = bt->threads;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt) if (nt > 1 && n >= 2048)
+    const size_t pmin = s->memoryless ? PLAN_PAR_MEMORYLESS : PLAN_PAR;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt) if (nt > 1 && n >= pmin)
     for (ptrdiff_t i0 = 0; i0 < (ptrdiff_t)n; i0 += PLAN_BATCH) {
         const size_t c = n - (size_t)i0 < PLAN_BATCH ? n - (size_t)i0 : PLAN_BATCH;
         plan_winners(s, w + i0, c, g->limit);
