@@ -915,6 +915,32 @@ static inline double box_dist2(const mr_bvh_node *n, const double p[3])
     return d;
 }
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+/* box_dist2 of nodes x and y at once, one in each lane: the same
+ * operations in the same order, so the same bits. */
+static inline void box_dist2_pair(const mr_bvh_node *x, const mr_bvh_node *y, const double p[3],
+                                  double *dx, double *dy)
+{
+    __m128d d = _mm_setzero_pd();
+    const __m128d zero = _mm_setzero_pd();
+    for (int k = 0; k < 3; k++) {
+        const __m128d pk = _mm_set1_pd(p[k]);
+        const __m128d lo = _mm_set_pd((double)y->lo[k], (double)x->lo[k]);
+        const __m128d hi = _mm_set_pd((double)y->hi[k], (double)x->hi[k]);
+        const __m128d below = _mm_sub_pd(lo, pk), above = _mm_sub_pd(pk, hi);
+        /* below > above ? below : above */
+        const __m128d gt = _mm_cmpgt_pd(below, above);
+        const __m128d e = _mm_or_pd(_mm_and_pd(gt, below), _mm_andnot_pd(gt, above));
+        const __m128d pos = _mm_cmpgt_pd(e, zero);
+        const __m128d c = _mm_and_pd(pos, e);
+        d = _mm_add_pd(d, _mm_mul_pd(c, c));
+    }
+    _mm_storel_pd(dx, d);
+    _mm_storeh_pd(dy, d);
+}
+#endif
+
 typedef struct stack_entry {
     uint32_t node;
     double d2;
@@ -1010,8 +1036,16 @@ MR_ALWAYS_INLINE static inline double bvh_search(const mr_bvh *bvh, node_dist_fn
         } else {
             /* Nearer child first; selects rather than branches, as the
              * order is unpredictable. */
-            const double d0 = node_dist(bound, nodes, n->a, p, best);
-            const double d1 = node_dist(bound, nodes, n->b, p, best);
+            double d0, d1;
+#if defined(__SSE2__)
+            if (node_dist == aabb_node_dist2) {
+                box_dist2_pair(&nodes[n->a], &nodes[n->b], p, &d0, &d1);
+            } else
+#endif
+            {
+                d0 = node_dist(bound, nodes, n->a, p, best);
+                d1 = node_dist(bound, nodes, n->b, p, best);
+            }
             const bool swap = d1 < d0;
             const uint32_t near = swap ? n->b : n->a, far = swap ? n->a : n->b;
             const double dn = swap ? d1 : d0, df = swap ? d0 : d1;
