@@ -941,6 +941,19 @@ static inline void box_dist2_pair(const mr_bvh_node *x, const mr_bvh_node *y, co
 }
 #endif
 
+/* Fetch what a search reads after node c: its children, or for a leaf
+ * its first primitive (records of prim_size bytes at data). */
+static inline void prefetch_below(const mr_bvh_node *nodes, const mr_bvh_node *c,
+                                  const void *data, size_t prim_size)
+{
+    if (c->b & MR_BVH_LEAF) {
+        __builtin_prefetch((const char *)data + prim_size * c->a);
+    } else {
+        __builtin_prefetch(&nodes[c->a]);
+        __builtin_prefetch(&nodes[c->b]);
+    }
+}
+
 typedef struct stack_entry {
     uint32_t node;
     double d2;
@@ -1035,29 +1048,19 @@ MR_ALWAYS_INLINE static inline double bvh_search(const mr_bvh *bvh, node_dist_fn
                 }
             }
         } else {
-            /* Nearer child first; selects rather than branches, as the
-             * order is unpredictable. */
             /* The next level's nodes, or a leaf's first primitive, are
              * fetched while these two boxes are measured: a search is
              * a chain of dependent loads (the nodes of a 100k-triangle
              * mesh's tree and its records are megabytes). */
             const mr_bvh_node *ca = &nodes[n->a], *cb = &nodes[n->b];
-            if (ca->b & MR_BVH_LEAF) {
-                __builtin_prefetch((const char *)data + prim_size * ca->a);
-            } else {
-                __builtin_prefetch(&nodes[ca->a]);
-                __builtin_prefetch(&nodes[ca->b]);
-            }
-            if (cb->b & MR_BVH_LEAF) {
-                __builtin_prefetch((const char *)data + prim_size * cb->a);
-            } else {
-                __builtin_prefetch(&nodes[cb->a]);
-                __builtin_prefetch(&nodes[cb->b]);
-            }
+            prefetch_below(nodes, ca, data, prim_size);
+            prefetch_below(nodes, cb, data, prim_size);
+            /* Nearer child first; selects rather than branches, as the
+             * order is unpredictable. */
             double d0, d1;
 #if defined(__SSE2__)
             if (node_dist == aabb_node_dist2) {
-                box_dist2_pair(&nodes[n->a], &nodes[n->b], p, &d0, &d1);
+                box_dist2_pair(ca, cb, p, &d0, &d1);
             } else
 #endif
             {

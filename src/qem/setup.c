@@ -125,17 +125,6 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
     mr_quadric_store(&s->q[v], &q);
 }
 
-void mr_simplifier_free(mr_simplifier *s)
-{
-    mr_collapse_mesh_free(&s->m);
-    free(s->q);
-    free(s->order);
-    mr_simplifier_batched_free(s);
-    mr_simplifier_queued_free(s);
-    mr_simplifier_partitioned_free(s);
-    memset(s, 0, sizeof *s);
-}
-
 void mr_simplifier_release_run(mr_simplifier *s)
 {
     free(s->q);
@@ -143,6 +132,14 @@ void mr_simplifier_release_run(mr_simplifier *s)
     mr_simplifier_batched_free(s);
     mr_simplifier_queued_free(s);
     mr_simplifier_partitioned_free(s);
+}
+
+void mr_simplifier_free(mr_simplifier *s)
+{
+    mr_collapse_mesh_free(&s->m);
+    mr_simplifier_release_run(s);
+    free(s->order);
+    memset(s, 0, sizeof *s);
 }
 
 static bool is_finite(double x) { return x == x && x - x == 0; }
