@@ -300,7 +300,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
                               double *target)
 {
     const mr_collapse_mesh *m = &s->m;
-    if (s->half || s->memoryless) { /* the memoryless plan reads the fans */
+    if (s->half) {
         for (size_t i = 0; i < n; i++)
             plan_one(s, a[i], b[i], i, cost, r, k, target);
         return;
@@ -312,33 +312,8 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
     uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];
     for (size_t i0 = 0; i0 < n; i0 += COST_BATCH) {
         const size_t i1 = n - i0 < COST_BATCH ? n : i0 + COST_BATCH;
-        uint8_t any = 0;
-        for (size_t i = i0; i < i1; i++)
-            any |= m->flags[a[i]] | m->flags[b[i]];
-        if (!(any & pin)) {
-            /* the usual batch: no pinned end, every edge in its own lane */
-            const size_t nl = i1 - i0;
-            for (size_t l = 0; l < nl; l++) {
-                const uint32_t ea = a[i0 + l], eb = b[i0 + l];
-                lr[l] = ea < eb ? eb : ea;
-                lk[l] = ea < eb ? ea : eb;
-            }
-            mr_cost_pack_inputs(s->q, s->m.pos, lr, lk, nl, in);
-            kern->free_costs(in, nl, cost + i0, x, s->box);
-            if (r) {
-                for (size_t l = 0; l < nl; l++) {
-                    const size_t i = i0 + l;
-                    const uint32_t kk = lk[l];
-                    r[i] = lr[l];
-                    k[i] = kk;
-                    target[3 * i] = (double)m->pos[3 * (size_t)kk] + x[l];
-                    target[3 * i + 1] = (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l];
-                    target[3 * i + 2] =
-                        (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l];
-                }
-            }
-            continue;
-        }
+        /* the free edges in lanes (plan_edge: the larger id goes), the
+         * pinned ones through the one-edge path */
         size_t nl = 0;
         for (size_t i = i0; i < i1; i++) {
             const uint32_t ea = a[i], eb = b[i];
@@ -346,24 +321,30 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
                 plan_one(s, ea, eb, i, cost, r, k, target);
                 continue;
             }
-            /* plan_edge: the larger id goes */
             lr[nl] = ea < eb ? eb : ea;
             lk[nl] = ea < eb ? ea : eb;
             lane[nl++] = (uint32_t)(i - i0);
         }
         mr_cost_pack_inputs(s->q, s->m.pos, lr, lk, nl, in);
         kern->free_costs(in, nl, out, x, s->box);
+        if (!r && !s->memoryless) {
+            for (size_t l = 0; l < nl; l++)
+                cost[i0 + lane[l]] = out[l];
+            continue;
+        }
         for (size_t l = 0; l < nl; l++) {
             const size_t i = i0 + lane[l];
-            cost[i] = out[l];
+            /* as plan_edge: the kept end's position plus x, then the
+             * memoryless plan from there */
+            const uint32_t kk = lk[l];
+            double t[3] = {(double)m->pos[3 * (size_t)kk] + x[l],
+                           (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l],
+                           (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l]};
+            cost[i] = s->memoryless ? memoryless_plan(s, lr[l], kk, t, out[l]) : out[l];
             if (r) {
-                /* as plan_edge: the kept end's position plus x */
-                const uint32_t kk = lk[l];
                 r[i] = lr[l];
                 k[i] = kk;
-                target[3 * i] = (double)m->pos[3 * (size_t)kk] + x[l];
-                target[3 * i + 1] = (double)m->pos[3 * (size_t)kk + 1] + x[COST_BATCH + l];
-                target[3 * i + 2] = (double)m->pos[3 * (size_t)kk + 2] + x[2 * COST_BATCH + l];
+                memcpy(target + 3 * i, t, sizeof t);
             }
         }
     }
