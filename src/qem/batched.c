@@ -308,8 +308,50 @@ static uint32_t gather_block(const mr_simplifier *s, size_t blk, double limit,
     return n;
 }
 
+/* Block blk's live edges, in triangle order, from out, with no cost yet. */
+static void list_block(const mr_collapse_mesh *m, size_t blk, mr_candidate *out)
+{
+    const size_t t0 = blk * BLOCK_TRIANGLES;
+    const size_t t1 = m->triangle_count - t0 < BLOCK_TRIANGLES ? m->triangle_count
+                                                                : t0 + BLOCK_TRIANGLES;
+    uint32_t n = 0;
+    for (size_t t = t0; t < t1; t++) {
+        if (m->tris[3 * t] == NONE)
+            continue;
+        MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
+            if (take) /* never past the block's last edge: the next block's */
+                out[n++] = (mr_candidate){0, a, b};
+        });
+    }
+}
+
+/* Edges planned together in a memoryless gather (the unit of its work
+ * sharing). */
+#define KEY_CHUNK 256
+
+/* The memoryless plans' keys of candidates [i0, i0 + n) (n <= KEY_CHUNK):
+ * their cost's, or DEAD_KEY when the collapse may not happen. */
+static void key_chunk(const mr_simplifier *s, mr_candidate *c, size_t n, double limit)
+{
+    uint32_t ea[KEY_CHUNK], eb[KEY_CHUNK];
+    double cost[KEY_CHUNK];
+    if (n == 0 || n > KEY_CHUNK)
+        return;
+    for (size_t i = 0; i < n; i++) {
+        ea[i] = c[i].a;
+        eb[i] = c[i].b;
+    }
+    mr_simplifier_plan_edges(s, n, ea, eb, cost, NULL, NULL, NULL);
+    for (size_t i = 0; i < n; i++)
+        c[i].key = cost[i] <= limit && cost[i] < INFINITY ? mr_float_key((float)cost[i])
+                                                          : DEAD_KEY;
+}
+
 /* Every live edge whose collapse may happen, block by block (bn[], from
- * boff[]); returns how many. */
+ * boff[]); returns how many. The quadric costs are computed block by
+ * block; the memoryless plans, ten times dearer each, in equal chunks of
+ * all the edges (a small mesh has few blocks, and its blocks unequal
+ * work), then each block keeps its allowed ones. */
 static size_t gather(mr_simplifier *s, double limit)
 {
     mr_batched *bt = s->bt;
@@ -328,11 +370,36 @@ static size_t gather(mr_simplifier *s, double limit)
     if (off > bt->cand_cap) /* never: a mesh has no more edges than at the start */
         return 0;
     size_t total = 0;
+    if (!s->memoryless) {
 #pragma omp parallel for schedule(dynamic, 4) reduction(+ : total) num_threads(bt->threads) \
     if (par)
-    for (ptrdiff_t i = 0; i < nb; i++) {
-        bt->bn[i] = gather_block(s, (size_t)i, limit, bt->cand + bt->boff[i]);
-        total += bt->bn[i];
+        for (ptrdiff_t i = 0; i < nb; i++) {
+            bt->bn[i] = gather_block(s, (size_t)i, limit, bt->cand + bt->boff[i]);
+            total += bt->bn[i];
+        }
+        return total;
+    }
+    const ptrdiff_t nc = (ptrdiff_t)off;
+#pragma omp parallel num_threads(bt->threads) if (par)
+    {
+#pragma omp for schedule(static)
+        for (ptrdiff_t i = 0; i < nb; i++)
+            list_block(m, (size_t)i, bt->cand + bt->boff[i]);
+#pragma omp for schedule(dynamic, 1)
+        for (ptrdiff_t i0 = 0; i0 < nc; i0 += KEY_CHUNK)
+            key_chunk(s, bt->cand + i0, nc - i0 < KEY_CHUNK ? (size_t)(nc - i0) : KEY_CHUNK,
+                      limit);
+#pragma omp for schedule(static) reduction(+ : total)
+        for (ptrdiff_t i = 0; i < nb; i++) {
+            mr_candidate *c = bt->cand + bt->boff[i];
+            uint32_t k = 0;
+            for (uint32_t j = 0, e = bt->bn[i]; j < e; j++) {
+                c[k] = c[j];
+                k += c[j].key != DEAD_KEY;
+            }
+            bt->bn[i] = k;
+            total += k;
+        }
     }
     return total;
 }
