@@ -404,13 +404,47 @@ static size_t gather(mr_simplifier *s, double limit)
     return total;
 }
 
+/* Candidates up to which rank_key finds its bucket in two passes over
+ * them with two histograms of 256 (the top byte of the keys, then the next
+ * within the top byte's bucket) instead of one of HIST_BUCKETS: the same
+ * bucket, without clearing and scanning 65,536 counters each pass (the
+ * homer, 12,000 triangles, to 10 % with the default: 0.0055 -> 0.0049 s). */
+#define RANK_SMALL 65536
+
 /* The key below which at least `rank` + 1 of the n candidates lie, to the
  * resolution of the top 16 bits (1/128 relative). */
+static uint32_t rank_key_small(const mr_batched *bt, size_t rank)
+{
+    uint32_t top[256] = {0}, next[256] = {0};
+    for (size_t i = 0; i < bt->nblocks; i++) {
+        const mr_candidate *c = bt->cand + bt->boff[i];
+        for (uint32_t j = 0, e = bt->bn[i]; j < e; j++)
+            top[c[j].key >> 24]++;
+    }
+    size_t acc = 0;
+    uint32_t t = 0;
+    for (; t < 256 && acc + top[t] <= rank; t++)
+        acc += top[t];
+    if (t == 256)
+        return UINT32_MAX;
+    for (size_t i = 0; i < bt->nblocks; i++) {
+        const mr_candidate *c = bt->cand + bt->boff[i];
+        for (uint32_t j = 0, e = bt->bn[i]; j < e; j++)
+            next[(c[j].key >> 16) & 0xFFu] += c[j].key >> 24 == t;
+    }
+    uint32_t u = 0;
+    for (; u < 255 && acc + next[u] <= rank; u++)
+        acc += next[u];
+    return (t << 8 | u) << 16 | 0xFFFFu;
+}
+
 static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
 {
     mr_batched *bt = s->bt;
     const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
     const int nt = n > 65536 ? bt->threads : 1;
+    if (n <= RANK_SMALL)
+        return rank_key_small(bt, rank);
 #pragma omp parallel num_threads(nt) if (nt > 1)
     {
         const int me = omp_get_thread_num(), team = omp_get_num_threads();
