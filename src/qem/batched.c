@@ -411,8 +411,7 @@ static size_t gather(mr_simplifier *s, double limit)
  * homer, 12,000 triangles, to 10 % with the default: 0.0055 -> 0.0049 s). */
 #define RANK_SMALL 65536
 
-/* The key below which at least `rank` + 1 of the n candidates lie, to the
- * resolution of the top 16 bits (1/128 relative). */
+/* rank_key for a small pass: the same bucket from the two histograms. */
 static uint32_t rank_key_small(const mr_batched *bt, size_t rank)
 {
     uint32_t top[256] = {0}, next[256] = {0};
@@ -438,6 +437,8 @@ static uint32_t rank_key_small(const mr_batched *bt, size_t rank)
     return (t << 8 | u) << 16 | 0xFFFFu;
 }
 
+/* The key below which at least `rank` + 1 of the n candidates lie, to the
+ * resolution of the top 16 bits (1/128 relative). */
 static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
 {
     mr_batched *bt = s->bt;
