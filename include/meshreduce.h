@@ -389,9 +389,12 @@ typedef enum mr_strategy {
 } mr_strategy;
 
 /* Progress of a simplification: the fraction done in [0, 1], from the
- * calling thread. Return 0 to go on; anything else cancels: the work stops
- * at the next report (within about 1 % of the collapses) and the call
- * fails with MR_ERR_CANCELLED, its output left empty. */
+ * calling thread, never decreasing. Return 0 to go on; anything else
+ * cancels: the work stops at the next report (within about 1 % of the
+ * collapses) and the call fails with MR_ERR_CANCELLED, its output left
+ * empty. With MR_QUALITY_BEST the collapses report up to 0.5 and the
+ * surface fit after it the rest, after the input's search hierarchy and
+ * after each of its sweeps (about a seventh of the fit each). */
 typedef int (*mr_progress_fn)(double fraction_done, void *user);
 
 /* How hard the simplifier works for closeness to the input's surface. */

@@ -1,6 +1,7 @@
 /* Cancelling a simplification from its progress callback: every strategy
  * (greedy and batched, full and half collapse; the concurrent queues on
- * several threads), through mr_simplify and mr_mesh_simplify, stops soon
+ * several threads; --quality best's surface fit), through mr_simplify and
+ * mr_mesh_simplify, stops soon
  * after the callback asks, fails with MR_ERR_CANCELLED and a message, and
  * leaves its output empty (ASan: nothing leaks). A callback that never asks
  * changes nothing. */
@@ -128,11 +129,98 @@ static void test_cancel_mesh(void **state)
     mr_mesh_free(&m);
 }
 
+/* --quality best: the collapses report up to 0.5, the surface fit the rest;
+ * asking to stop during the fit stops it. */
+typedef struct fit_watch {
+    size_t calls, above_half, after_stop;
+    double last, stop_above; /* ask to stop on the first report above
+                                stop_above (>= 1: never) */
+    bool increasing, stopped;
+} fit_watch;
+
+static int on_fit_progress(double fraction, void *user)
+{
+    fit_watch *w = user;
+    w->calls++;
+    w->after_stop += w->stopped;
+    w->increasing &= w->calls == 1 || fraction >= w->last;
+    w->above_half += fraction > 0.5 && fraction < 1;
+    w->last = fraction;
+    if (fraction > w->stop_above)
+        w->stopped = true;
+    return w->stopped;
+}
+
+static void test_cancel_best(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    mr_error err;
+    mr_mesh_init(&m);
+    assert_int_equal(mr_generate(MR_GEN_SCAN, 60000, 1, &m, &err), MR_OK);
+    const int threads[2] = {1, 2};
+    for (int t = 0; t < 2; t++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.quality = MR_QUALITY_BEST;
+        o.threads = threads[t];
+        o.target_ratio = 0.05;
+        o.progress = on_fit_progress;
+        /* never asking: the reports climb to 1, six of them in the fit */
+        fit_watch go = {0, 0, 0, 0, 2, true, false};
+        o.progress_user = &go;
+        mr_simplified r;
+        assert_int_equal(mr_simplify(m.positions, 0, m.vertex_count, m.indices, m.triangle_count,
+                                     &o, &r, &err),
+                         MR_OK);
+        assert_true(go.increasing);
+        assert_true(go.last == 1.0);
+        assert_true(go.above_half >= 6);
+        assert_true(go.calls > go.above_half + 3); /* the collapses' reports */
+        mr_simplified_free(&r);
+        /* asking during the fit: it stops there */
+        fit_watch stop = {0, 0, 0, 0, 0.6, true, false};
+        o.progress_user = &stop;
+        assert_int_equal(mr_simplify(m.positions, 0, m.vertex_count, m.indices, m.triangle_count,
+                                     &o, &r, &err),
+                         MR_ERR_CANCELLED);
+        tu_assert_contains(err.message, "cancelled by the progress callback");
+        assert_true(stop.stopped);
+        assert_int_equal(stop.after_stop, 0); /* not called again */
+        assert_true(stop.last > 0.6 && stop.last < 1.0);
+        assert_null(r.positions);
+        assert_int_equal(r.triangle_count, 0);
+    }
+    mr_mesh_free(&m);
+
+    /* the same through mr_mesh_simplify */
+    assert_int_equal(mr_generate(MR_GEN_TORUS, 60000, 2, &m, &err), MR_OK);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.quality = MR_QUALITY_BEST;
+    o.target_ratio = 0.05;
+    o.progress = on_fit_progress;
+    fit_watch stop = {0, 0, 0, 0, 0.6, true, false};
+    o.progress_user = &stop;
+    mr_mesh out;
+    mr_mesh_init(&out);
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, NULL, &err), MR_ERR_CANCELLED);
+    assert_true(stop.stopped && stop.after_stop == 0 && stop.last < 1.0);
+    assert_null(out.positions);
+    fit_watch go = {0, 0, 0, 0, 2, true, false};
+    o.progress_user = &go;
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, NULL, &err), MR_OK);
+    assert_true(go.increasing && go.last == 1.0 && go.above_half >= 6);
+    mr_mesh_free(&out);
+    mr_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cancel_flat_arrays),
         cmocka_unit_test(test_cancel_mesh),
+        cmocka_unit_test(test_cancel_best),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -357,7 +357,7 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
     size_t collapses = mr_simplifier_run(&s, &o, &max_error);
     if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
         mr_simplifier_release_run(&s);
-        st = mr_simplifier_refine(&s, in->positions, 0, gidx, tc, err);
+        st = mr_simplifier_refine(&s, &o, in->positions, 0, gidx, tc, err);
         free(gidx);
         gidx = NULL;
         if (st != MR_OK) {

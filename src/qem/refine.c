@@ -30,7 +30,9 @@
  * flip, turn by more than max_normal_turn in one sweep or lose its area
  * puts its vertices back, until none does. ITERATIONS sweeps. Boundary,
  * seam, locked and non-manifold vertices stay where the collapses left
- * them.
+ * them. The fit reports its part of the progress (s->fit_share) after the
+ * input's hierarchy and after each sweep, and stops there when the
+ * callback asks.
  *
  * The first sweep finds each sample's nearest triangle in a hierarchy
  * (exact); the later ones walk from the last sweep's answer (walk_nearest:
@@ -311,8 +313,16 @@ static void input_pull(const input_surface *in, bool exact, const double p[3], d
     o->w = (float)w;
 }
 
-mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
-                               const uint32_t *indices, size_t triangle_count, mr_error *err)
+/* Report the fit's step k of ITERATIONS + 1 (the input's hierarchy, then
+ * the sweeps): true when the progress callback asked to stop. */
+static bool fit_report(mr_simplifier *s, const mr_simplify_options *opt, int k)
+{
+    return mr_simplifier_report(s, opt, 1 - s->fit_share + s->fit_share * k / (ITERATIONS + 1));
+}
+
+mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
+                               const float *positions, size_t stride, const uint32_t *indices,
+                               size_t triangle_count, mr_error *err)
 {
     mr_collapse_mesh *m = &s->m;
     if (stride == 0)
@@ -323,8 +333,10 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     size_t nlive = 0;
     for (size_t t = 0; t < m->triangle_count; t++)
         nlive += m->tris[3 * t] != MR_COLLAPSE_NONE;
-    if (nlive == 0 || triangle_count == 0)
+    if (nlive == 0 || triangle_count == 0) {
+        fit_report(s, opt, ITERATIONS + 1);
         return MR_OK;
+    }
     const size_t step = triangle_count > SAMPLES_PER_TRIANGLE * nlive
                             ? triangle_count / (SAMPLES_PER_TRIANGLE * nlive)
                             : 1;
@@ -374,6 +386,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
     if (st != MR_OK)
         goto done;
     have_ibvh = true;
+    if (fit_report(s, opt, 1))
+        goto done; /* cancelled: the caller fails */
     const input_surface in = {ipos, indices, istart, ilist, &ibvh};
 
     /* the samples: the input's, the output's triangles' and vertices' (the
@@ -589,6 +603,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
                 m->flags[v] |= MR_VF_MOVED;
             }
         }
+        if (fit_report(s, opt, it + 2))
+            goto done; /* cancelled (or the last report) */
     }
 done:
     if (have_ibvh)

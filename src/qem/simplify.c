@@ -116,7 +116,7 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     size_t collapses = mr_simplifier_run(&s, options, &max_error);
     if (options->quality == MR_QUALITY_BEST && !s.cancelled) {
         mr_simplifier_release_run(&s);
-        st = mr_simplifier_refine(&s, positions, stride, indices, triangle_count, err);
+        st = mr_simplifier_refine(&s, options, positions, stride, indices, triangle_count, err);
         if (st != MR_OK) {
             mr_simplifier_free(&s);
             return st;

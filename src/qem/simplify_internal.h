@@ -83,6 +83,9 @@ struct mr_simplifier {
     mr_partition_profile pprofile; /* its counts, after the run */
     int threads;             /* threads the run may use (options.threads) */
     bool cancelled;          /* the progress callback asked to stop */
+    double fit_share;        /* of the progress, the surface fit's part
+                                (MR_QUALITY_BEST); the collapses report
+                                the rest */
     double centre[3], scale, diagonal;
     double error_base;       /* bounding-box diagonal of all the input's
                                 vertices: relative errors are relative to it */
@@ -239,8 +242,9 @@ void mr_simplifier_release_run(mr_simplifier *s);
 /* Fit the output's vertices to the input's surface (MR_QUALITY_BEST's last
  * step, after the strategy; refine.c): the input as mr_simplifier_init got
  * it. */
-mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
-                               const uint32_t *indices, size_t triangle_count, mr_error *err);
+mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *o,
+                               const float *positions, size_t stride, const uint32_t *indices,
+                               size_t triangle_count, mr_error *err);
 bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
                            double cost, double limit);
 /* Is u's queue entry (u, w) allowed (mr_simplifier_plan, then
@@ -268,16 +272,24 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
 mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
 
-/* Report progress (options.progress, when set) from the calling thread;
- * true when the callback asked to stop (s->cancelled is then set): the
- * strategy ends its run as at a reached target, and the caller fails with
+/* Report `fraction` of the whole call done (options.progress, when set)
+ * from the calling thread; true when the callback asked to stop
+ * (s->cancelled is then set): the strategy ends its run as at a reached
+ * target, the surface fit after its sweep, and the caller fails with
  * MR_ERR_CANCELLED (mr_simplifier_cancelled). */
-static inline bool mr_simplifier_progress(mr_simplifier *s, const mr_simplify_options *o,
-                                          double fraction)
+static inline bool mr_simplifier_report(mr_simplifier *s, const mr_simplify_options *o,
+                                        double fraction)
 {
     if (o->progress && !s->cancelled && o->progress(fraction, o->progress_user) != 0)
         s->cancelled = true;
     return s->cancelled;
+}
+
+/* The strategies' report: `fraction` of the collapses done. */
+static inline bool mr_simplifier_progress(mr_simplifier *s, const mr_simplify_options *o,
+                                          double fraction)
+{
+    return mr_simplifier_report(s, o, (1 - s->fit_share) * fraction);
 }
 
 /* The error of a cancelled run. */
