@@ -237,8 +237,10 @@ void mr_simplifier_batched_free(mr_simplifier *s)
     s->bt = NULL;
 }
 
-/* Edges block `blk` takes (MR_FOR_EACH_TRIANGLE_EDGE), without their costs. */
-static uint32_t block_edges(const mr_collapse_mesh *m, size_t blk)
+/* Edges block `blk` takes (MR_FOR_EACH_TRIANGLE_EDGE), without their
+ * costs: how many, and when out is not NULL the edges themselves, in
+ * triangle order, from out. */
+static uint32_t block_edges(const mr_collapse_mesh *m, size_t blk, mr_candidate *out)
 {
     const size_t t0 = blk * BLOCK_TRIANGLES;
     const size_t t1 = m->triangle_count - t0 < BLOCK_TRIANGLES ? m->triangle_count
@@ -247,7 +249,11 @@ static uint32_t block_edges(const mr_collapse_mesh *m, size_t blk)
     for (size_t t = t0; t < t1; t++) {
         if (m->tris[3 * t] == NONE)
             continue;
-        MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, { n += take; });
+        MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
+            if (take && out) /* never past the block's last edge: the next block's */
+                out[n] = (mr_candidate){0, a, b};
+            n += take;
+        });
     }
     return n;
 }
@@ -308,23 +314,6 @@ static uint32_t gather_block(const mr_simplifier *s, size_t blk, double limit,
     return n;
 }
 
-/* Block blk's live edges, in triangle order, from out, with no cost yet. */
-static void list_block(const mr_collapse_mesh *m, size_t blk, mr_candidate *out)
-{
-    const size_t t0 = blk * BLOCK_TRIANGLES;
-    const size_t t1 = m->triangle_count - t0 < BLOCK_TRIANGLES ? m->triangle_count
-                                                                : t0 + BLOCK_TRIANGLES;
-    uint32_t n = 0;
-    for (size_t t = t0; t < t1; t++) {
-        if (m->tris[3 * t] == NONE)
-            continue;
-        MR_FOR_EACH_TRIANGLE_EDGE(m, t, a, b, take, {
-            if (take) /* never past the block's last edge: the next block's */
-                out[n++] = (mr_candidate){0, a, b};
-        });
-    }
-}
-
 /* Edges planned together in a memoryless gather (the unit of its work
  * sharing). */
 #define KEY_CHUNK 256
@@ -361,7 +350,7 @@ static size_t gather(mr_simplifier *s, double limit)
                      m->live_triangles > (s->memoryless ? GATHER_PAR_MEMORYLESS : GATHER_PAR);
 #pragma omp parallel for schedule(static) num_threads(bt->threads) if (par)
     for (ptrdiff_t i = 0; i < nb; i++)
-        bt->bn[i] = block_edges(m, (size_t)i);
+        bt->bn[i] = block_edges(m, (size_t)i, NULL);
     size_t off = 0;
     for (size_t i = 0; i < bt->nblocks; i++) {
         bt->boff[i] = off;
@@ -384,7 +373,7 @@ static size_t gather(mr_simplifier *s, double limit)
     {
 #pragma omp for schedule(static)
         for (ptrdiff_t i = 0; i < nb; i++)
-            list_block(m, (size_t)i, bt->cand + bt->boff[i]);
+            block_edges(m, (size_t)i, bt->cand + bt->boff[i]);
 #pragma omp for schedule(dynamic, 1)
         for (ptrdiff_t i0 = 0; i0 < nc; i0 += KEY_CHUNK)
             key_chunk(s, bt->cand + i0, nc - i0 < KEY_CHUNK ? (size_t)(nc - i0) : KEY_CHUNK,
