@@ -36,9 +36,7 @@
 #define MAX_LEAF 4           /* primitives per leaf at most */
 #define MIN_LEAF 2           /* ranges this small always become leaves */
 #define TRAVERSAL_COST 1.0   /* of a node visit, relative to one primitive test */
-#define TASK_MIN 2048        /* subtrees smaller than this are built in one task (small
-                                enough that a 12,000-triangle tree's tasks balance over
-                                the threads) */
+#define TASK_MIN 8192        /* subtrees smaller than this are built in one task */
 #define SAH_MAX_DEPTH 64     /* below this depth, median splits keep the depth bounded */
 #define STACK_SIZE 128       /* > SAH_MAX_DEPTH + 32 median levels + slack */
 #define DEGENERATE_SIN2 1e-20 /* sin^2 of the angle at a below which a triangle is a sliver */
