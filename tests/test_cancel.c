@@ -160,11 +160,10 @@ static void test_cancel_best(void **state)
     assert_int_equal(mr_generate(MR_GEN_SCAN, 60000, 1, &m, &err), MR_OK);
     const int threads[2] = {1, 2};
     for (int t = 0; t < 2; t++) {
+        const variant v = {MR_STRATEGY_BATCHED, MR_COLLAPSE_FULL, threads[t]};
         mr_simplify_options o;
-        mr_simplify_options_default(&o);
+        options(&o, &v, NULL);
         o.quality = MR_QUALITY_BEST;
-        o.threads = threads[t];
-        o.target_ratio = 0.05;
         o.progress = on_fit_progress;
         /* never asking: the reports climb to 1, six of them in the fit */
         fit_watch go = {0, 0, 0, 0, 2, true, false};
@@ -195,10 +194,10 @@ static void test_cancel_best(void **state)
 
     /* the same through mr_mesh_simplify */
     assert_int_equal(mr_generate(MR_GEN_TORUS, 60000, 2, &m, &err), MR_OK);
+    const variant v = {MR_STRATEGY_BATCHED, MR_COLLAPSE_FULL, 0};
     mr_simplify_options o;
-    mr_simplify_options_default(&o);
+    options(&o, &v, NULL);
     o.quality = MR_QUALITY_BEST;
-    o.target_ratio = 0.05;
     o.progress = on_fit_progress;
     fit_watch stop = {0, 0, 0, 0, 0.6, true, false};
     o.progress_user = &stop;

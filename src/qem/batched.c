@@ -432,9 +432,9 @@ static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
 {
     mr_batched *bt = s->bt;
     const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
-    const int nt = n > 65536 ? bt->threads : 1;
     if (n <= RANK_SMALL)
         return rank_key_small(bt, rank);
+    const int nt = bt->threads;
 #pragma omp parallel num_threads(nt) if (nt > 1)
     {
         const int me = omp_get_thread_num(), team = omp_get_num_threads();

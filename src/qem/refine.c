@@ -513,10 +513,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
          * sample order: each thread scans them all and adds to its own
          * range of output vertices, so every vertex sums its samples in
          * the same order on any number of threads */
-        const ptrdiff_t nvo9 = 9 * nvo;
-#pragma omp parallel for simd schedule(static) num_threads(s->threads) if (par && nvo > 16384)
-        for (ptrdiff_t i = 0; i < nvo9; i++)
-            acc[i] = 0;
+        memset(acc, 0, 9 * nout * sizeof *acc);
 #pragma omp parallel num_threads(s->threads) if (par && nsi > 65536)
         {
             const size_t nth = (size_t)omp_get_num_threads(), th = (size_t)omp_get_thread_num();
