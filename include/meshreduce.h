@@ -409,7 +409,9 @@ typedef enum mr_simplify_quality {
                                their quadric collapses),
                                and at the end the output's vertices fitted to
                                the input's surface (least squares, no triangle
-                               flips); lower RMS and Hausdorff distance, 5-15x
+                               flips, and no two triangles that the collapses
+                               left apart brought to cross: such moves are put
+                               back); lower RMS and Hausdorff distance, 5-15x
                                the time. max_error still bounds the quadric
                                error. */
 } mr_simplify_quality;

@@ -17,6 +17,7 @@
 #include "testutil.h"
 #include "core/omp_compat.h"
 #include "metrics/selfint.h"
+#include "qem/simplify_internal.h"
 
 #include <math.h>
 #include <stdbool.h>
@@ -457,12 +458,41 @@ static void test_self_intersections(void **state)
     const int threads[3] = {2, 3, 8}; /* the same count on any number of threads */
     for (int i = 0; i < 3; i++)
         assert_int_equal(self_intersections_at(&s2, threads[i]), crossing);
+    /* the pairs listed: as many, each a crossing of one sphere with the
+     * other, the same list on any number of threads */
+    uint32_t *list1 = NULL;
+    size_t n1 = 0;
+    assert_int_equal(mr_self_intersection_pairs(s2.positions, s2.indices, s2.triangle_count, 1,
+                                                &list1, &n1, &err),
+                     MR_OK);
+    assert_int_equal(n1, crossing);
+    for (size_t k = 0; k < n1; k++)
+        assert_true((list1[2 * k] < s1.triangle_count) != (list1[2 * k + 1] < s1.triangle_count));
+    for (int i = 0; i < 3; i++) {
+        uint32_t *list = NULL;
+        size_t n = 0;
+        assert_int_equal(mr_self_intersection_pairs(s2.positions, s2.indices, s2.triangle_count,
+                                                    threads[i], &list, &n, &err),
+                         MR_OK);
+        assert_int_equal(n, n1);
+        assert_memory_equal(list, list1, 2 * n * sizeof *list);
+        free(list);
+    }
+    free(list1);
+    assert_int_equal(mr_self_intersection_pairs(s1.positions, s1.indices, s1.triangle_count, 2,
+                                                &list1, &n1, &err),
+                     MR_OK);
+    assert_int_equal(n1, 0);
+    assert_null(list1);
     mr_mesh_free(&s1);
     mr_mesh_free(&s2);
 
-    /* the bunny and the armadillo at 10 %, either quality: none added */
-    const char *files[2] = {"stanford-bunny.obj", "armadillo.obj"};
-    for (int i = 0; i < 2; i++) {
+    /* the bunny and the armadillo at 10 %, either quality, and where the
+     * surface fit once added some (the nefertiti at 2 %, the homer at 5
+     * %): none added */
+    const char *files[4] = {"stanford-bunny.obj", "armadillo.obj", "nefertiti.obj", "homer.obj"};
+    const double ratios[4] = {0.1, 0.1, 0.02, 0.05};
+    for (int i = 0; i < 4; i++) {
         const char *path = tu_shared_data(files[i]);
         mr_mesh in;
         mr_mesh_init(&in);
@@ -471,17 +501,97 @@ static void test_self_intersections(void **state)
             continue;
         }
         const size_t before = self_intersections(&in);
-        for (int q = 0; q < 2; q++) {
+        for (int q = i < 2 ? 0 : 1; q < 2; q++) {
             mr_mesh out;
-            simplify(&in, 0.1, q ? MR_QUALITY_BEST : MR_QUALITY_DEFAULT, 2, &out);
+            simplify(&in, ratios[i], q ? MR_QUALITY_BEST : MR_QUALITY_DEFAULT, 2, &out);
             const size_t after = self_intersections(&out);
-            print_message("%s at 10 %% (%s): %zu self-intersecting pairs (input: %zu)\n",
-                          files[i], q ? "best" : "default", after, before);
+            print_message("%s at %g %% (%s): %zu self-intersecting pairs (input: %zu)\n",
+                          files[i], 100 * ratios[i], q ? "best" : "default", after, before);
             assert_true(after <= before);
             mr_mesh_free(&out);
         }
         mr_mesh_free(&in);
     }
+}
+
+/* A sheet of n x n squares at height z over [0, n]^2, its vertices from
+ * *nv on, its triangles from *nt on, both wound upwards. */
+static void add_sheet(int n, float z, float *pos, uint32_t *idx, size_t *nv, size_t *nt)
+{
+    const uint32_t base = (uint32_t)*nv;
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++) {
+            float *p = pos + 3 * (*nv)++;
+            p[0] = (float)i;
+            p[1] = (float)j;
+            p[2] = z;
+        }
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            const uint32_t a = base + (uint32_t)(i * (n + 1) + j), b = a + (uint32_t)(n + 1);
+            const uint32_t t[6] = {a, b, b + 1, a, b + 1, a + 1};
+            memcpy(idx + 3 * *nt, t, sizeof t);
+            *nt += 2;
+        }
+}
+
+/* The fit's last step (mr_fit_untangle): a move that pushes a vertex of
+ * one sheet through another is put back, moves that cross nothing stay,
+ * and so does a move of triangles that crossed before the fit already. */
+static void test_fit_untangle(void **state)
+{
+    (void)state;
+    enum { N = 4, PER = (N + 1) * (N + 1) };
+    float before[3 * 3 * PER], pos[3 * 3 * PER];
+    uint32_t idx[3 * 3 * 2 * N * N];
+    size_t nv = 0, nt = 0;
+    add_sheet(N, 0, before, idx, &nv, &nt); /* vertices 0 .. PER */
+    add_sheet(N, 1, before, idx, &nv, &nt); /* PER .. 2 PER */
+    add_sheet(N, 0.5f, before, idx, &nv, &nt); /* 2 PER .. 3 PER, turned upright below */
+    for (size_t v = 2 * PER; v < 3 * PER; v++) { /* the plane x = 3.5 across the others */
+        float *p = before + 3 * v;
+        const float y = p[1], x = p[0];
+        p[0] = 3.5f;
+        p[1] = y;
+        p[2] = -1 + 0.75f * x; /* z from -1 to 2: through both sheets */
+    }
+    memcpy(pos, before, sizeof pos);
+    mr_error err;
+    size_t np = 0;
+    uint32_t *pairs = NULL;
+    assert_int_equal(mr_self_intersection_pairs(before, idx, nt, 1, &pairs, &np, &err), MR_OK);
+    assert_true(np > 0); /* the upright sheet crosses both */
+    free(pairs);
+    const uint32_t through = PER + 1 * (N + 1) + 1; /* the top sheet's (1, 1) */
+    const uint32_t harmless = PER + 3 * (N + 1) + 2; /* the top sheet's (3, 2) */
+    const uint32_t crossing = 2 * PER + 2 * (N + 1) + 2; /* the upright's middle */
+    pos[3 * through + 2] = -0.5f; /* down through the bottom sheet */
+    pos[3 * harmless + 2] = 1.2f;
+    pos[3 * crossing + 1] += 0.1f; /* its triangles cross the sheets before and after */
+    for (int threads = 1; threads <= 8; threads *= 2) {
+        float p[3 * 3 * PER];
+        memcpy(p, pos, sizeof p);
+        size_t back = 0;
+        assert_int_equal(mr_fit_untangle(p, before, 3 * PER, idx, nt, 0.5, threads, &back, &err),
+                         MR_OK);
+        assert_int_equal(back, 1);
+        assert_memory_equal(p + 3 * through, before + 3 * through, 3 * sizeof *p);
+        assert_memory_equal(p + 3 * harmless, pos + 3 * harmless, 3 * sizeof *p);
+        assert_memory_equal(p + 3 * crossing, pos + 3 * crossing, 3 * sizeof *p);
+        /* what still meets is the upright sheet and the others */
+        assert_int_equal(mr_self_intersection_pairs(p, idx, nt, threads, &pairs, &np, &err), MR_OK);
+        assert_true(np > 0);
+        for (size_t k = 0; k < np; k++)
+            assert_true((pairs[2 * k] >= 4 * N * N) != (pairs[2 * k + 1] >= 4 * N * N));
+        free(pairs);
+    }
+    /* nothing to put back: nothing changes */
+    size_t back = 1;
+    float p[3 * 3 * PER];
+    memcpy(p, before, sizeof p);
+    assert_int_equal(mr_fit_untangle(p, before, 3 * PER, idx, nt, 0.5, 2, &back, &err), MR_OK);
+    assert_int_equal(back, 0);
+    assert_memory_equal(p, before, sizeof p);
 }
 
 static void test_threads(void **state)
@@ -652,6 +762,7 @@ int main(void)
         cmocka_unit_test(test_options),         cmocka_unit_test(test_best_error_bound),         cmocka_unit_test(test_flat_stays_flat),
         cmocka_unit_test(test_bevel_corners),   cmocka_unit_test(test_closer_and_sound),
         cmocka_unit_test(test_threads),        cmocka_unit_test(test_self_intersections),
+        cmocka_unit_test(test_fit_untangle),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -157,14 +157,13 @@ bool mr_triangles_meet(const double *u[3], const double *v[3])
     return !(a1 < b0 || b1 < a0);
 }
 
-mr_status mr_self_intersections(const float *positions, const uint32_t *indices,
-                                size_t triangle_count, int threads, size_t *pairs,
-                                mr_error *err)
+/* The boxes of the triangles, sorted by their low x (then index): NULL
+ * when out of memory. */
+static box *sorted_boxes(const float *positions, const uint32_t *indices, size_t triangle_count)
 {
-    *pairs = 0;
     box *bx = malloc(sizeof *bx * (triangle_count ? triangle_count : 1));
     if (!bx)
-        return mr_fail_nomem(err, "self-intersections", sizeof *bx * triangle_count);
+        return NULL;
     for (size_t t = 0; t < triangle_count; t++) {
         box *b = &bx[t];
         b->t = (uint32_t)t;
@@ -177,39 +176,108 @@ mr_status mr_self_intersections(const float *positions, const uint32_t *indices,
         }
     }
     qsort(bx, triangle_count, sizeof *bx, box_cmp);
+    return bx;
+}
+
+/* The triangles after box i in the sweep that share no vertex with its
+ * triangle and meet it: their count, and when out is not NULL the pairs
+ * (triangle indices, i's first) written there. */
+static uint32_t row_pairs(const box *bx, size_t n, size_t i, const float *positions,
+                          const uint32_t *indices, uint32_t *out)
+{
+    const box *a = &bx[i];
+    const uint32_t *ta = indices + 3 * (size_t)a->t;
+    double pa[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < 3; c++)
+            pa[k][c] = positions[3 * (size_t)ta[k] + (size_t)c];
+    const double *u[3] = {pa[0], pa[1], pa[2]};
+    uint32_t count = 0;
+    for (size_t j = i + 1; j < n && bx[j].lo[0] <= a->hi[0]; j++) {
+        const box *b = &bx[j];
+        if (b->lo[1] > a->hi[1] || b->hi[1] < a->lo[1] || b->lo[2] > a->hi[2] ||
+            b->hi[2] < a->lo[2])
+            continue;
+        const uint32_t *tb = indices + 3 * (size_t)b->t;
+        bool shared = false;
+        for (int x = 0; x < 3; x++)
+            for (int y = 0; y < 3; y++)
+                shared |= ta[x] == tb[y];
+        if (shared)
+            continue;
+        double pb[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++)
+                pb[k][c] = positions[3 * (size_t)tb[k] + (size_t)c];
+        const double *v[3] = {pb[0], pb[1], pb[2]};
+        if (!mr_triangles_meet(u, v))
+            continue;
+        if (out) {
+            out[2 * (size_t)count] = a->t;
+            out[2 * (size_t)count + 1] = b->t;
+        }
+        count++;
+    }
+    return count;
+}
+
+mr_status mr_self_intersections(const float *positions, const uint32_t *indices,
+                                size_t triangle_count, int threads, size_t *pairs,
+                                mr_error *err)
+{
+    *pairs = 0;
+    box *bx = sorted_boxes(positions, indices, triangle_count);
+    if (!bx)
+        return mr_fail_nomem(err, "self-intersections", sizeof *bx * triangle_count);
     size_t count = 0;
     const ptrdiff_t n = (ptrdiff_t)triangle_count;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : count) num_threads(threads) \
     if (threads > 1 && n > 4096)
-    for (ptrdiff_t i = 0; i < n; i++) {
-        const box *a = &bx[i];
-        const uint32_t *ta = indices + 3 * (size_t)a->t;
-        double pa[3][3];
-        for (int k = 0; k < 3; k++)
-            for (int c = 0; c < 3; c++)
-                pa[k][c] = positions[3 * (size_t)ta[k] + (size_t)c];
-        const double *u[3] = {pa[0], pa[1], pa[2]};
-        for (ptrdiff_t j = i + 1; j < n && bx[j].lo[0] <= a->hi[0]; j++) {
-            const box *b = &bx[j];
-            if (b->lo[1] > a->hi[1] || b->hi[1] < a->lo[1] || b->lo[2] > a->hi[2] ||
-                b->hi[2] < a->lo[2])
-                continue;
-            const uint32_t *tb = indices + 3 * (size_t)b->t;
-            bool shared = false;
-            for (int x = 0; x < 3; x++)
-                for (int y = 0; y < 3; y++)
-                    shared |= ta[x] == tb[y];
-            if (shared)
-                continue;
-            double pb[3][3];
-            for (int k = 0; k < 3; k++)
-                for (int c = 0; c < 3; c++)
-                    pb[k][c] = positions[3 * (size_t)tb[k] + (size_t)c];
-            const double *v[3] = {pb[0], pb[1], pb[2]};
-            count += mr_triangles_meet(u, v);
-        }
-    }
+    for (ptrdiff_t i = 0; i < n; i++)
+        count += row_pairs(bx, triangle_count, (size_t)i, positions, indices, NULL);
     free(bx);
     *pairs = count;
     return MR_OK;
+}
+
+mr_status mr_self_intersection_pairs(const float *positions, const uint32_t *indices,
+                                     size_t triangle_count, int threads, uint32_t **pairs,
+                                     size_t *count, mr_error *err)
+{
+    *pairs = NULL;
+    *count = 0;
+    box *bx = sorted_boxes(positions, indices, triangle_count);
+    uint32_t *rows = malloc(sizeof *rows * (triangle_count ? triangle_count : 1));
+    if (!bx || !rows) {
+        free(bx);
+        free(rows);
+        return mr_fail_nomem(err, "self-intersections", (sizeof *bx + 4) * triangle_count);
+    }
+    const ptrdiff_t n = (ptrdiff_t)triangle_count;
+    size_t total = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : total) num_threads(threads) \
+    if (threads > 1 && n > 4096)
+    for (ptrdiff_t i = 0; i < n; i++) {
+        rows[i] = row_pairs(bx, triangle_count, (size_t)i, positions, indices, NULL);
+        total += rows[i];
+    }
+    mr_status st = MR_OK;
+    if (total > 0) {
+        uint32_t *out = malloc(2 * total * sizeof *out);
+        if (!out) {
+            st = mr_fail_nomem(err, "self-intersections", 8 * total);
+        } else {
+            /* the rows with pairs again, each at its offset: sweep order */
+            for (size_t i = 0, at = 0; i < triangle_count; i++) {
+                if (rows[i])
+                    row_pairs(bx, triangle_count, i, positions, indices, out + 2 * at);
+                at += rows[i];
+            }
+            *pairs = out;
+            *count = total;
+        }
+    }
+    free(bx);
+    free(rows);
+    return st;
 }

@@ -245,6 +245,17 @@ void mr_simplifier_release_run(mr_simplifier *s);
 mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *o,
                                const float *positions, size_t stride, const uint32_t *indices,
                                size_t triangle_count, mr_error *err);
+/* The fit's last step: every pair of the live triangles (nlive, vertex ids
+ * below vc) that meets at pos gets its vertices put back to before -- their
+ * positions before the fit -- unless one of them is a vertex of a triangle
+ * that met another at before already (where the surface crossed itself,
+ * the fit moves the crossing: that is no new one); so does every triangle
+ * that this flips or turns further than min_cos from before, until none is
+ * left (each round puts back a moved vertex: at worst all of them, the
+ * collapses' surface). *put_back: the vertices put back. */
+mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint32_t *live,
+                          size_t nlive, double min_cos, int threads, size_t *put_back,
+                          mr_error *err);
 bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
                            double cost, double limit);
 /* Is u's queue entry (u, w) allowed (mr_simplifier_plan, then
