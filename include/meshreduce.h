@@ -11,7 +11,13 @@
  *     offset, and what is wrong. The library never prints, exits or aborts on
  *     bad input;
  *   - options structs are initialised by mr_*_options_default() so that
- *     fields can be added without breaking callers.
+ *     fields can be added without breaking callers;
+ *   - calls run on OpenMP teams of the `threads` they are given. Any call
+ *     may run at the same time as others on the caller's threads, also from
+ *     inside the caller's own OpenMP parallel region: with nesting off
+ *     (OpenMP's default) its teams then have one thread each, with the same
+ *     result. The simplifier turns OMP_DYNAMIC's adjustment off for the
+ *     length of a call and restores the caller's setting.
  */
 #ifndef MESHREDUCE_H
 #define MESHREDUCE_H

@@ -3,6 +3,7 @@
 #include "testutil.h"
 #include "qem/collapse.h"
 #include "qem/simplify_internal.h"
+#include "core/omp_compat.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -385,6 +386,71 @@ static void test_deterministic(void **state)
         mr_simplified_free(&a);
         mr_simplified_free(&b);
     }
+    mr_mesh_free(&m);
+}
+
+/* Simplify m with o from inside a parallel region of the caller's own, of
+ * `outer` threads, each thread once: how many results differ from ref's
+ * bytes (or fail). */
+static int differ_inside_region(const mr_mesh *m, const mr_simplify_options *o,
+                                const mr_simplified *ref, int outer)
+{
+    int bad = 0;
+#pragma omp parallel num_threads(outer) reduction(+ : bad)
+    {
+        mr_simplified r;
+        mr_error err;
+        if (mr_simplify(m->positions, 0, m->vertex_count, m->indices, m->triangle_count, o, &r,
+                        &err) != MR_OK) {
+            bad++;
+        } else {
+            bad += r.vertex_count != ref->vertex_count || r.triangle_count != ref->triangle_count ||
+                   memcmp(r.positions, ref->positions, 12 * r.vertex_count) != 0 ||
+                   memcmp(r.indices, ref->indices, 12 * r.triangle_count) != 0;
+            mr_simplified_free(&r);
+        }
+    }
+    return bad;
+}
+
+/* A call from inside the caller's own parallel region (two of its threads
+ * simplifying at once; nesting off, so the library's teams get one thread
+ * each, then on), and one with OMP_DYNAMIC's setting on: the same bytes as
+ * a call from serial code, and the caller's setting as it was after the
+ * call. The compaction once took "inside a parallel region" for "inside
+ * the simplifier's own team" and met the caller's team at its barriers:
+ * the call hung. Above the parallel paths' 65,536 triangles, to 5 %. */
+static void test_inside_callers_region(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    generate(MR_GEN_SCAN, 100000, &m);
+    const mr_strategy strategies[3] = {MR_STRATEGY_BATCHED, MR_STRATEGY_GREEDY,
+                                                MR_STRATEGY_PARTITIONED};
+    const char *q = getenv("MR_TEST_QUICK");
+    const bool quick = q && *q && strcmp(q, "0") != 0;
+    for (int i = 0; i < 3; i++)
+        for (int best = 0; best < (quick || i > 0 ? 1 : 2); best++) {
+            mr_simplify_options o;
+            mr_simplify_options_default(&o);
+            o.strategy = strategies[i];
+            o.quality = best ? MR_QUALITY_BEST : MR_QUALITY_DEFAULT;
+            o.target_ratio = 0.05;
+            o.threads = 2;
+            mr_simplified ref;
+            simplify_ok(&m, &o, &ref);
+            assert_int_equal(differ_inside_region(&m, &o, &ref, 2), 0);
+            const int levels = omp_get_max_active_levels();
+            omp_set_max_active_levels(2);
+            assert_int_equal(differ_inside_region(&m, &o, &ref, 2), 0);
+            omp_set_max_active_levels(levels);
+            omp_set_dynamic(1);
+            const int dynamic = omp_get_dynamic(); /* 1 where the runtime has it */
+            assert_int_equal(differ_inside_region(&m, &o, &ref, 1), 0);
+            assert_int_equal(omp_get_dynamic(), dynamic); /* the caller's, back */
+            omp_set_dynamic(0);
+            mr_simplified_free(&ref);
+        }
     mr_mesh_free(&m);
 }
 
@@ -836,6 +902,7 @@ int main(void)
         cmocka_unit_test(test_lock_border),
         cmocka_unit_test(test_vertex_lock),
         cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_inside_callers_region),
         cmocka_unit_test(test_blocked_edges_requeued),
         cmocka_unit_test(test_fan_caps),
         cmocka_unit_test(test_batched_close_to_greedy),

@@ -182,9 +182,15 @@ void *mr_realloc_array(void *p, size_t count, size_t size)
 
 int mr_thread_count(int requested)
 {
-    if (requested > 0)
-        return requested;
-    int n = omp_get_max_threads();
+    int n = requested > 0 ? requested : omp_get_max_threads();
+    /* No more active levels of parallelism allowed (a call from inside the
+     * caller's own parallel region, nesting off; or the serial build): a
+     * team opened here has one thread, so one is asked for. */
+    if (omp_get_active_level() >= omp_get_max_active_levels())
+        n = 1;
+    const int limit = omp_get_thread_limit();
+    if (limit > 0 && n > limit)
+        n = limit;
     return n > 0 ? n : 1;
 }
 

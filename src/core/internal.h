@@ -109,7 +109,10 @@ static inline double mr_triangle_area(const double a[3], const double b[3], cons
     return 0.5 * sqrt(x * x + y * y + z * z);
 }
 
-/* Number of threads to use for a requested count (0 = all cores). */
+/* Number of threads to use for a requested count (0 = all cores): at most
+ * the team a parallel region opened here can have (one inside the caller's
+ * parallel region when nesting is off, and in the serial build; at most
+ * OMP_THREAD_LIMIT). */
 int mr_thread_count(int requested);
 
 /*

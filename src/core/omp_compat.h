@@ -20,6 +20,33 @@ static inline int omp_get_thread_num(void) { return 0; }
 static inline int omp_get_num_procs(void) { return 1; }
 static inline int omp_in_parallel(void) { return 0; }
 static inline void omp_set_num_threads(int n) { (void)n; }
+static inline int omp_get_level(void) { return 0; }
+static inline int omp_get_active_level(void) { return 0; }
+static inline int omp_get_max_active_levels(void) { return 0; }
+static inline void omp_set_max_active_levels(int n) { (void)n; }
+static inline int omp_get_thread_limit(void) { return 1; }
+static inline int omp_get_dynamic(void) { return 0; }
+static inline void omp_set_dynamic(int d) { (void)d; }
 #endif
+
+/* The simplifier shares work out by thread number and meets its team at
+ * barriers, so each of its teams must have the threads it asked for:
+ * mr_thread_count asks for one where no team could have more (see there),
+ * and these two turn off the runtime's right to give a team fewer threads
+ * (OMP_DYNAMIC=true) for the length of a call, then restore the caller's
+ * setting. */
+static inline int mr_omp_fixed_teams(void)
+{
+    const int dynamic = omp_get_dynamic();
+    if (dynamic)
+        omp_set_dynamic(0);
+    return dynamic;
+}
+
+static inline void mr_omp_restore_teams(int dynamic)
+{
+    if (dynamic)
+        omp_set_dynamic(dynamic);
+}
 
 #endif /* MR_OMP_COMPAT_H */

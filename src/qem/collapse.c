@@ -213,6 +213,7 @@ mr_status mr_collapse_mesh_init(mr_collapse_mesh *m, const float *positions, siz
     m->tris = mr_alloc_array(3 * tc, sizeof *m->tris);
     m->flags = mr_calloc_array(vc, sizeof *m->flags);
     m->threads = threads > 1 ? threads : 1;
+    m->level = omp_get_level();
     m->seg = mr_alloc_array(3 * ((size_t)m->threads + 1), sizeof *m->seg);
     m->alive = mr_alloc_array((tc + 63) / 64 + 1, sizeof *m->alive);
     if (!m->start || !m->count || !m->pos || !m->tris || !m->flags || !m->seg || !m->alive) {
@@ -759,7 +760,9 @@ static void compact_team(mr_collapse_mesh *m)
 
 void mr_collapse_compact(mr_collapse_mesh *m)
 {
-    if (omp_in_parallel()) {
+    /* called by every thread of one of the simplifier's own teams (not
+     * merely inside the caller's parallel region, whose team is not ours) */
+    if (omp_get_level() > m->level) {
         compact_team(m);
         return;
     }

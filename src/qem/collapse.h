@@ -70,6 +70,8 @@ typedef struct mr_collapse_mesh {
     size_t live_vertices;  /* referenced, not removed */
     size_t live_triangles;
     int threads;         /* compaction's team (mr_collapse_compact) */
+    int level;           /* omp_get_level() where the mesh was made: deeper,
+                            compaction runs on the calling team */
     size_t *seg;         /* 3 * (threads + 1): compaction's segments */
     uint64_t *alive;     /* a bit per triangle, set when live: compaction's
                             (valid only during one) */
@@ -235,8 +237,9 @@ void mr_collapse_prepare(mr_collapse_mesh *m);
 
 /* Compact refs now (exclusive access): afterwards the free room is at
  * least one entry per live triangle. Runs on up to m->threads threads;
- * inside a parallel region every thread of the team must call it (it
- * shares the work out and meets the others at barriers). The layout it
+ * inside a parallel region opened since the mesh was made (m->level),
+ * every thread of that team must call it (it shares the work out and
+ * meets the others at barriers). The layout it
  * leaves -- every live list in the order the lists lay in refs, from 0 --
  * is the same on any number of threads. */
 void mr_collapse_compact(mr_collapse_mesh *m);

@@ -233,8 +233,9 @@ static float *dup_floats(const float *src, size_t n)
     return d;
 }
 
-mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options, mr_mesh *out,
-                           uint32_t **origin, mr_simplify_stats *stats, mr_error *err)
+static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *options,
+                               mr_mesh *out, uint32_t **origin, mr_simplify_stats *stats,
+                               mr_error *err)
 {
     if (origin)
         *origin = NULL;
@@ -470,4 +471,13 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
         mr_partition_profile_stats(&pprofile, stats);
     }
     return MR_OK;
+}
+
+mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options, mr_mesh *out,
+                           uint32_t **origin, mr_simplify_stats *stats, mr_error *err)
+{
+    const int dynamic = mr_omp_fixed_teams(); /* teams as asked for */
+    const mr_status st = mesh_simplify(in, options, out, origin, stats, err);
+    mr_omp_restore_teams(dynamic);
+    return st;
 }

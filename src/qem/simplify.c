@@ -16,6 +16,8 @@
  */
 #include "simplify_internal.h"
 
+#include "../core/omp_compat.h"
+
 void mr_simplify_options_default(mr_simplify_options *o)
 {
     memset(o, 0, sizeof *o);
@@ -91,9 +93,9 @@ const char *mr_simplify_stop_string(mr_simplify_stop stop)
     return "unknown";
 }
 
-mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count,
-                      const uint32_t *indices, size_t triangle_count,
-                      const mr_simplify_options *options, mr_simplified *out, mr_error *err)
+static mr_status simplify(const float *positions, size_t stride, size_t vertex_count,
+                          const uint32_t *indices, size_t triangle_count,
+                          const mr_simplify_options *options, mr_simplified *out, mr_error *err)
 {
     if (!out)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: no output");
@@ -157,4 +159,15 @@ mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count
     stats->seconds_collapse = t2 - t1;
     stats->seconds_output = t3 - t2;
     return MR_OK;
+}
+
+mr_status mr_simplify(const float *positions, size_t stride, size_t vertex_count,
+                      const uint32_t *indices, size_t triangle_count,
+                      const mr_simplify_options *options, mr_simplified *out, mr_error *err)
+{
+    const int dynamic = mr_omp_fixed_teams(); /* teams as asked for */
+    const mr_status st =
+        simplify(positions, stride, vertex_count, indices, triangle_count, options, out, err);
+    mr_omp_restore_teams(dynamic);
+    return st;
 }

@@ -24,7 +24,10 @@ mr_status mr_multiqueue_init(mr_multiqueue *q, size_t capacity, int threads,
     memset(q, 0, sizeof *q);
     if (capacity >= UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL, "MultiQueue of %zu ids", capacity);
-    const uint64_t count = (uint64_t)mr_thread_count(threads) * (per_thread ? per_thread : 2);
+    /* the threads that will use it, as asked (not the team a region
+     * opened here could have: the caller's threads drive it) */
+    const uint64_t count = (uint64_t)(threads > 0 ? threads : mr_thread_count(0)) *
+                           (per_thread ? per_thread : 2);
     if (count > MR_MQ_MAX_QUEUES)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "%llu queues (at most %u)", (unsigned long long)count,
