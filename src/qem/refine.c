@@ -37,9 +37,9 @@
  * data meshes at 25/10/5/2/1 %, the sweeps had added crossings on the
  * nefertiti at 2 % and the homer at 5 %, 2 and 5 pairs, at RMS +0.1 % and
  * +1.0 % once put back; one check of the output costs about 1 us a
- * triangle on one thread). The fit reports its part of the progress (s->fit_share) after the
- * input's hierarchy and after each sweep, and stops there when the
- * callback asks.
+ * triangle on one thread). The fit reports its part of the progress
+ * (s->fit_share) after the input's hierarchy and after each sweep, and
+ * stops there when the callback asks.
  *
  * The first sweep finds each sample's nearest triangle in a hierarchy
  * (exact); the later ones walk from the last sweep's answer (walk_nearest:
@@ -442,7 +442,8 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
     pull *in_pull = NULL, *out_pull = NULL, *v_pull = NULL;
     uint32_t *vidx = NULL, *vout = NULL;
     double *acc = NULL; /* per output vertex: its input samples' normal equations */
-    float *next = NULL, *before = NULL; /* before: the collapses' positions */
+    float *next = NULL;
+    float *before = NULL; /* the output vertices' positions from the collapses, in vout order */
     uint8_t *moved = NULL;
     mr_tri_bvh ibvh;
     bool have_ibvh = false;
@@ -489,13 +490,13 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
     vidx = mr_alloc_array(vc, sizeof *vidx);
     acc = mr_alloc_array(9 * nout, sizeof *acc);
     next = mr_alloc_array(3 * vc, sizeof *next);
-    before = mr_alloc_array(3 * vc, sizeof *before);
+    before = mr_alloc_array(3 * nout, sizeof *before);
     moved = mr_alloc_array(vc, 1);
     if (!sarea || !in_pull || !out_pull || !v_pull || !vout || !vidx || !acc || !next ||
         !before || !moved) {
         st = mr_fail_nomem(err, "simplify: surface fit",
                            ns * (sizeof *sarea + sizeof *in_pull) + no * sizeof *out_pull +
-                               nout * (sizeof *v_pull + 4 + 9 * sizeof *acc) + 29 * vc);
+                               nout * (sizeof *v_pull + 16 + 9 * sizeof *acc) + 17 * vc);
         goto done;
     }
     for (size_t i = 0; i < no; i++)
@@ -506,7 +507,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
             vout[i++] = (uint32_t)v;
     }
     for (size_t i = 0; i < nout; i++)
-        memcpy(before + 3 * (size_t)vout[i], m->pos + 3 * (size_t)vout[i], 3 * sizeof *before);
+        memcpy(before + 3 * i, m->pos + 3 * (size_t)vout[i], 3 * sizeof *before);
     for (size_t i = 0; i < nout; i++)
         v_pull[i].tri = MR_NO_HINT;
 #pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nsi > 65536)
@@ -692,15 +693,17 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
             goto done; /* cancelled */
     }
     /* no pair of triangles that the collapses left apart meets after the
-     * fit */
+     * fit: the collapses' positions by vertex id (in next, free now) */
+    for (size_t i = 0; i < nout; i++)
+        memcpy(next + 3 * (size_t)vout[i], before + 3 * i, 3 * sizeof *next);
     size_t put_back;
-    st = mr_fit_untangle(m->pos, before, vc, live, nlive, s->limits.min_cos_turn, s->threads,
+    st = mr_fit_untangle(m->pos, next, vc, live, nlive, s->limits.min_cos_turn, s->threads,
                          &put_back, err);
     if (st != MR_OK)
         goto done;
     for (size_t i = 0; i < nout; i++) {
         const size_t v = vout[i];
-        if (memcmp(m->pos + 3 * v, before + 3 * v, 3 * sizeof *before) != 0)
+        if (memcmp(m->pos + 3 * v, next + 3 * v, 3 * sizeof *next) != 0)
             m->flags[v] |= MR_VF_MOVED;
     }
     fit_report(s, opt, ITERATIONS + 1); /* the last: a stop here fails the call */
