@@ -415,8 +415,9 @@ static int differ_inside_region(const mr_mesh *m, const mr_simplify_options *o,
 
 /* A call from inside the caller's own parallel region (two of its threads
  * simplifying at once; nesting off, so the library's teams get one thread
- * each, then on), and one with OMP_DYNAMIC's setting on: the same bytes as
- * a call from serial code, and the caller's setting as it was after the
+ * each, then on), and one with OMP_DYNAMIC's setting on, for the batched
+ * (both qualities), greedy and both partitioned strategies: the same bytes
+ * as a call from serial code, and the caller's setting as it was after the
  * call. The compaction once took "inside a parallel region" for "inside
  * the simplifier's own team" and met the caller's team at its barriers:
  * the call hung. Above the parallel paths' 65,536 triangles, to 5 %. */
@@ -425,11 +426,11 @@ static void test_inside_callers_region(void **state)
     (void)state;
     mr_mesh m;
     generate(MR_GEN_SCAN, 100000, &m);
-    const mr_strategy strategies[3] = {MR_STRATEGY_BATCHED, MR_STRATEGY_GREEDY,
-                                                MR_STRATEGY_PARTITIONED};
+    const mr_strategy strategies[4] = {MR_STRATEGY_BATCHED, MR_STRATEGY_GREEDY,
+                                       MR_STRATEGY_PARTITIONED, MR_STRATEGY_PARTITIONED_BOUNDARY};
     const char *q = getenv("MR_TEST_QUICK");
     const bool quick = q && *q && strcmp(q, "0") != 0;
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 4; i++)
         for (int best = 0; best < (quick || i > 0 ? 1 : 2); best++) {
             mr_simplify_options o;
             mr_simplify_options_default(&o);
