@@ -52,12 +52,48 @@ typedef struct inputs {
     double fan_t[NFAN][3];
     mr_quadricf q[NMERGE + 1];
     double d[NMERGE][3];
+    /* fan sums: an edge (0, 1) with 10 ring vertices, 12 triangles (two on
+     * the edge), r's 7 and k's 7 list entries, bumped 16 ways */
+    float ring_pos[16][3 * 12 + 1];
+    uint32_t ring_tris[3 * 12], ring_lr[7], ring_lk[7];
     /* outputs */
     double cost[MR_COST_BATCH], x[3 * MR_COST_BATCH], plane_out[7 * MR_PLANE_ROW];
 } inputs;
 
+static void fill_rings(inputs *in)
+{
+    enum { N = 10 };
+    for (int c = 0; c < 16; c++) {
+        float *p = in->ring_pos[c];
+        memset(p, 0, sizeof in->ring_pos[c]);
+        p[3] = 1;
+        for (int i = 0; i < N; i++) {
+            const double a = 6.283185307179586 * i / N;
+            p[3 * (2 + i)] = (float)(0.5 + 1.2 * cos(a) + rnd() * 0.2);
+            p[3 * (2 + i) + 1] = (float)(sin(a) + rnd() * 0.2);
+            p[3 * (2 + i) + 2] = (float)(rnd() * 0.6);
+        }
+    }
+    uint32_t nr = 0, nk = 0;
+    for (uint32_t i = 0; i < N; i++) {
+        const uint32_t at = i >= N / 2, t[3] = {at, 2 + i, 2 + (i + 1) % N};
+        memcpy(in->ring_tris + 3 * i, t, sizeof t);
+        if (at)
+            in->ring_lk[nk++] = 3 * i;
+        else
+            in->ring_lr[nr++] = 3 * i;
+    }
+    const uint32_t e[2][3] = {{0, 1, 2}, {1, 0, 2 + N / 2}};
+    for (uint32_t j = 0; j < 2; j++) {
+        memcpy(in->ring_tris + 3 * (N + j), e[j], sizeof e[j]);
+        in->ring_lr[nr++] = 3 * (N + j) + j;
+        in->ring_lk[nk++] = 3 * (N + j) + 1 - j;
+    }
+}
+
 static void fill(inputs *in)
 {
+    fill_rings(in);
     const double box[3] = {0.5, 0.5, 0.5};
     (void)box;
     for (int b = 0; b < NB; b++)
@@ -143,6 +179,24 @@ static size_t run_fan(const mr_kernels *k, inputs *in, uint64_t *sig)
             *sig = mix(*sig, &r, sizeof r);
     }
     if (ok == 0xFFFFFFFFu)
+        puts(""); /* keeps the calls */
+    return NFAN;
+}
+
+static size_t run_fan_sums(const mr_kernels *k, inputs *in, uint64_t *sig)
+{
+    double acc = 0;
+    for (int i = 0; i < NFAN; i++) {
+        const float *p = in->ring_pos[i % 16];
+        const mr_fan_input f = {p, in->ring_tris, in->ring_lr, in->ring_lk, 7, 7, 0, 1};
+        const double o[3] = {p[3], p[4], p[5]};
+        double sum[MR_FAN_SUMS] = {0};
+        k->fan_sums(&f, o, true, sum);
+        acc += sum[MR_FAN_C];
+        if (sig)
+            *sig = mix(*sig, sum, sizeof sum);
+    }
+    if (acc == -1)
         puts(""); /* keeps the calls */
     return NFAN;
 }
@@ -416,6 +470,7 @@ int main(int argc, char **argv)
         {"free_costs (solve + cost)", "edge", run_costs},
         {"plane_terms (construction)", "vertex", run_plane},
         {"fan_ok (normal test)", "collapse", run_fan},
+        {"fan_sums (memoryless plan)", "plan", run_fan_sums},
         {"merge (addition)", "collapse", run_merge},
     };
     printf("\nkernels alone (in cache; median of %d alternating rounds of ~20 ms)\n", runs);

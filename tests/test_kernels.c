@@ -214,6 +214,80 @@ static void test_fan_ok(void **state)
     assert_true(fail > 400);
 }
 
+/* Two fans around the edge (r, k) of a ring mesh: r = 0 and k = 1 in the
+ * middle, n outer vertices 2 .. n + 1 around both (wound one way), every
+ * triangle listed at its corners; some triangles deleted. */
+static void test_fan_sums(void **state)
+{
+    (void)state;
+    enum { NMAX = 24 };
+    float pos[3 * (NMAX + 2) + 1];
+    uint32_t tris[3 * 2 * NMAX], lr[2 * NMAX], lk[2 * NMAX];
+    size_t differ = 0, edges = 0, dead = 0;
+    for (int it = 0; it < 3000; it++) {
+        const uint32_t n = 4 + (uint32_t)it % (NMAX - 4);
+        /* r at the origin, k at (1, 0, 0), the ring around both, bumpy */
+        pos[0] = (float)(rnd() * 0.1), pos[1] = (float)(rnd() * 0.1), pos[2] = (float)(rnd() * 0.1);
+        pos[3] = (float)(1 + rnd() * 0.1), pos[4] = (float)(rnd() * 0.1), pos[5] = (float)(rnd() * 0.1);
+        for (uint32_t i = 0; i < n; i++) {
+            const double a = 6.283185307179586 * i / n;
+            pos[3 * (2 + i)] = (float)(0.5 + 1.2 * cos(a) + rnd() * 0.2);
+            pos[3 * (2 + i) + 1] = (float)(sin(a) + rnd() * 0.2);
+            pos[3 * (2 + i) + 2] = (float)(rnd() * 0.6);
+        }
+        pos[3 * (n + 2)] = 0; /* the padding float */
+        /* the ring's first half around r, the second around k; the two
+         * triangles between them hold both */
+        uint32_t nt = 0, nr = 0, nk = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            const uint32_t a = 2 + i, b = 2 + (i + 1) % n;
+            const bool at_k = i >= n / 2;
+            const uint32_t c = at_k ? 1 : 0;
+            tris[3 * nt] = c, tris[3 * nt + 1] = a, tris[3 * nt + 2] = b;
+            (at_k ? lk : lr)[at_k ? nk++ : nr++] = 3 * nt;
+            nt++;
+        }
+        /* the edge triangles (r, k, ring[0]) and (k, r, ring[n/2]) */
+        const uint32_t e[2][3] = {{0, 1, 2}, {1, 0, 2 + n / 2}};
+        for (int j = 0; j < 2; j++) {
+            memcpy(tris + 3 * nt, e[j], sizeof e[j]);
+            lr[nr++] = 3 * nt + (j == 0 ? 0 : 1);
+            lk[nk++] = 3 * nt + (j == 0 ? 1 : 0);
+            nt++;
+            edges++;
+        }
+        for (uint32_t t = 0; t < nt; t++)
+            if (it % 5 == 0 && t % 7 == 3) { /* a lazy list's deleted triangle */
+                tris[3 * t] = UINT32_MAX;
+                dead++;
+            }
+        const mr_fan_input in = {pos, tris, lr, lk, nr, nk, 0, 1};
+        const double o[3] = {pos[3], pos[4], pos[5]};
+        for (int full = 0; full < 2; full++) {
+            double ref[MR_FAN_SUMS];
+            for (int i = 0; i < MR_FAN_SUMS; i++) /* sums carried in */
+                ref[i] = it % 2 ? rnd() : 0;
+            double start[MR_FAN_SUMS];
+            memcpy(start, ref, sizeof ref);
+            mr_kernels_path(MR_PATH_DEFAULT)->fan_sums(&in, o, full, ref);
+            /* the default path: g is the normals' sum of the triangles that
+             * stay, h the volumes of r's */
+            assert_true(ref[MR_FAN_G] != start[MR_FAN_G] || it % 5 == 0);
+            for (int p = MR_PATH_DEFAULT + 1; p < MR_PATHS; p++) {
+                const mr_kernels *k = mr_kernels_path(p);
+                if (!k)
+                    continue;
+                double got[MR_FAN_SUMS];
+                memcpy(got, start, sizeof got);
+                k->fan_sums(&in, o, full, got);
+                differ += memcmp(got, ref, sizeof got) != 0;
+            }
+        }
+    }
+    assert_int_equal(differ, 0);
+    assert_true(dead > 100 && edges == 6000);
+}
+
 static void test_merge(void **state)
 {
     (void)state;
@@ -299,6 +373,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_free_costs), cmocka_unit_test(test_plane_terms),
         cmocka_unit_test(test_fan_ok),     cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_fan_sums),
         cmocka_unit_test(test_choice),     cmocka_unit_test(test_cli_paths),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

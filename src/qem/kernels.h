@@ -3,8 +3,10 @@
  * build has and picked once at run time: the cost and plan of a batch of
  * free edges (the quadric solve, mr_free_costs), the area-weighted plane
  * terms a vertex's initial quadric sums (construction), the normal test
- * of a collapse's fans, and the merge of two quadrics at a collapse
- * (addition). Internal.
+ * of a collapse's fans, the merge of two quadrics at a collapse
+ * (addition), and the fan sums of a memoryless plan (MR_QUALITY_BEST's
+ * ranking: a triangle's vectors in lanes, its terms added to each sum in
+ * the default path's order). Internal.
  *
  * Every path computes the same bits: the same expressions in the same
  * order, no fused multiply-add (the build has -ffp-contract=off, and the
@@ -219,6 +221,20 @@ static inline __attribute__((always_inline)) void mr_merge_body(mr_quadricf *k,
     mr_quadric_store(k, &qk);
 }
 
+/* The fans of a collapse of r into k, as the memoryless plan sums them
+ * (mr_kernels.fan_sums; cost.c: fan_sums). */
+typedef struct mr_fan_input {
+    const float *pos;         /* 3 per vertex, and one float of padding after
+                                 the last (read as 4: the extra lane unused) */
+    const uint32_t *tris;     /* 3 per triangle; a deleted one starts with
+                                 UINT32_MAX */
+    const uint32_t *lr, *lk;  /* r's and k's lists: 3 * triangle + corner */
+    uint32_t nr, nk, r, k;
+} mr_fan_input;
+
+/* Entries of fan_sums' sums. */
+enum { MR_FAN_G = 0, MR_FAN_H = 3, MR_FAN_A = 4, MR_FAN_B = 10, MR_FAN_C = 13, MR_FAN_SUMS = 14 };
+
 /* The paths. */
 enum { MR_PATH_DEFAULT = 0, MR_PATH_AVX2 = 1, MR_PATHS = 2 };
 
@@ -233,6 +249,10 @@ typedef struct mr_kernels {
     bool (*fan_ok)(const double *in, size_t n, const double t[3], double min_cos);
     /* the merge of two quadrics (mr_merge_body); k may not alias r */
     void (*merge)(mr_quadricf *k, const mr_quadricf *r, const double dk[3], const double dr[3]);
+    /* a collapse's fan sums relative to o (k's position), added to
+     * sum[MR_FAN_SUMS]: g (3), the volume h, and when full also the swept
+     * volumes' normal equations A (6), b (3) and c (cost.c: fan_sums) */
+    void (*fan_sums)(const mr_fan_input *in, const double o[3], bool full, double *sum);
 } mr_kernels;
 
 /* free_costs' inputs of the edges (u[l], w[l]), l < n <= MR_COST_BATCH, of
