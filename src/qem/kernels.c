@@ -46,6 +46,42 @@ static void merge_default(mr_quadricf *k, const mr_quadricf *r, const double dk[
     mr_merge_body(k, r, dk, dr);
 }
 
+/* List entry c's triangle, seen from its corner: the next corner a and
+ * the one after, b; false for a deleted triangle or one with corner skip. */
+static inline bool fan_corners(const mr_fan_input *in, uint32_t c, uint32_t skip, uint32_t *a,
+                               uint32_t *b)
+{
+    const uint32_t j = c % 3, *tri = in->tris + (c - j);
+    *a = tri[mr_local_next(j)];
+    *b = tri[mr_local_prev(j)];
+    return tri[0] != UINT32_MAX && *a != skip && *b != skip;
+}
+
+/* Corners a and b relative to o, and the normal n = ua x ub. */
+static inline void fan_normal(const float *pos, uint32_t a, uint32_t b, const double o[3],
+                              double ua[3], double ub[3], double n[3])
+{
+    const float *pa = pos + 3 * (size_t)a, *pb = pos + 3 * (size_t)b;
+    for (int i = 0; i < 3; i++) {
+        ua[i] = pa[i] - o[i];
+        ub[i] = pb[i] - o[i];
+    }
+    n[0] = ua[1] * ub[2] - ua[2] * ub[1];
+    n[1] = ua[2] * ub[0] - ua[0] * ub[2];
+    n[2] = ua[0] * ub[1] - ua[1] * ub[0];
+}
+
+/* A (6 entries of a symmetric matrix) += v v^T. */
+static inline void add_outer(double A[6], const double v[3])
+{
+    A[0] += v[0] * v[0];
+    A[1] += v[0] * v[1];
+    A[2] += v[0] * v[2];
+    A[3] += v[1] * v[1];
+    A[4] += v[1] * v[2];
+    A[5] += v[2] * v[2];
+}
+
 /* The fan sums, a triangle at a time. r's triangles (a, r, b): w = r, away
  * from o; their normal n = (a - o) x (b - o) adds to g and the volume
  * (w - o).n to h (an edge triangle's volume too: it goes, and its volume
@@ -58,15 +94,11 @@ static void fan_sums_default(const mr_fan_input *in, const double o[3], bool ful
     const float *pw = in->pos + 3 * (size_t)in->r;
     const double uw[3] = {pw[0] - o[0], pw[1] - o[1], pw[2] - o[2]};
     for (uint32_t i = 0; i < in->nr; i++) {
-        const uint32_t c = in->lr[i], j = c % 3, *tri = in->tris + (c - j);
-        if (tri[0] == UINT32_MAX)
+        uint32_t a, b;
+        if (!fan_corners(in, in->lr[i], UINT32_MAX, &a, &b))
             continue;
-        const uint32_t a = tri[mr_local_next(j)], b = tri[mr_local_prev(j)];
-        const float *pa = in->pos + 3 * (size_t)a, *pb = in->pos + 3 * (size_t)b;
-        const double ua[3] = {pa[0] - o[0], pa[1] - o[1], pa[2] - o[2]};
-        const double ub[3] = {pb[0] - o[0], pb[1] - o[1], pb[2] - o[2]};
-        const double n[3] = {ua[1] * ub[2] - ua[2] * ub[1], ua[2] * ub[0] - ua[0] * ub[2],
-                             ua[0] * ub[1] - ua[1] * ub[0]};
+        double ua[3], ub[3], n[3];
+        fan_normal(in->pos, a, b, o, ua, ub, n);
         sum[MR_FAN_H] += uw[0] * n[0] + uw[1] * n[1] + uw[2] * n[2];
         if (a == in->k || b == in->k)
             continue;
@@ -80,40 +112,24 @@ static void fan_sums_default(const mr_fan_input *in, const double o[3], bool ful
         const double nw[3] = {va[1] * vb[2] - va[2] * vb[1], va[2] * vb[0] - va[0] * vb[2],
                               va[0] * vb[1] - va[1] * vb[0]};
         const double d = nw[0] * uw[0] + nw[1] * uw[1] + nw[2] * uw[2];
-        A[0] += nw[0] * nw[0];
-        A[1] += nw[0] * nw[1];
-        A[2] += nw[0] * nw[2];
-        A[3] += nw[1] * nw[1];
-        A[4] += nw[1] * nw[2];
-        A[5] += nw[2] * nw[2];
+        add_outer(A, nw);
         bv[0] += nw[0] * d;
         bv[1] += nw[1] * d;
         bv[2] += nw[2] * d;
         sum[MR_FAN_C] += d * d;
     }
     for (uint32_t i = 0; i < in->nk; i++) {
-        const uint32_t c = in->lk[i], j = c % 3, *tri = in->tris + (c - j);
-        if (tri[0] == UINT32_MAX)
-            continue;
-        const uint32_t a = tri[mr_local_next(j)], b = tri[mr_local_prev(j)];
-        if (a == in->r || b == in->r)
-            continue;
-        const float *pa = in->pos + 3 * (size_t)a, *pb = in->pos + 3 * (size_t)b;
-        const double ua[3] = {pa[0] - o[0], pa[1] - o[1], pa[2] - o[2]};
-        const double ub[3] = {pb[0] - o[0], pb[1] - o[1], pb[2] - o[2]};
-        const double n[3] = {ua[1] * ub[2] - ua[2] * ub[1], ua[2] * ub[0] - ua[0] * ub[2],
-                             ua[0] * ub[1] - ua[1] * ub[0]};
+        uint32_t a, b;
+        if (!fan_corners(in, in->lk[i], in->r, &a, &b))
+            continue; /* deleted, or on the edge */
+        double ua[3], ub[3], n[3];
+        fan_normal(in->pos, a, b, o, ua, ub, n);
         g[0] += n[0];
         g[1] += n[1];
         g[2] += n[2];
         if (!full)
             continue;
-        A[0] += n[0] * n[0];
-        A[1] += n[0] * n[1];
-        A[2] += n[0] * n[2];
-        A[3] += n[1] * n[1];
-        A[4] += n[1] * n[2];
-        A[5] += n[2] * n[2];
+        add_outer(A, n);
     }
 }
 
@@ -183,10 +199,9 @@ MR_TARGET_AVX2 static void fan_sums_avx2(const mr_fan_input *in, const double o[
     __m128d b2c = _mm_loadu_pd(sum + MR_FAN_B + 2);
     double h = sum[MR_FAN_H];
     for (uint32_t i = 0; i < in->nr; i++) {
-        const uint32_t c = in->lr[i], j = c % 3, *tri = in->tris + (c - j);
-        if (tri[0] == UINT32_MAX)
+        uint32_t a, b;
+        if (!fan_corners(in, in->lr[i], UINT32_MAX, &a, &b))
             continue;
-        const uint32_t a = tri[mr_local_next(j)], b = tri[mr_local_prev(j)];
         const __m256d ua = rel_avx2(in->pos + 3 * (size_t)a, O);
         const __m256d ub = rel_avx2(in->pos + 3 * (size_t)b, O);
         const __m256d n = cross_avx2(ua, ub);
@@ -208,12 +223,9 @@ MR_TARGET_AVX2 static void fan_sums_avx2(const mr_fan_input *in, const double o[
     /* k's triangles add to g and A only: A4 and A5 alone from here */
     __m128d a45 = _mm256_castpd256_pd128(a4b1);
     for (uint32_t i = 0; i < in->nk; i++) {
-        const uint32_t c = in->lk[i], j = c % 3, *tri = in->tris + (c - j);
-        if (tri[0] == UINT32_MAX)
-            continue;
-        const uint32_t a = tri[mr_local_next(j)], b = tri[mr_local_prev(j)];
-        if (a == in->r || b == in->r)
-            continue;
+        uint32_t a, b;
+        if (!fan_corners(in, in->lk[i], in->r, &a, &b))
+            continue; /* deleted, or on the edge */
         const __m256d n = cross_avx2(rel_avx2(in->pos + 3 * (size_t)a, O),
                                      rel_avx2(in->pos + 3 * (size_t)b, O));
         g = _mm256_add_pd(g, n);
