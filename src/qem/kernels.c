@@ -6,7 +6,7 @@
  */
 #include "kernels.h"
 
-#include "../mesh/adjacency.h"
+#include "collapse.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -54,7 +54,7 @@ static inline bool fan_corners(const mr_fan_input *in, uint32_t c, uint32_t skip
     const uint32_t j = c % 3, *tri = in->tris + (c - j);
     *a = tri[mr_local_next(j)];
     *b = tri[mr_local_prev(j)];
-    return tri[0] != UINT32_MAX && *a != skip && *b != skip;
+    return tri[0] != MR_COLLAPSE_NONE && *a != skip && *b != skip;
 }
 
 /* Corners a and b relative to o, and the normal n = ua x ub. */

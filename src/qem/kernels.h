@@ -227,7 +227,7 @@ typedef struct mr_fan_input {
     const float *pos;         /* 3 per vertex, and one float of padding after
                                  the last (read as 4: the extra lane unused) */
     const uint32_t *tris;     /* 3 per triangle; a deleted one starts with
-                                 UINT32_MAX */
+                                 MR_COLLAPSE_NONE (collapse.h) */
     const uint32_t *lr, *lk;  /* r's and k's lists: 3 * triangle + corner */
     uint32_t nr, nk, r, k;
 } mr_fan_input;

@@ -321,6 +321,20 @@ static void input_pull(const input_surface *in, bool exact, const double p[3], d
     o->w = (float)w;
 }
 
+/* mr_fit_untangle's marks per vertex. */
+enum { BACK = 1, TANGLED = 2 };
+
+/* Vertex x back where it was before the fit, marked BACK: false when it
+ * is there already. */
+static bool put_vertex_back(float *pos, const float *before, uint8_t *back, size_t x)
+{
+    if (memcmp(pos + 3 * x, before + 3 * x, 3 * sizeof *pos) == 0)
+        return false;
+    memcpy(pos + 3 * x, before + 3 * x, 3 * sizeof *pos);
+    back[x] |= BACK;
+    return true;
+}
+
 mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint32_t *live,
                           size_t nlive, double min_cos, int threads, size_t *put_back,
                           mr_error *err)
@@ -329,7 +343,6 @@ mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint
     uint8_t *back = calloc(vc ? vc : 1, 1); /* BACK, TANGLED */
     if (!back)
         return mr_fail_nomem(err, "simplify: surface fit", vc);
-    enum { BACK = 1, TANGLED = 2 };
     mr_status st = MR_OK;
     bool have_before = false;
     for (;;) {
@@ -361,14 +374,8 @@ mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint
                 tangled |= ((back[ta[k]] | back[tb[k]]) & TANGLED) != 0;
             if (tangled)
                 continue; /* where the collapses' surface met itself already */
-            for (int k = 0; k < 6; k++) {
-                const size_t x = k < 3 ? ta[k] : tb[k - 3];
-                if (memcmp(pos + 3 * x, before + 3 * x, 3 * sizeof *pos) == 0)
-                    continue;
-                memcpy(pos + 3 * x, before + 3 * x, 3 * sizeof *pos);
-                back[x] |= BACK;
-                marked++;
-            }
+            for (int k = 0; k < 6; k++)
+                marked += put_vertex_back(pos, before, back, k < 3 ? ta[k] : tb[k - 3]);
         }
         free(pairs);
         if (marked == 0)
@@ -382,15 +389,11 @@ mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint
                 if (!((back[tv[0]] | back[tv[1]] | back[tv[2]]) & BACK) ||
                     !turns_bad(before, pos, tv, min_cos))
                     continue;
-                for (int j = 0; j < 3; j++) {
-                    const size_t x = tv[j];
-                    if (memcmp(pos + 3 * x, before + 3 * x, 3 * sizeof *pos) == 0)
-                        continue;
-                    memcpy(pos + 3 * x, before + 3 * x, 3 * sizeof *pos);
-                    back[x] |= BACK;
-                    marked++;
-                    again = true;
-                }
+                for (int j = 0; j < 3; j++)
+                    if (put_vertex_back(pos, before, back, tv[j])) {
+                        marked++;
+                        again = true;
+                    }
             }
         }
         *put_back += marked;
