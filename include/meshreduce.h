@@ -180,11 +180,18 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
 /* Remove the temporary files of the writes in progress, in every thread
  * (those of mr_mesh_write and mr_png_write), which a process killed in the
  * middle of a write would leave beside their destinations as hidden
- * ".meshreduce-XXXXXX" files. Async-signal-safe: it calls only unlink(),
- * with no lock and no allocation. Meant for the handler of a signal that
- * ends the process (SIGINT, SIGTERM, SIGHUP), which the host program
- * installs: the library installs no signal handler. Writes still in progress
- * then fail (their rename finds no file); a destination is never touched. */
+ * ".meshreduce-PID-XXXXXX" files. Async-signal-safe: it calls only
+ * unlink(), gettid() and clock_nanosleep(), with atomics, no lock and no
+ * allocation; it covers a file being created at that moment on any
+ * thread, the calling one included (it waits for another thread's open()
+ * to return), and a removal another thread's call is making. Meant for
+ * the handler of a signal that ends the process (SIGINT, SIGTERM, SIGHUP),
+ * which the host program installs: the library installs no signal
+ * handler. Keep the handler installed until the call returns (no
+ * SA_RESETHAND: a second signal would end the process under it). Writes
+ * still in progress then fail (their rename finds no file); writes that
+ * start during the call wait for its end; a destination is never
+ * touched. */
 void mr_remove_pending_files(void);
 
 /* ------------------------------------------------------------------------ */
@@ -453,7 +460,9 @@ typedef struct mr_simplify_options {
                                    parts whose bounding-box diagonal is at
                                    most the error bound (max_error, or else
                                    the largest collapse error made), never
-                                   the part with the most triangles */
+                                   the largest part (by that diagonal; ties
+                                   by triangles, then by place: the same
+                                   part whatever the vertex order) */
     const uint8_t *vertex_lock; /* optional, one byte per input vertex:
                                    nonzero = this vertex never moves */
     int threads;                /* 0 = all cores (parallel algorithms) */

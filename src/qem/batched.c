@@ -1138,7 +1138,6 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
             share = PASS_SHARE;
         }
     }
-    mr_simplifier_progress(s, o, 1.0);
     const double e = sqrt(worst);
     *max_error = mr_simplifier_error(s, o, e);
     return done;

@@ -490,7 +490,8 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
                          t[2] == m->pos[3 * u + 2];
     const bool v_stays = t[0] == m->pos[3 * v] && t[1] == m->pos[3 * v + 1] &&
                          t[2] == m->pos[3 * v + 2];
-    if ((fu & MR_VF_LOCKED && !u_stays) || (fv & MR_VF_LOCKED && !v_stays))
+    const uint8_t pinned = MR_VF_LOCKED | MR_VF_CORNER;
+    if ((fu & pinned && !u_stays) || (fv & pinned && !v_stays))
         return false;
     if (limits->half_edge) {
         const uint8_t keep = MR_VF_BOUNDARY | MR_VF_SEAM;

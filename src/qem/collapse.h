@@ -48,9 +48,13 @@ enum {
     MR_VF_REMOVED = 1u << 3,     /* collapsed away, or never referenced */
     MR_VF_MOVED = 1u << 4,       /* position differs from the input's */
     MR_VF_NONMANIFOLD = 1u << 5,
-    MR_VF_BLOCKED = 1u << 6      /* simplifier's bookkeeping: an edge at
+    MR_VF_BLOCKED = 1u << 6,     /* simplifier's bookkeeping: an edge at
                                     this vertex was found invalid and left
                                     the queue until the ring changes */
+    MR_VF_CORNER = 1u << 7       /* where an open boundary or a seam turns
+                                    (mr_simplifier_mark_corners): stays in
+                                    place while the run can do without
+                                    moving it */
 };
 
 typedef struct mr_collapse_mesh {
@@ -155,7 +159,7 @@ uint32_t mr_collapse_edge_triangles(const mr_collapse_mesh *m, uint32_t v, uint3
  * turns by more than the limit, or degenerates; (3) no duplicate
  * triangle arises; (4) two boundary vertices only collapse along a
  * boundary edge, and the last triangles of a component never vanish;
- * (5) a LOCKED vertex never moves. Reads only the triangles of u and v and
+ * (5) a LOCKED or CORNER vertex never moves. Reads only the triangles of u and v and
  * the flags and positions of their vertices.
  */
 bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,

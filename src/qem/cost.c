@@ -49,6 +49,10 @@ static inline void free_cost_inputs_at(const mr_quadricf *q, const float *pos, u
  * (flags fw) is -- the half-edge collapse u -> w, or a full collapse that
  * keeps w in place?
  *   locked:           never;
+ *   a corner:         never (where a boundary or seam turns, a tile's or
+ *                     a decal's corner: mr_simplifier_mark_corners; kept
+ *                     in place while the target can be reached without
+ *                     moving it, then released: mr_simplifier_run);
  *   on a boundary:    only onto the boundary (a boundary vertex, locked or
  *                     not, or a non-manifold one, where boundaries may
  *                     meet; an inner edge between two boundary vertices is
@@ -64,7 +68,7 @@ static inline void free_cost_inputs_at(const mr_quadricf *q, const float *pos, u
  */
 static inline bool may_go_onto(uint8_t fu, uint8_t fw)
 {
-    if (fu & MR_VF_LOCKED)
+    if (fu & (MR_VF_LOCKED | MR_VF_CORNER))
         return false;
     if (fu & MR_VF_BOUNDARY) /* a non-manifold end may be where boundaries meet */
         return (fw & (MR_VF_BOUNDARY | MR_VF_NONMANIFOLD)) != 0;
@@ -74,7 +78,7 @@ static inline bool may_go_onto(uint8_t fu, uint8_t fw)
 }
 
 /* Flags that keep a full collapse off the free optimum. */
-#define PINNING (MR_VF_LOCKED | MR_VF_BOUNDARY | MR_VF_SEAM)
+#define PINNING (MR_VF_LOCKED | MR_VF_BOUNDARY | MR_VF_SEAM | MR_VF_CORNER)
 
 /*
  * The full collapse of edge (u, w): the target relative to w's position

@@ -436,7 +436,6 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
     }
     /* The queue is done with: its memory goes before the output's. */
     greedy_free(s);
-    mr_simplifier_progress(s, o, 1.0);
     double e = sqrt(worst);
     *max_error = mr_simplifier_error(s, o, e);
     return done;

@@ -16,7 +16,9 @@
  *     same side of the seam; a non-seam vertex may collapse into a seam
  *     vertex, whose position then stays (full collapses pin seam ends);
  *   - seam vertices with more than two wedges, other than two seam edges,
- *     or on an open boundary (seams meeting, corners) are locked.
+ *     or on an open boundary (seams meeting, corners) are locked;
+ *   - where a seam turns sharply between straight runs, its vertex is a
+ *     corner (MR_VF_CORNER), kept in place as a boundary's corners are.
  * On a full collapse the survivor's wedges take the attributes
  * interpolated along the edge at the target's projection parameter
  * (normals renormalised). The output keeps the split: one output vertex
@@ -213,6 +215,13 @@ static size_t setup_seams(mr_simplifier *s)
     return seam_vertices;
 }
 
+/* A seam's edge (mr_simplifier_mark_corners' polyline). */
+static bool seam_line_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
+{
+    uint32_t et[2];
+    return edge_tris(s, v, x, et) == 2 && seam_edge(s, v, x, et);
+}
+
 /* ---- the call ---------------------------------------------------------------------- */
 
 static void free_ctx(attr_ctx *a)
@@ -335,6 +344,8 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
      * is done at output from each vertex's one wedge. */
     const bool has_attributes = a.normals || a.texcoords || a.colors;
     const bool has_seams = setup_seams(&s) > 0;
+    if (has_seams)
+        mr_simplifier_mark_corners(&s, MR_VF_SEAM, seam_line_edge);
     s.attr_valid = has_seams ? attr_valid : NULL;
     s.attr_apply = has_seams || has_attributes ? attr_apply : NULL;
     if (!s.attr_apply) {

@@ -41,11 +41,35 @@ static mr_simplify_stop stop_reason(const mr_simplifier *s, const mr_simplify_go
     return movable ? MR_STOP_REFUSED : MR_STOP_LOCKED;
 }
 
+/* Is the part of box a (diagonal da, ta triangles) larger than that of
+ * box b: by diagonal, then triangles, then the lower corner of the box;
+ * at last by root id (parts equal in all of these are copies of one
+ * shape at one place). The same answer whatever the vertex order. */
+static bool larger_part(const float *a, double da, uint32_t ta, uint32_t ra, const float *b,
+                        double db, uint32_t tb, uint32_t rb)
+{
+    if (da != db)
+        return da > db;
+    if (ta != tb)
+        return ta > tb;
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k])
+            return a[k] < b[k];
+    return ra < rb;
+}
+
+static double box_diagonal(const float *b)
+{
+    const double dx = (double)b[3] - b[0], dy = (double)b[4] - b[1], dz = (double)b[5] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
 /*
  * Drop the connected parts whose bounding-box diagonal (normalised) is at
  * most `bound` -- removing them moves the surface by no more -- but never
- * the part with the most triangles. Returns the number of parts dropped.
- * A part is a set of live triangles joined through shared vertices.
+ * the largest part, by that same diagonal (larger_part): pruning never
+ * leaves nothing. Returns the number of parts dropped. A part is a set of
+ * live triangles joined through shared vertices.
  */
 static size_t prune(mr_simplifier *s, double bound)
 {
@@ -80,23 +104,27 @@ static size_t prune(mr_simplifier *s, double bound)
             b[3 + k] = p[k] > b[3 + k] ? p[k] : b[3 + k];
         }
     }
-    uint32_t largest = NONE;
     for (size_t t = 0; t < tc; t++)
-        if (m->tris[3 * t] != NONE) {
-            const uint32_t r = mr_uf_find(parent, m->tris[3 * t]);
-            tris[r]++;
-            largest = largest == NONE || tris[r] > tris[largest] ||
-                              (tris[r] == tris[largest] && r < largest)
-                          ? r
-                          : largest;
+        if (m->tris[3 * t] != NONE)
+            tris[mr_uf_find(parent, m->tris[3 * t])]++;
+    uint32_t largest = NONE;
+    double largest_diagonal = 0;
+    for (size_t v = 0; v < vc; v++) {
+        if (!tris[v])
+            continue;
+        const double d = box_diagonal(box + 6 * v);
+        if (largest == NONE || larger_part(box + 6 * v, d, tris[v], (uint32_t)v,
+                                           box + 6 * (size_t)largest, largest_diagonal,
+                                           tris[largest], largest)) {
+            largest = (uint32_t)v;
+            largest_diagonal = d;
         }
+    }
     /* tris[r] becomes the verdict: 1 = drop part r */
     for (size_t v = 0; v < vc; v++) {
         if (!tris[v])
             continue;
-        const float *b = box + 6 * v;
-        const double dx = (double)b[3] - b[0], dy = (double)b[4] - b[1], dz = (double)b[5] - b[2];
-        tris[v] = v != largest && sqrt(dx * dx + dy * dy + dz * dz) <= bound;
+        tris[v] = v != largest && box_diagonal(box + 6 * v) <= bound;
         dropped += tris[v];
     }
     if (!dropped)
@@ -133,6 +161,8 @@ void mr_simplifier_finish(mr_simplifier *s, const mr_simplify_options *o, double
         /* the error bound, or the largest error the collapses made */
         const double e = o->max_error > 0 ? o->max_error : max_error;
         s->pruned = prune(s, mr_simplifier_normalised(s, o, e));
+        if (s->pruned && mr_simplifier_reached(s, &g))
+            s->stop = MR_STOP_TARGET; /* the pruning reached it */
     }
 }
 

@@ -477,7 +477,6 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
         if (!mr_part_next(pass_done, &ps, &share))
             break; /* nothing valid is left */
     }
-    mr_simplifier_progress(s, o, 1.0);
     *max_error = mr_simplifier_error(s, o, sqrt(worst));
     return done;
 }

@@ -262,6 +262,192 @@ static mr_status spatial_order(const float *positions, size_t stride, const uint
     return MR_OK;
 }
 
+/* ---- corners ---------------------------------------------------------------- */
+
+/* A polyline turns sharply at a vertex when the directions of its two
+ * edges there differ by at least MR_CORNER_SHARP degrees, and runs
+ * straight on when they differ by at most MR_CORNER_STRAIGHT. */
+#define MR_CORNER_SHARP 40.0
+#define MR_CORNER_STRAIGHT 20.0
+
+/* v's two neighbours along a polyline (the x with on_line(s, v, x)) into
+ * nb; false unless there are exactly two. */
+static bool line_neighbours(const mr_simplifier *s, uint32_t v, mr_line_edge on_line,
+                            uint32_t nb[2])
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < m->count[v]; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        const uint32_t k = list[i] % 3;
+        for (int side = 1; side <= 2; side++) {
+            const uint32_t x = tri[(k + (uint32_t)side) % 3];
+            if ((n > 0 && nb[0] == x) || (n > 1 && nb[1] == x) || !on_line(s, v, x))
+                continue;
+            if (n == 2)
+                return false;
+            nb[n++] = x;
+        }
+    }
+    return n == 2;
+}
+
+/* The turn of the polyline at v, from neighbour nb[0] through v to nb[1]:
+ * the cosine of the angle between its two edges' directions (1: straight
+ * on) into *cosine, and on which side it turns, seen along the normal of
+ * v's fan, into *side (+1 or -1). False when an edge has no length. */
+static bool line_turn(const mr_simplifier *s, uint32_t v, const uint32_t nb[2], double *cosine,
+                      int *side)
+{
+    const mr_collapse_mesh *m = &s->m;
+    double pv[3], pa[3], pb[3];
+    mr_collapse_load(m, v, pv);
+    mr_collapse_load(m, nb[0], pa);
+    mr_collapse_load(m, nb[1], pb);
+    const double e1[3] = {pv[0] - pa[0], pv[1] - pa[1], pv[2] - pa[2]};
+    const double e2[3] = {pb[0] - pv[0], pb[1] - pv[1], pb[2] - pv[2]};
+    const double l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    const double l2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+    if (!(l1 > 0) || !(l2 > 0))
+        return false;
+    *cosine = (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) / (l1 * l2);
+    double n[3] = {0, 0, 0};
+    const uint32_t *list = mr_collapse_vertex_tris(m, v);
+    for (uint32_t i = 0; i < m->count[v]; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        double p[3][3], c[3];
+        for (int j = 0; j < 3; j++)
+            mr_collapse_load(m, tri[j], p[j]);
+        mr_triangle_normal(p[0], p[1], p[2], c);
+        n[0] += c[0];
+        n[1] += c[1];
+        n[2] += c[2];
+    }
+    const double x[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                         e1[0] * e2[1] - e1[1] * e2[0]};
+    *side = x[0] * n[0] + x[1] * n[1] + x[2] * n[2] < 0 ? -1 : 1;
+    return true;
+}
+
+/* One vertex along a polyline: cur's turn (*cosine, *side) and the
+ * vertex after it coming from prev (*next). False where the line ends at
+ * cur (a junction, a line's end, an edge without length). */
+static bool line_step(const mr_simplifier *s, uint32_t prev, uint32_t cur, mr_line_edge on_line,
+                      uint32_t *next, double *cosine, int *side)
+{
+    uint32_t nb[2];
+    if (!line_neighbours(s, cur, on_line, nb) || (nb[0] != prev && nb[1] != prev))
+        return false;
+    const uint32_t order[2] = {prev, nb[0] == prev ? nb[1] : nb[0]};
+    *next = order[1];
+    return line_turn(s, cur, order, cosine, side);
+}
+
+/* Does the run from v through x (on v's side `side`) bear a corner at v?
+ * Yes when it goes on straight for a while (CORNER_RUN vertices), ends
+ * the line, or ends turning to v's side again (a tile's next corner);
+ * no when it ends turning back within those few vertices -- a staircase
+ * of grid cells, a scan's ragged hole. The first vertex may also turn
+ * sharply to v's side with a straight run beyond it: the two corners of a
+ * strip one triangle wide. */
+#define CORNER_RUN 3
+static bool run_bears_corner(const mr_simplifier *s, uint32_t v, uint32_t x, int side,
+                             mr_line_edge on_line, double sharp, double straight)
+{
+    uint32_t prev = v, cur = x, next;
+    double c;
+    int sd;
+    if (!line_step(s, prev, cur, on_line, &next, &c, &sd))
+        return true; /* the line ends at x */
+    if (c < straight) {
+        if (c > sharp || sd != side)
+            return false; /* a bend, or back the other way at once */
+        prev = cur; /* the pair's other corner: its run beyond */
+        cur = next;
+        if (!line_step(s, prev, cur, on_line, &next, &c, &sd))
+            return true;
+        if (c < straight)
+            return false;
+    }
+    for (int n = 1; n < CORNER_RUN; n++) {
+        prev = cur;
+        cur = next;
+        if (!line_step(s, prev, cur, on_line, &next, &c, &sd))
+            return true;
+        if (c < straight)
+            return sd == side;
+    }
+    return true;
+}
+
+/*
+ * Is v a corner of its polyline: a sharp turn between two runs that bear
+ * it (run_bears_corner)? A ragged line turns at every vertex or every few
+ * vertices, back and forth, and has no corners: its vertices simplify as
+ * any boundary's.
+ */
+static bool is_corner(const mr_simplifier *s, uint32_t v, mr_line_edge on_line)
+{
+    const double deg = 3.14159265358979323846 / 180;
+    const double sharp = cos(MR_CORNER_SHARP * deg), straight = cos(MR_CORNER_STRAIGHT * deg);
+    uint32_t nb[2];
+    double c;
+    int side;
+    if (!line_neighbours(s, v, on_line, nb) || !line_turn(s, v, nb, &c, &side) || c > sharp)
+        return false;
+    /* walked from v, the run to nb[1] goes the way v's turn was taken,
+     * the run to nb[0] against it: its turns to v's side read opposite */
+    return run_bears_corner(s, v, nb[0], -side, on_line, sharp, straight) &&
+           run_bears_corner(s, v, nb[1], side, on_line, sharp, straight);
+}
+
+size_t mr_simplifier_mark_corners(mr_simplifier *s, uint8_t line, mr_line_edge on_line)
+{
+    mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+    const uint8_t skip = MR_VF_LOCKED | MR_VF_NONMANIFOLD | MR_VF_REMOVED;
+    size_t on = 0;
+    for (ptrdiff_t v = 0; v < nv; v++)
+        on += (m->flags[v] & (line | skip)) == line;
+    if (on == 0)
+        return 0;
+    uint8_t *mark = mr_calloc_array(m->vertex_count, 1);
+    if (!mark)
+        return 0; /* no memory: no corners kept, the run as without them */
+    /* Each vertex decides from the mesh alone into its own mark, then the
+     * marks become flags: the same on any number of threads. */
+    const int nthreads = s->threads;
+#pragma omp parallel for schedule(dynamic, 4096) num_threads(nthreads) \
+    if (nthreads > 1 && on > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
+        if ((m->flags[v] & (line | skip)) == line)
+            mark[v] = is_corner(s, (uint32_t)v, on_line);
+    size_t corners = 0;
+    for (ptrdiff_t v = 0; v < nv; v++)
+        if (mark[v]) {
+            m->flags[v] |= MR_VF_CORNER;
+            corners++;
+        }
+    free(mark);
+    s->corners += corners;
+    return corners;
+}
+
+void mr_simplifier_release_corners(mr_simplifier *s)
+{
+    mr_collapse_mesh *m = &s->m;
+    for (size_t v = 0; v < m->vertex_count; v++)
+        m->flags[v] &= (uint8_t)~MR_VF_CORNER;
+    s->corners = 0;
+}
+
+/* An open boundary's edge: one triangle. */
+static bool boundary_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
+{
+    return mr_collapse_edge_triangles(&s->m, v, x) == 1;
+}
+
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
                                     size_t input_triangles, mr_error *err)
 {
@@ -492,6 +678,7 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     for (ptrdiff_t v = 0; v < nv; v++)
         if (!(m->flags[v] & MR_VF_REMOVED))
             initial_quadric(s, (uint32_t)v, o->boundary_weight);
+    mr_simplifier_mark_corners(s, MR_VF_BOUNDARY, boundary_edge);
     return MR_OK;
 }
 

@@ -64,13 +64,72 @@ mr_status mr_simplifier_cancelled(mr_error *err)
                          "simplify: cancelled by the progress callback");
 }
 
+static size_t run_strategy(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+{
+    return s->batched          ? mr_simplifier_run_batched(s, o, max_error)
+           : s->queued         ? mr_simplifier_run_queued(s, o, max_error)
+           : s->boundary_aware ? mr_simplifier_run_partitioned_boundary(s, o, max_error)
+           : s->partitioned    ? mr_simplifier_run_partitioned(s, o, max_error)
+                               : mr_simplifier_run_greedy(s, o, max_error);
+}
+
+static void add_profiles(mr_simplifier *s, const mr_queued_profile *q,
+                         const mr_partition_profile *p)
+{
+    s->profile.pops += q->pops;
+    s->profile.locks += q->locks;
+    s->profile.lock_failures += q->lock_failures;
+    s->profile.checks += q->checks;
+    s->profile.updates += q->updates;
+    s->profile.compactions += q->compactions;
+    s->pprofile.passes += p->passes;
+    s->pprofile.interior += p->interior;
+    s->pprofile.boundary += p->boundary;
+    s->pprofile.boundary_seq += p->boundary_seq;
+    s->pprofile.tail += p->tail;
+    s->pprofile.rebalances += p->rebalances;
+    s->pprofile.deferred += p->deferred;
+    for (int i = 0; i < 4; i++)
+        s->pprofile.trigger[i] += p->trigger[i];
+}
+
+/*
+ * The strategy's run, in up to two stages. The first keeps the corners
+ * (MR_VF_CORNER: may_go_onto's rule) in place; when it ends short of the
+ * targets -- every other collapse within the error bound made or refused
+ * -- the corners are released and the strategy goes on from there with
+ * its queue filled anew, so a corner moves only where the target cannot
+ * be reached without it. Without corners (a closed mesh, ragged
+ * boundaries) the run is one stage.
+ */
 size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
 {
-    size_t done = s->batched  ? mr_simplifier_run_batched(s, o, max_error)
-                  : s->queued ? mr_simplifier_run_queued(s, o, max_error)
-                  : s->boundary_aware ? mr_simplifier_run_partitioned_boundary(s, o, max_error)
-                  : s->partitioned ? mr_simplifier_run_partitioned(s, o, max_error)
-                              : mr_simplifier_run_greedy(s, o, max_error);
+    size_t done = run_strategy(s, o, max_error);
+    mr_simplify_goal g;
+    mr_simplifier_targets(s, o, &g);
+    if (s->corners && !s->cancelled && !mr_simplifier_reached(s, &g)) {
+        mr_simplifier_release_corners(s);
+        const mr_queued_profile q = s->profile;
+        const mr_partition_profile p = s->pprofile;
+        /* The vertex queues' state went with their first stage: filled
+         * anew from clean lists (a lazy run leaves deleted triangles in
+         * them). No memory for it: the run ends there. */
+        bool go = s->batched || s->partitioned;
+        if (!go) {
+            mr_collapse_mesh *m = &s->m;
+            for (size_t v = 0; v < m->vertex_count; v++)
+                mr_collapse_clean(m, (uint32_t)v);
+            mr_error ignored;
+            go = mr_simplifier_fill_queue(s, &ignored) == MR_OK;
+        }
+        if (go) {
+            double e2;
+            done += run_strategy(s, o, &e2);
+            *max_error = e2 > *max_error ? e2 : *max_error;
+            add_profiles(s, &q, &p);
+        }
+    }
+    mr_simplifier_progress(s, o, 1.0);
     if (s->memoryless) /* its costs are no distances */
         *max_error = mr_simplifier_error(s, o, mr_simplifier_vertex_error(s));
     mr_simplifier_finish(s, o, *max_error);

@@ -83,6 +83,7 @@ struct mr_simplifier {
     mr_partition_profile pprofile; /* its counts, after the run */
     int threads;             /* threads the run may use (options.threads) */
     bool cancelled;          /* the progress callback asked to stop */
+    double reported;         /* the last fraction reported */
     double fit_share;        /* of the progress, the surface fit's part
                                 (MR_QUALITY_BEST); the collapses report
                                 the rest */
@@ -98,6 +99,7 @@ struct mr_simplifier {
                                 frees it (mr_mesh_simplify reorders its
                                 corners by it) */
     size_t input_vertices;
+    size_t corners;          /* flagged MR_VF_CORNER, until released */
     size_t blocked_vertices; /* non-manifold or inconsistently wound: locked */
     mr_simplify_stop stop;   /* why mr_simplifier_run stopped */
     size_t pruned;           /* parts dropped by options.prune */
@@ -193,6 +195,16 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
 void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
                            mr_simplify_goal *g);
 void mr_simplifier_free(mr_simplifier *s);
+/* Is (v, x) an edge of the polyline that mr_simplifier_mark_corners
+ * looks at (an open boundary, a seam)? */
+typedef bool (*mr_line_edge)(const mr_simplifier *s, uint32_t v, uint32_t x);
+/* Flag MR_VF_CORNER the vertices flagged `line` (and not locked) where
+ * their polyline, the edges on_line takes, turns sharply between two
+ * straight runs (setup.c, is_corner); returns how many. mr_simplifier_init
+ * marks the open boundaries' corners, mr_mesh_simplify its seams'. */
+size_t mr_simplifier_mark_corners(mr_simplifier *s, uint8_t line, mr_line_edge on_line);
+/* Clear every MR_VF_CORNER: the corners may move from now on. */
+void mr_simplifier_release_corners(mr_simplifier *s);
 
 /* ---- cost.c: costs, plans, validity, the collapse */
 /* The full collapse of edge (u, w): the target relative to w's position
@@ -291,6 +303,10 @@ size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double 
 static inline bool mr_simplifier_report(mr_simplifier *s, const mr_simplify_options *o,
                                         double fraction)
 {
+    /* never backwards: a second stage of the run (mr_simplifier_run)
+     * counts from its own start */
+    fraction = fraction > s->reported ? fraction : s->reported;
+    s->reported = fraction;
     if (o->progress && !s->cancelled && o->progress(fraction, o->progress_user) != 0)
         s->cancelled = true;
     return s->cancelled;

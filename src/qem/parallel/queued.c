@@ -678,7 +678,6 @@ size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
     const size_t end = atomic_load(&qd->cursor);
     m->refs_size = end < m->refs_capacity ? end : m->refs_capacity;
     mr_simplifier_queued_free(s);
-    mr_simplifier_progress(s, o, 1.0);
     *max_error = mr_simplifier_error(s, o, sqrt(worst));
     return made;
 }
