@@ -38,11 +38,20 @@ static void print_help(FILE *f)
 /* SIGINT, SIGTERM or SIGHUP in the middle of a write would leave the
  * output's hidden temporary file behind: remove it, then die of the same
  * signal, so that the parent (a shell, make) sees why the tool stopped.
- * SA_RESETHAND has restored the default action, and the signal, blocked in
- * its handler, is delivered as the handler returns. */
+ * The action stays this handler until the files are gone: a second
+ * signal (the same or another of the three) meanwhile reaches another
+ * thread, whose handler waits for the removal in progress
+ * (mr_remove_pending_files) rather than ending the process under it. Then
+ * the default action is restored, and the signal, blocked in its
+ * handler, is delivered as the handler returns. */
 static void on_terminating_signal(int sig)
 {
     mr_remove_pending_files();
+    struct sigaction dfl;
+    memset(&dfl, 0, sizeof dfl);
+    dfl.sa_handler = SIG_DFL;
+    sigemptyset(&dfl.sa_mask);
+    sigaction(sig, &dfl, NULL);
     raise(sig);
 }
 
@@ -52,8 +61,7 @@ static void install_signal_handlers(void)
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_terminating_signal;
-    sa.sa_flags = SA_RESETHAND;
-    /* the others wait, so that the tool dies of the first */
+    /* the others wait on this thread, so that the tool dies of the first */
     sigemptyset(&sa.sa_mask);
     for (size_t i = 0; i < sizeof signals / sizeof *signals; i++)
         sigaddset(&sa.sa_mask, signals[i]);

@@ -10,9 +10,11 @@
 #include <pthread.h>
 #include <signal.h>
 #include <stdbool.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/inotify.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -152,6 +154,161 @@ static void test_sighup_mid_write(void **state)
 {
     (void)state;
     signal_mid_write(SIGHUP, "sighup");
+}
+
+/* ---- signals at random moments, under load ---------------------------- */
+
+/* A busy process per core and one more, so that the tool's threads are
+ * preempted at any instruction (a loaded machine), until stop_load. */
+static int start_load(pid_t *pids, int cap)
+{
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int n = (int)(cores > 0 ? cores : 1) + 1;
+    n = n < cap ? n : cap;
+    for (int i = 0; i < n; i++) {
+        pids[i] = fork();
+        assert_true(pids[i] >= 0);
+        if (pids[i] == 0) {
+            alarm(600);
+            for (volatile unsigned long x = 0;; x++)
+                ;
+        }
+    }
+    return n;
+}
+
+static void stop_load(const pid_t *pids, int n)
+{
+    for (int i = 0; i < n; i++) {
+        kill(pids[i], SIGKILL);
+        waitpid(pids[i], NULL, 0);
+    }
+}
+
+static uint64_t next_random(uint64_t *x)
+{
+    *x ^= *x << 13;
+    *x ^= *x >> 7;
+    *x ^= *x << 17;
+    return *x;
+}
+
+static void spin_us(long us)
+{
+    struct timespec a, b;
+    clock_gettime(CLOCK_MONOTONIC, &a);
+    do
+        clock_gettime(CLOCK_MONOTONIC, &b);
+    while ((b.tv_sec - a.tv_sec) * 1000000L + (b.tv_nsec - a.tv_nsec) / 1000 < us);
+}
+
+/*
+ * The tool, on two threads, writing a mesh while busy processes load every
+ * core, gets SIGTERM (some tries SIGTERM and then SIGINT or SIGTERM again
+ * at once) at random moments: half the tries a few microseconds after its
+ * temporary file is created (inotify tells the moment: the tool may be
+ * preempted there, between creating the file and registering it), the
+ * others anywhere in the write. Whatever the moment, no temporary file is
+ * left, and the destination is either absent (the tool died of the
+ * signal) or complete (it had finished).
+ */
+static void test_signals_at_random_moments(void **state)
+{
+    (void)state;
+    const bool quick = getenv("MR_TEST_QUICK") != NULL;
+    const int tries = quick ? 50 : 80;
+    const char *size = quick ? "60k" : "200k";
+    /* the complete output, to hold a kept destination against */
+    char refdir[1024], ref[1100];
+    fresh_dir("random-ref", refdir, sizeof refdir);
+    snprintf(ref, sizeof ref, "%s/ref.obj", refdir);
+    assert_int_equal(tu_run_cli(tu_fmt("--threads 2 generate scan --triangles %s -q -o %s", size,
+                                       ref),
+                                NULL),
+                     0);
+    size_t ref_size;
+    char *ref_bytes = tu_read_file(ref, &ref_size);
+    assert_non_null(ref_bytes);
+    pid_t load[64];
+    const int nload = start_load(load, 64);
+    uint64_t rng = 0x9e3779b97f4a7c15ull ^ (uint64_t)getpid();
+    int killed = 0, finished = 0;
+    for (int t = 0; t < tries; t++) {
+        char dir[1024], dest[1100];
+        fresh_dir(tu_fmt("random-%d", t), dir, sizeof dir);
+        snprintf(dest, sizeof dest, "%s/big.obj", dir);
+        const int watch = inotify_init1(IN_CLOEXEC);
+        assert_true(watch >= 0);
+        assert_true(inotify_add_watch(watch, dir, IN_CREATE) >= 0);
+        pid_t pid = fork();
+        assert_true(pid >= 0);
+        if (pid == 0) {
+            signal(SIGINT, SIG_DFL);
+            signal(SIGTERM, SIG_DFL);
+            sigset_t none;
+            sigemptyset(&none);
+            sigprocmask(SIG_SETMASK, &none, NULL);
+            alarm(120);
+            execl(MR_CLI_PATH, "meshreduce", "--threads", "2", "generate", "scan",
+                  "--triangles", size, "-q", "-o", dest, (char *)NULL);
+            _exit(127);
+        }
+        const uint64_t r = next_random(&rng);
+        if (t % 2 == 0) {
+            /* at the creation of the temporary file */
+            char ev[4096];
+            const ssize_t n = read(watch, ev, sizeof ev);
+            assert_true(n > 0);
+            spin_us((long)(r % 40));
+        } else {
+            /* anywhere from the file's creation to (about) the write's end */
+            char ev[4096];
+            assert_true(read(watch, ev, sizeof ev) > 0);
+            sleep_ms((long)(r % (quick ? 60 : 150)));
+        }
+        kill(pid, SIGTERM);
+        if ((r >> 8) % 4 == 0)
+            kill(pid, (r >> 12) % 2 ? SIGINT : SIGTERM);
+        close(watch);
+        int status;
+        assert_int_equal(waitpid(pid, &status, 0), pid);
+        char tmp[2048];
+        if (find_temp(dir, tmp, sizeof tmp)) {
+            stop_load(load, nload);
+            fail_msg("try %d: temporary file left behind: %s", t, tmp);
+        }
+        if (WIFSIGNALED(status))
+            killed++;
+        else if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
+            finished++;
+        else {
+            stop_load(load, nload);
+            fail_msg("try %d: exit status %d", t, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+        }
+        /* a destination is there only complete: the write had ended (the
+         * signal may still come before the process exits) */
+        if (tu_file_exists(dest)) {
+            size_t n;
+            char *got = tu_read_file(dest, &n);
+            const bool same = got && n == ref_size && memcmp(got, ref_bytes, n) == 0;
+            free(got);
+            if (!same) {
+                stop_load(load, nload);
+                fail_msg("try %d: %s is not the complete output", t, dest);
+            }
+            unlink(dest);
+        } else if (!WIFSIGNALED(status)) {
+            stop_load(load, nload);
+            fail_msg("try %d: finished without its output", t);
+        }
+        rmdir(dir);
+    }
+    stop_load(load, nload);
+    free(ref_bytes);
+    unlink(ref);
+    rmdir(refdir);
+    print_message("%d tries: %d killed, %d finished first\n", tries, killed, finished);
+    assert_true(killed >= tries / 2);
 }
 
 /* Under nohup (SIGHUP ignored at start) the tool keeps ignoring it and
@@ -743,6 +900,7 @@ int main(void)
         cmocka_unit_test(test_sigterm_mid_write),
         cmocka_unit_test(test_sighup_mid_write),
         cmocka_unit_test(test_ignored_hangup_runs_on),
+        cmocka_unit_test(test_signals_at_random_moments),
         cmocka_unit_test(test_remove_pending_idle),
         cmocka_unit_test(test_concurrent_writes),
         cmocka_unit_test(test_dev_null),

@@ -193,51 +193,99 @@ mr_status mr_mesh_read(const char *path, const mr_read_options *options, mr_mesh
 /* Pending temporary files                                                  */
 /* ------------------------------------------------------------------------ */
 
-/* The temporary files of the writes in progress, for mr_remove_pending_files,
- * which a signal handler may call at any moment on any thread. So: fixed
- * slots (no allocation, no lock), each claimed by an atomic compare-and-swap;
- * the path is written completely before the slot is published, and a
- * published slot's path is never changed while a handler may be reading it.
- * When every slot is taken a write goes unregistered: it still works, only a
- * signal would leave its temporary file behind; so does a signal in the few
- * instructions between creating the file and publishing its slot. */
+/*
+ * The temporary files of the writes in progress, for mr_remove_pending_files,
+ * which a signal handler may call at any moment on any thread -- also on
+ * the thread that is creating a file, between any two of its instructions.
+ * So: fixed slots (no allocation, no lock), each claimed by an atomic
+ * compare-and-swap, and a slot names its file *before* the file is
+ * created:
+ *   FILLING   the writer owns it and writes its path (no file of it exists);
+ *   CREATING  the path is complete and the file may exist (the writer is
+ *             in open()): a handler on another thread waits until the
+ *             writer says (PUBLISHED, or FILLING again when no file was
+ *             made); a handler on the writer's own thread has stopped it
+ *             there and removes the path at once (the process ends before
+ *             the writer goes on);
+ *   PUBLISHED the file exists; TAKEN: a handler is removing it; REMOVED:
+ *             a handler removed it, the writer frees the slot.
+ * A writer checks `removing` after announcing CREATING and a handler
+ * raises it before reading any slot (both sequentially consistent), so
+ * either the handler sees the slot or the writer sees the handler and
+ * waits, creating nothing until the removal is over. Writes made when all
+ * slots are taken go unregistered: they work, but a signal would leave
+ * their file behind.
+ */
 enum { PENDING_SLOTS = 64 };
-enum {
-    SLOT_FREE,      /* unused */
-    SLOT_FILLING,   /* claimed by a writer that is copying its path in */
-    SLOT_PUBLISHED, /* a temporary file exists at path */
-    SLOT_TAKEN,     /* a handler is removing it (it reads path) */
-    SLOT_REMOVED    /* a handler has removed it; the writer frees the slot */
-};
+enum { SLOT_FREE, SLOT_FILLING, SLOT_CREATING, SLOT_PUBLISHED, SLOT_TAKEN, SLOT_REMOVED };
 typedef struct pending_slot {
     atomic_int state;
+    atomic_int owner; /* the writer's thread (gettid) */
+    atomic_int taker; /* the thread of the handler removing it */
     char path[MR_OUTPUT_PATH_CAP];
 } pending_slot;
 static pending_slot pending[PENDING_SLOTS];
+static atomic_int removing; /* mr_remove_pending_files calls at work */
 
 /* Async-signal-safe only when the atomics need no lock. */
 _Static_assert(ATOMIC_INT_LOCK_FREE == 2, "pending-file slots need lock-free atomic int");
 
-/* Register an existing temporary file; returns its slot or -1. */
-static int pending_add(const char *path)
+/* A short pause, async-signal-safe (clock_nanosleep is on POSIX's list). */
+static void pause_briefly(void)
+{
+    const struct timespec ts = {0, 20000};
+    clock_nanosleep(CLOCK_MONOTONIC, 0, &ts, NULL);
+}
+
+/* Claim a slot for a file this thread is about to create; -1 when all are
+ * taken. */
+static int pending_claim(void)
 {
     for (int i = 0; i < PENDING_SLOTS; i++) {
         int expected = SLOT_FREE;
         if (atomic_compare_exchange_strong(&pending[i].state, &expected, SLOT_FILLING)) {
-            memcpy(pending[i].path, path, strlen(path) + 1);
-            atomic_store(&pending[i].state, SLOT_PUBLISHED);
+            atomic_store(&pending[i].owner, (int)gettid());
             return i;
         }
     }
     return -1;
 }
 
-/* Forget a temporary file that has been renamed or removed. */
+/* Name the file about to be created at path: the slot is CREATING on
+ * return, and no removal is under way. */
+static void pending_arm(int slot, const char *path)
+{
+    pending_slot *p = &pending[slot];
+    for (;;) {
+        memcpy(p->path, path, strlen(path) + 1);
+        atomic_store(&p->state, SLOT_CREATING);
+        if (atomic_load(&removing) == 0)
+            return;
+        /* a handler is at work (the process is ending, most likely):
+         * nothing is created until it is done */
+        atomic_store(&p->state, SLOT_FILLING);
+        while (atomic_load(&removing) != 0)
+            pause_briefly();
+    }
+}
+
+/* The open() of an armed slot returned: the file exists (made) or not. */
+static void pending_opened(int slot, bool made)
+{
+    if (slot >= 0)
+        atomic_store(&pending[slot].state, made ? SLOT_PUBLISHED : SLOT_FILLING);
+}
+
+/* Forget a temporary file that has been renamed or removed, or a claimed
+ * slot that made none. */
 static void pending_drop(int slot)
 {
     if (slot < 0)
         return;
     int expected = SLOT_PUBLISHED;
+    if (atomic_compare_exchange_strong(&pending[slot].state, &expected, SLOT_FREE))
+        return;
+    expected = SLOT_FILLING;
     if (atomic_compare_exchange_strong(&pending[slot].state, &expected, SLOT_FREE))
         return;
     /* A handler took it. Once it is done the slot can be reused; while it
@@ -249,13 +297,33 @@ static void pending_drop(int slot)
 void mr_remove_pending_files(void)
 {
     int saved = errno; /* a handler must not change errno under the code it interrupted */
+    atomic_fetch_add(&removing, 1);
+    const int me = (int)gettid();
     for (int i = 0; i < PENDING_SLOTS; i++) {
-        int expected = SLOT_PUBLISHED;
-        if (atomic_compare_exchange_strong(&pending[i].state, &expected, SLOT_TAKEN)) {
-            unlink(pending[i].path);
-            atomic_store(&pending[i].state, SLOT_REMOVED);
+        pending_slot *p = &pending[i];
+        for (;;) {
+            int st = atomic_load(&p->state);
+            if (st == SLOT_PUBLISHED) {
+                if (!atomic_compare_exchange_strong(&p->state, &st, SLOT_TAKEN))
+                    continue; /* the writer dropped it meanwhile: look again */
+                atomic_store(&p->taker, me);
+                unlink(p->path);
+                atomic_store(&p->state, SLOT_REMOVED);
+            } else if (st == SLOT_CREATING) {
+                if (atomic_load(&p->owner) == me) {
+                    unlink(p->path); /* stopped in its own creation: made or not */
+                } else {
+                    pause_briefly(); /* the writer's open() will say */
+                    continue;
+                }
+            } else if (st == SLOT_TAKEN && atomic_load(&p->taker) != me) {
+                pause_briefly(); /* another handler is removing it: until it is gone */
+                continue;
+            }
+            break;
         }
     }
+    atomic_fetch_sub(&removing, 1);
     errno = saved;
 }
 
@@ -268,7 +336,7 @@ void mr_remove_pending_files(void)
 static bool copy_path(char *dst, const char *src)
 {
     size_t n = strlen(src);
-    if (n + sizeof "/.meshreduce-XXXXXX" > MR_OUTPUT_PATH_CAP)
+    if (n + sizeof "/.meshreduce-4294967295-XXXXXX" > MR_OUTPUT_PATH_CAP)
         return false;
     memcpy(dst, src, n + 1);
     return true;
@@ -377,35 +445,57 @@ static mr_status plan_output(mr_output_file *out, const char *path, struct stat 
     return MR_OK;
 }
 
-/* Create a new temporary file in `dir` (its path into out->tmp) with the
- * given mode, which the kernel reduces by the umask. Not mkstemp: its 0600
- * would have to be widened by reading the umask, and umask() can only be
- * read by setting it, which races with files other threads create. */
+static bool temp_name(mr_output_file *out, const char *dir);
+
+/* Create a new temporary file in `dir` (its path into out->tmp, named
+ * after this process: .meshreduce-PID-XXXXXX) with the given mode, which
+ * the kernel reduces by the umask, registered in a pending slot
+ * (out->slot) before it exists. Not mkstemp: its 0600 would have to be
+ * widened by reading the umask, and umask() can only be read by setting
+ * it, which races with files other threads create. */
 static int create_temp(mr_output_file *out, const char *dir, mode_t mode)
+{
+    out->slot = pending_claim();
+    for (int attempt = 0; attempt < 100; attempt++) {
+        if (!temp_name(out, dir))
+            break;
+        if (out->slot >= 0)
+            pending_arm(out->slot, out->tmp);
+        int fd = open(out->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
+        pending_opened(out->slot, fd >= 0);
+        if (fd >= 0)
+            return fd;
+        if (errno != EEXIST)
+            break;
+    }
+    const int e = errno;
+    pending_drop(out->slot);
+    out->slot = -1;
+    errno = e;
+    return -1;
+}
+
+/* A fresh name for a temporary file in dir, into out->tmp. */
+static bool temp_name(mr_output_file *out, const char *dir)
 {
     static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz"
                                  "ABCDEFGHIJKLMNOPQRSTUVWXYZ";
     static atomic_uint_fast64_t counter;
-    for (int attempt = 0; attempt < 100; attempt++) {
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        uint64_t r = mr_mix64(atomic_fetch_add(&counter, 1) ^ (uint64_t)getpid() << 40 ^
-                              (uint64_t)ts.tv_sec << 30 ^ (uint64_t)ts.tv_nsec);
-        char name[7];
-        for (int i = 0; i < 6; i++, r /= 62)
-            name[i] = digits[r % 62];
-        name[6] = '\0';
-        int len = snprintf(out->tmp, sizeof out->tmp, "%s/.meshreduce-%s", dir, name);
-        if (len < 0 || (size_t)len >= sizeof out->tmp) {
-            errno = ENAMETOOLONG; /* not reached: plan_output checked the length */
-            return -1;
-        }
-        int fd = open(out->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
-        if (fd >= 0 || errno != EEXIST)
-            return fd;
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    uint64_t r = mr_mix64(atomic_fetch_add(&counter, 1) ^ (uint64_t)getpid() << 40 ^
+                          (uint64_t)ts.tv_sec << 30 ^ (uint64_t)ts.tv_nsec);
+    char name[7];
+    for (int i = 0; i < 6; i++, r /= 62)
+        name[i] = digits[r % 62];
+    name[6] = '\0';
+    int len = snprintf(out->tmp, sizeof out->tmp, "%s/.meshreduce-%ld-%s", dir, (long)getpid(),
+                       name);
+    if (len < 0 || (size_t)len >= sizeof out->tmp) {
+        errno = ENAMETOOLONG; /* not reached: plan_output checked the length */
+        return false;
     }
-    errno = EEXIST;
-    return -1;
+    return true;
 }
 
 /* Open a temporary file beside out->dest into *fd; an existing
@@ -422,7 +512,6 @@ static mr_status open_temp(mr_output_file *out, const char *path, const struct s
     if (*fd < 0)
         return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
                              strerror(errno));
-    out->slot = pending_add(out->tmp);
     if (!exists)
         return MR_OK;
     /* Best effort, as an editor saving a file does: only root may give a
