@@ -19,7 +19,10 @@ static const char usage[] =
     "  --cell C                cell edge length (absolute, > 0)\n"
     "  --cell-rel F            cell edge as a fraction of the bounding-box diagonal\n"
     "                          (the input must not be a single point)\n"
-    "  --target-vertices N     the cell size whose grid has about N occupied cells\n"
+    "  --target-vertices N     the cell size whose grid has about N occupied cells;\n"
+    "                          N >= 1: clustering has no error bound to stop at, so\n"
+    "                          there is no 0 = 'as far as allowed' as simplify's\n"
+    "                          --triangles 0 (one cell would leave no triangle)\n"
     "\n"
     "options:\n"
     "  -o, --output FILE       output file (required)\n"
@@ -61,7 +64,8 @@ static int option(int argc, char **argv, int *i, void *user)
         job->cell_rel = x;
     } else if (cli_value(argc, argv, i, "--target-vertices", &v)) {
         if (!cli_parse_count(v, &n) || n == 0)
-            return cli_usage_error("cluster", "--target-vertices needs a positive count");
+            return cli_usage_error("cluster", "--target-vertices needs a count of at least 1 "
+                                              "(no error bound ends a clustering: see --help)");
         if ((rc = cli_choose(&job->size_option, "cluster", "--target-vertices", size_group)) !=
             CLI_OK)
             return rc;
