@@ -1,5 +1,5 @@
 /*
- * Nearest-triangle queries in the triangle hierarchy (metrics/distance.h):
+ * Nearest-triangle queries in the triangle hierarchy (geometry/distance.h):
  * what `meshreduce compare` and the first sweep of --quality best's surface
  * fit spend most of their time in.
  *
@@ -17,7 +17,7 @@
  * generated 1M-triangle scan.
  */
 #include "benchutil.h"
-#include "metrics/distance.h"
+#include "geometry/distance.h"
 
 #include <math.h>
 #include <stdint.h>

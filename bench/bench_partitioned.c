@@ -21,7 +21,7 @@
  * and 1 %, 3 runs.
  */
 #include "benchpeers.h"
-#include "metrics/distance.h"
+#include "geometry/distance.h"
 
 #include <math.h>
 #include <omp.h>

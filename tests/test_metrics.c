@@ -1,7 +1,7 @@
 /* Error metrics: point-triangle distance, the hierarchies, mr_compare,
  * mr_vertex_similarity and the compare command. */
 #include "testutil.h"
-#include "metrics/distance.h"
+#include "geometry/distance.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -16,7 +16,7 @@
  */
 #include "testutil.h"
 #include "core/omp_compat.h"
-#include "metrics/selfint.h"
+#include "geometry/selfint.h"
 #include "qem/simplify_internal.h"
 
 #include <math.h>

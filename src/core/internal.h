@@ -58,12 +58,6 @@ void *mr_realloc_array(void *p, size_t count, size_t size);
  * touched. */
 void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_count);
 
-/* target[v] = the first vertex whose position is bitwise equal to v's
- * (-0 and +0 equal), v itself for the first of each group: the map that
- * mr_mesh_weld_exact applies. Deterministic at any thread count. */
-mr_status mr_weld_positions(const float *positions, size_t vertex_count, uint32_t *target,
-                            mr_error *err);
-
 /* Monotonic wall clock in seconds (phase timings). */
 double mr_now_seconds(void);
 
@@ -114,31 +108,5 @@ static inline double mr_triangle_area(const double a[3], const double b[3], cons
  * parallel region when nesting is off, and in the serial build; at most
  * OMP_THREAD_LIMIT). */
 int mr_thread_count(int requested);
-
-/*
- * Output files. mr_output_open opens `path` for writing (out->f) and
- * mr_output_close flushes and closes it; it returns the final status: st, or
- * the first write error, with strerror's reason.
- *
- * A new or existing regular file appears whole or not at all: it is written
- * to a hidden temporary file beside it (".meshreduce-XXXXXX", registered
- * for mr_remove_pending_files) and, when st is MR_OK and every write worked,
- * renamed onto it, else removed. An existing file keeps its permission
- * bits. A symbolic link is followed: its target is replaced, the link stays;
- * a dangling link is an error. Anything else (a device such as /dev/null, a
- * FIFO, a name for an open descriptor such as /dev/stdout) cannot be
- * replaced by a rename and is written in place: there, a failure can leave
- * part of the output written.
- */
-#define MR_OUTPUT_PATH_CAP 4200 /* PATH_MAX and the temporary name */
-typedef struct mr_output_file {
-    FILE *f;
-    bool direct;                   /* written in place, no temporary file */
-    int slot;                      /* the temporary file's registry slot, or -1 */
-    char dest[MR_OUTPUT_PATH_CAP]; /* what is written: path, or its link's target */
-    char tmp[MR_OUTPUT_PATH_CAP];  /* the temporary file, when not direct */
-} mr_output_file;
-mr_status mr_output_open(mr_output_file *out, const char *path, mr_error *err);
-mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, mr_error *err);
 
 #endif /* MR_INTERNAL_H */

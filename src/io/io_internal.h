@@ -1,6 +1,7 @@
 /*
  * The contract between the format dispatcher (io.c) and the per-format
- * readers and writers (obj.c, ply.c, stl.c, xyz.c).
+ * readers and writers (obj.c, ply.c, stl.c, xyz.c), which both stand on
+ * output.h (options, output files, write errors).
  *
  * Readers:
  *   - parse `size` bytes at `data` (not NUL-terminated; may be a memory
@@ -30,7 +31,7 @@
 #ifndef MR_IO_INTERNAL_H
 #define MR_IO_INTERNAL_H
 
-#include "../core/internal.h"
+#include "output.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -52,10 +53,6 @@ mr_status mr_write_stl(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
                        const char *name, mr_error *err);
 mr_status mr_write_xyz(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
                        const char *name, mr_error *err);
-
-/* Report a failed write as "<name>: write failed: <strerror(errnum)>"
- * (MR_ERR_IO); errnum 0 (no errno) reads as an I/O error. */
-mr_status mr_fail_write(mr_error *err, const char *name, int errnum);
 
 /* Check that every coordinate of the mesh's positions is finite and every
  * index is below vertex_count; on failure report the first bad element.

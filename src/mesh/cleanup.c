@@ -20,6 +20,7 @@
  * of duplicates matches mr_stats.duplicate_triangles.
  */
 #include "adjacency.h"
+#include "weld_map.h"
 
 #define PARALLEL_MIN 65536
 
@@ -103,127 +104,6 @@ mr_status mr_mesh_remove_unreferenced(mr_mesh *mesh, size_t *removed, mr_error *
 
 /* ---- welding --------------------------------------------------------------- */
 
-/* The words that make up a vertex's identity for welding: the bit patterns
- * of its position and (when asked) its attributes, with -0 read as +0 so
- * that the two zeros, which compare equal as numbers, weld. */
-typedef struct weld_layout {
-    const float *arrays[4];
-    unsigned widths[4];
-    unsigned count;
-} weld_layout;
-
-static inline uint32_t float_word(float f)
-{
-    uint32_t w;
-    memcpy(&w, &f, sizeof w);
-    return w == UINT32_C(0x80000000) ? 0 : w;
-}
-
-static bool same_vertex(const weld_layout *l, uint32_t a, uint32_t b)
-{
-    for (unsigned k = 0; k < l->count; k++) {
-        const float *p = l->arrays[k] + (size_t)a * l->widths[k];
-        const float *q = l->arrays[k] + (size_t)b * l->widths[k];
-        for (unsigned j = 0; j < l->widths[k]; j++)
-            if (float_word(p[j]) != float_word(q[j]))
-                return false;
-    }
-    return true;
-}
-
-
-static uint64_t hash_vertex(const weld_layout *l, uint32_t v)
-{
-    uint64_t h = UINT64_C(0x9e3779b97f4a7c15);
-    for (unsigned k = 0; k < l->count; k++) {
-        const float *p = l->arrays[k] + (size_t)v * l->widths[k];
-        for (unsigned j = 0; j < l->widths[k]; j++)
-            h = mr_mix64(h ^ float_word(p[j]));
-    }
-    return h;
-}
-
-/*
- * For one run of vertices with equal hashes (in increasing id order), point
- * each at the first vertex of the run with the same data. A run normally
- * holds copies of one vertex, so the list of distinct representatives stays
- * at one or two entries; only hash collisions make it longer.
- */
-static void weld_run(const weld_layout *l, const uint32_t *ids, size_t k, uint32_t *target,
-                     uint8_t *keep, uint32_t *reps, size_t *merged)
-{
-    size_t nreps = 0;
-    for (size_t i = 0; i < k; i++) {
-        uint32_t v = ids[i];
-        size_t r = 0;
-        while (r < nreps && !same_vertex(l, reps[r], v))
-            r++;
-        if (r == nreps) {
-            reps[nreps++] = v;
-            target[v] = v;
-            keep[v] = 1;
-        } else {
-            target[v] = reps[r];
-            (*merged)++;
-        }
-    }
-}
-
-/*
- * target[v] = the first vertex whose data in `l` equals v's (v itself for
- * the first of each group); keep[v] = 1 for those first vertices (when
- * keep is non-NULL); *merged = the number of later copies.
- */
-static mr_status weld_map(const weld_layout *l, size_t vc, uint32_t *target, uint8_t *keep,
-                          size_t *merged, mr_error *err)
-{
-    mr_status st = MR_OK;
-    uint64_t *keys = mr_alloc_array(vc, sizeof *keys);
-    uint32_t *ids = mr_alloc_array(vc, sizeof *ids);
-    uint32_t *reps = mr_alloc_array(vc, sizeof *reps);
-    uint8_t *own_keep = keep ? NULL : mr_calloc_array(vc, 1);
-    if (!keys || !ids || !reps || (!keep && !own_keep)) {
-        st = mr_fail_nomem(err, NULL, vc * 17);
-        goto done;
-    }
-    /* Sort by a hash truncated to ~11 bits more than the vertex ids need:
-     * distinct vertices then rarely share a key, with fewer radix passes
-     * than a full 64-bit key. Equal vertices always share it. */
-    unsigned bits = mr_index_bits(vc) + 11;
-    if (bits > 64)
-        bits = 64;
-#pragma omp parallel for schedule(static) if (vc > PARALLEL_MIN)
-    for (size_t v = 0; v < vc; v++) {
-        keys[v] = hash_vertex(l, (uint32_t)v) >> (64 - bits);
-        ids[v] = (uint32_t)v;
-    }
-    if ((st = mr_radix_sort_u64(keys, ids, vc, bits, 0, err)) != MR_OK)
-        goto done;
-
-    *merged = 0;
-    for (size_t i = 0; i < vc;) {
-        size_t j = i + 1;
-        while (j < vc && keys[j] == keys[i])
-            j++;
-        weld_run(l, ids + i, j - i, target, keep ? keep : own_keep, reps, merged);
-        i = j;
-    }
-done:
-    free(keys);
-    free(ids);
-    free(reps);
-    free(own_keep);
-    return st;
-}
-
-mr_status mr_weld_positions(const float *positions, size_t vertex_count, uint32_t *target,
-                            mr_error *err)
-{
-    const weld_layout l = {{positions}, {3}, 1};
-    size_t merged;
-    return weld_map(&l, vertex_count, target, NULL, &merged, err);
-}
-
 mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t *removed,
                              mr_error *err)
 {
@@ -236,7 +116,7 @@ mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t 
     if (vc < 2)
         return MR_OK;
 
-    weld_layout l = {{mesh->positions}, {3}, 1};
+    mr_weld_layout l = {{mesh->positions}, {3}, 1};
     if (require_same_attributes) {
         const float *arrays[3] = {mesh->normals, mesh->texcoords, mesh->colors};
         const unsigned widths[3] = {3, 2, 4};
@@ -254,7 +134,7 @@ mr_status mr_mesh_weld_exact(mr_mesh *mesh, int require_same_attributes, size_t 
     if (!target || !keep)
         st = mr_fail_nomem(err, NULL, vc * 5);
     else
-        st = weld_map(&l, vc, target, keep, &merged, err);
+        st = mr_weld_map(&l, vc, target, keep, &merged, err);
     if (st == MR_OK && merged)
         compact_vertices(mesh, target, keep);
     if (st == MR_OK && removed)
@@ -274,7 +154,7 @@ mr_status mr_mesh_weld_seams(mr_mesh *mesh, size_t *removed, mr_error *err)
     const size_t vc = mesh->vertex_count;
     if (vc < 2 || mesh->triangle_count == 0)
         return MR_OK;
-    weld_layout l = {{mesh->positions}, {3}, 1};
+    mr_weld_layout l = {{mesh->positions}, {3}, 1};
     const float *arrays[3] = {mesh->normals, mesh->texcoords, mesh->colors};
     const unsigned widths[3] = {3, 2, 4};
     for (unsigned k = 0; k < 3; k++)
@@ -297,7 +177,7 @@ mr_status mr_mesh_weld_seams(mr_mesh *mesh, size_t *removed, mr_error *err)
         goto done;
     /* The vertices of each surface point, in index order (a counting sort
      * by point: the point is the smallest index of its vertices). */
-    uint32_t *start = reps; /* reused below as weld_run's scratch */
+    uint32_t *start = reps; /* reused below as mr_weld_run's scratch */
     for (size_t v = 0; v < vc; v++)
         start[v] = 0;
     for (size_t v = 0; v < vc; v++)
@@ -316,7 +196,7 @@ mr_status mr_mesh_weld_seams(mr_mesh *mesh, size_t *removed, mr_error *err)
         size_t j = i + 1;
         while (j < vc && point[ids[j]] == point[ids[i]])
             j++;
-        weld_run(&l, ids + i, j - i, point, keep, reps, &merged);
+        mr_weld_run(&l, ids + i, j - i, point, keep, reps, &merged);
         i = j;
     }
     if (merged)

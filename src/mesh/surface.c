@@ -23,6 +23,7 @@
  * simplifier, the statistics and the format conversion.
  */
 #include "adjacency.h"
+#include "weld_map.h"
 
 typedef struct seam_edge {
     uint64_t key; /* (lower position id << 32) | higher, the geometric edge */

@@ -25,7 +25,7 @@
  * vertices (those on the surface); a *_rel value is 0 when the diagonal
  * is 0. Referenced vertices must have finite coordinates.
  */
-#include "distance.h"
+#include "../geometry/distance.h"
 #include "../mesh/adjacency.h"
 
 #include <math.h>

@@ -73,14 +73,14 @@
  * bytes a sample instead of a sort by vertex and random reads; the output
  * samples by the output's triangles around the vertex); the flip checks
  * run in triangle order. The result is the same on any number of
- * threads. The hierarchy is metrics/distance.h's, the one upward use of
- * that module from the simplifier.
+ * threads. The hierarchy is geometry/distance.h's (below the simplifier,
+ * shared with compare), the crossing test geometry/selfint.h's.
  */
 #include "simplify_internal.h"
 
 #include "../core/omp_compat.h"
-#include "../metrics/distance.h"
-#include "../metrics/selfint.h"
+#include "../geometry/distance.h"
+#include "../geometry/selfint.h"
 
 #include <math.h>
 

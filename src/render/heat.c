@@ -3,7 +3,7 @@
  * face (or per point of a point cloud), through the nearest-triangle
  * hierarchy of src/metrics; and the colour map that shows it.
  */
-#include "../metrics/distance.h"
+#include "../geometry/distance.h"
 
 #include "../core/omp_compat.h"
 

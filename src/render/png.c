@@ -1,7 +1,7 @@
 /* PNG output through libpng, written atomically (temporary file + rename).
  * Built without libpng (MR_HAVE_PNG undefined), mr_png_write fails with
  * MR_ERR_UNSUPPORTED. */
-#include "../core/internal.h"
+#include "../io/output.h"
 
 #ifdef MR_HAVE_PNG
 #include <errno.h>

@@ -3,8 +3,8 @@
  * and the benchmarks check that a simplification adds none, and the
  * surface fit (qem/refine.c) puts back the moves that would add some.
  */
-#ifndef MR_METRICS_SELFINT_H
-#define MR_METRICS_SELFINT_H
+#ifndef MR_GEOMETRY_SELFINT_H
+#define MR_GEOMETRY_SELFINT_H
 
 #include "../core/internal.h"
 
@@ -26,4 +26,4 @@ mr_status mr_self_intersection_pairs(const float *positions, const uint32_t *ind
                                      size_t triangle_count, int threads, uint32_t **pairs,
                                      size_t *count, mr_error *err);
 
-#endif /* MR_METRICS_SELFINT_H */
+#endif /* MR_GEOMETRY_SELFINT_H */
