@@ -1,5 +1,5 @@
 /*
- * The simplifier's vector kernels (src/qem/kernels.h), each path alone and
+ * The simplifier's vector kernels (src/qem/core/kernels.h), each path alone and
  * end to end.
  *
  * Alone: each kernel on inputs that stay in cache (so the figure is the
@@ -14,7 +14,7 @@
  *   bench_kernels [--runs R] [--triangles N] [--ratio F] [--threads 1,2,...] [--quick]
  */
 #include "benchutil.h"
-#include "qem/kernels.h"
+#include "qem/core/kernels.h"
 
 #include <stdint.h>
 #include <stdlib.h>

@@ -16,8 +16,8 @@
 
 #include "core/internal.h"
 #include "core/omp_compat.h"
-#include "qem/parallel/fppq.h"
-#include "qem/parallel/multiqueue.h"
+#include "qem/strategies/parallel/fppq.h"
+#include "qem/strategies/parallel/multiqueue.h"
 
 #include <stdlib.h>
 #include <string.h>

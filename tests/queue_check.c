@@ -4,7 +4,7 @@
 
 #include "core/internal.h"
 #include "core/omp_compat.h"
-#include "qem/heap.h"
+#include "qem/strategies/heap.h"
 
 #include <math.h>
 #include <stdatomic.h>

@@ -4,7 +4,7 @@
  * whatever the order of the pieces. */
 #include "testutil.h"
 
-#include "qem/simplify_internal.h"
+#include "qem/core/simplifier.h"
 
 #include <math.h>
 #include <stdio.h>

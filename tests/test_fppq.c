@@ -7,7 +7,7 @@
  */
 #include "testutil.h"
 #include "queue_check.h"
-#include "qem/parallel/fppq.h"
+#include "qem/strategies/parallel/fppq.h"
 #include "core/omp_compat.h"
 
 #include <math.h>

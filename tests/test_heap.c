@@ -1,6 +1,6 @@
 /* The indexed min-heap against a brute-force model. */
 #include "testutil.h"
-#include "qem/heap.h"
+#include "qem/strategies/heap.h"
 
 #include <math.h>
 #include <stdlib.h>

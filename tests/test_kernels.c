@@ -1,5 +1,5 @@
 /*
- * The simplifier's vector kernels (src/qem/kernels.h) on every CPU path
+ * The simplifier's vector kernels (src/qem/core/kernels.h) on every CPU path
  * this machine has: each path gives the default path's bits, and the
  * default path gives the one-edge scalar evaluation's (the greedy
  * strategy's costs and the batched strategy's are the same numbers), on
@@ -7,7 +7,7 @@
  * the CLI under MR_SIMD=default writes the same bytes as on the best path.
  */
 #include "testutil.h"
-#include "qem/kernels.h"
+#include "qem/core/kernels.h"
 
 #include <stdio.h>
 #include <stdlib.h>

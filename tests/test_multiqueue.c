@@ -6,7 +6,7 @@
  */
 #include "testutil.h"
 #include "queue_check.h"
-#include "qem/parallel/multiqueue.h"
+#include "qem/strategies/parallel/multiqueue.h"
 
 #include <math.h>
 #include <stdlib.h>

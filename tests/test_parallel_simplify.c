@@ -17,7 +17,7 @@
  * cases shrink, staying above the parallel thresholds. */
 #include "testutil.h"
 #include "core/omp_compat.h"
-#include "qem/collapse.h"
+#include "qem/core/collapse.h"
 
 #include <dirent.h>
 #include <inttypes.h>

@@ -24,8 +24,8 @@
  * With MR_TEST_QUICK set (sanitizer stages) the meshes shrink. */
 #include "testutil.h"
 #include "core/omp_compat.h"
-#include "qem/partitioned.h"
-#include "qem/simplify_internal.h"
+#include "qem/strategies/partitioned.h"
+#include "qem/core/simplifier.h"
 
 #include <math.h>
 #include <stdbool.h>

@@ -7,7 +7,7 @@
  */
 #include "testutil.h"
 #include "queue_check.h"
-#include "qem/parallel/ppq.h"
+#include "qem/strategies/parallel/ppq.h"
 
 #include <math.h>
 #include <stdatomic.h>

@@ -17,7 +17,7 @@
 #include "testutil.h"
 #include "core/omp_compat.h"
 #include "geometry/selfint.h"
-#include "qem/simplify_internal.h"
+#include "qem/core/simplifier.h"
 
 #include <math.h>
 #include <stdbool.h>

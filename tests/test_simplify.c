@@ -1,8 +1,8 @@
 /* The sequential quadric simplifier: topology, targets, locks, normals,
  * determinism, errors, attributes, bad input. */
 #include "testutil.h"
-#include "qem/collapse.h"
-#include "qem/simplify_internal.h"
+#include "qem/core/collapse.h"
+#include "qem/core/simplifier.h"
 #include "core/omp_compat.h"
 
 #include <math.h>

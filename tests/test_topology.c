@@ -4,7 +4,7 @@
  * decides which vertices are one surface point. */
 #include "testutil.h"
 
-#include "qem/collapse.h"
+#include "qem/core/collapse.h"
 
 #include <math.h>
 

@@ -1,7 +1,7 @@
 /*
  * Self-intersections of a triangle mesh (selfint.c). Internal: the tests
  * and the benchmarks check that a simplification adds none, and the
- * surface fit (qem/refine.c) puts back the moves that would add some.
+ * surface fit (qem/core/refine.c) puts back the moves that would add some.
  */
 #ifndef MR_GEOMETRY_SELFINT_H
 #define MR_GEOMETRY_SELFINT_H

@@ -24,7 +24,7 @@
  * (normals renormalised). The output keeps the split: one output vertex
  * per surviving wedge.
  */
-#include "simplify_internal.h"
+#include "core/simplifier.h"
 
 #include "../core/omp_compat.h"
 

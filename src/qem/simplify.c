@@ -14,7 +14,7 @@
  * parallel/queued.c (the concurrent-queue strategies) are the others. mr_mesh_simplify (mesh_simplify.c)
  * drives the same phases with attribute hooks.
  */
-#include "simplify_internal.h"
+#include "core/simplifier.h"
 
 #include "../core/omp_compat.h"
 

@@ -41,7 +41,7 @@
  */
 #include "passes.h"
 
-#include "../core/omp_compat.h"
+#include "../../core/omp_compat.h"
 
 #include <assert.h>
 #include <math.h>

@@ -27,7 +27,7 @@
 #ifndef MR_VERTEX_QUEUE_H
 #define MR_VERTEX_QUEUE_H
 
-#include "simplify_internal.h"
+#include "../core/simplifier.h"
 
 typedef struct mr_vertex_queue {
     uint32_t *best;  /* per vertex: the other end of its queued collapse */

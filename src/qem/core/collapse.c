@@ -2,8 +2,8 @@
 #include "collapse.h"
 #include "kernels.h"
 
-#include "../core/omp_compat.h"
-#include "../mesh/adjacency.h"
+#include "../../core/omp_compat.h"
+#include "../../mesh/adjacency.h"
 #include "quadric.h"
 
 #include <assert.h>

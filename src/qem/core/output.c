@@ -3,7 +3,7 @@
  * of small parts (options.prune), and the output arrays of mr_simplify
  * (mr_mesh_simplify writes its own, wedge by wedge).
  */
-#include "simplify_internal.h"
+#include "simplifier.h"
 
 #include <math.h>
 

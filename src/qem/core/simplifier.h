@@ -11,7 +11,7 @@
 #ifndef MR_SIMPLIFY_INTERNAL_H
 #define MR_SIMPLIFY_INTERNAL_H
 
-#include "../mesh/adjacency.h"
+#include "../../mesh/adjacency.h"
 #include "collapse.h"
 #include "quadric.h"
 

@@ -74,7 +74,7 @@
 #ifndef MR_PPQ_H
 #define MR_PPQ_H
 
-#include "../../core/internal.h"
+#include "../../../core/internal.h"
 #include "../heap.h"
 #include "filter_layout.h"
 #include "vlock.h"

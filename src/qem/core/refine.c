@@ -76,11 +76,11 @@
  * threads. The hierarchy is geometry/distance.h's (below the simplifier,
  * shared with compare), the crossing test geometry/selfint.h's.
  */
-#include "simplify_internal.h"
+#include "simplifier.h"
 
-#include "../core/omp_compat.h"
-#include "../geometry/distance.h"
-#include "../geometry/selfint.h"
+#include "../../core/omp_compat.h"
+#include "../../geometry/distance.h"
+#include "../../geometry/selfint.h"
 
 #include <math.h>
 

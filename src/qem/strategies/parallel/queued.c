@@ -81,10 +81,10 @@
  * exactly what greedy.c's heap has at its top, and every step makes the
  * same decision: the output is greedy.c's half-edge output, byte for byte.
  */
-#include "../simplify_internal.h"
+#include "../../core/simplifier.h"
 #include "../vertex_queue.h"
 
-#include "../../core/omp_compat.h"
+#include "../../../core/omp_compat.h"
 #include "fppq.h"
 #include "multiqueue.h"
 #include "ppq.h"

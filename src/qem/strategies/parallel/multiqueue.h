@@ -55,7 +55,7 @@
 #ifndef MR_MULTIQUEUE_H
 #define MR_MULTIQUEUE_H
 
-#include "../../core/internal.h"
+#include "../../../core/internal.h"
 #include "../heap.h"
 #include "vlock.h"
 

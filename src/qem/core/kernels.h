@@ -257,7 +257,7 @@ typedef struct mr_kernels {
 
 /* free_costs' inputs of the edges (u[l], w[l]), l < n <= MR_COST_BATCH, of
  * the quadrics q and positions pos (3 floats a vertex) into the batch's rows
- * in[k * MR_COST_BATCH + l] (src/qem/cost.c). */
+ * in[k * MR_COST_BATCH + l] (src/qem/core/cost.c). */
 void mr_cost_pack_inputs(const mr_quadricf *q, const float *pos, const uint32_t *u,
                          const uint32_t *w, size_t n, float *in);
 

@@ -17,7 +17,7 @@
 #ifndef MR_HEAP_H
 #define MR_HEAP_H
 
-#include "../core/internal.h"
+#include "../../core/internal.h"
 
 #include <math.h>
 

@@ -30,8 +30,8 @@
 #ifndef MR_COLLAPSE_H
 #define MR_COLLAPSE_H
 
-#include "../core/internal.h"
-#include "../mesh/adjacency.h"
+#include "../../core/internal.h"
+#include "../../mesh/adjacency.h"
 
 #define MR_COLLAPSE_NONE UINT32_MAX
 

@@ -16,7 +16,7 @@
  *
  * The edge queue is described where it starts, below.
  */
-#include "simplify_internal.h"
+#include "../core/simplifier.h"
 
 #include "heap.h"
 #include "vertex_queue.h"

@@ -11,7 +11,7 @@
  * every one of them is tested by mr_simplifier_allowed and applied by
  * mr_simplifier_collapse.
  */
-#include "simplify_internal.h"
+#include "simplifier.h"
 #include "kernels.h"
 
 #include <math.h>

@@ -11,12 +11,12 @@
  * bounding box of all the input's vertices (error_base, the one that
  * `meshreduce info` prints: unreferenced vertices may widen it).
  */
-#include "simplify_internal.h"
+#include "simplifier.h"
 #include "kernels.h"
 
-#include "../core/omp_compat.h"
-#include "../mesh/adjacency.h"
-#include "parallel/filter_layout.h"
+#include "../../core/omp_compat.h"
+#include "../../mesh/adjacency.h"
+#include "../strategies/parallel/filter_layout.h"
 
 #include <math.h>
 

@@ -9,7 +9,7 @@
 
 #include "passes.h"
 
-#include "../core/omp_compat.h"
+#include "../../core/omp_compat.h"
 
 #include <math.h>
 
