@@ -4,7 +4,7 @@
  * whatever the order of the pieces. */
 #include "testutil.h"
 
-#include "qem/core/simplifier.h"
+#include "qem/entry.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -340,7 +340,7 @@ static size_t corners_of(const mr_mesh *m)
     o.target_ratio = 0.5;
     mr_simplifier s;
     mr_error err;
-    assert_int_equal(mr_simplifier_init(&s, m->positions, 0, m->vertex_count, m->indices,
+    assert_int_equal(mr_simplify_setup(&s, m->positions, 0, m->vertex_count, m->indices,
                                         m->triangle_count, &o, NULL, &err),
                      MR_OK);
     const size_t n = s.corners;

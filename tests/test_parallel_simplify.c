@@ -458,7 +458,7 @@ static void test_compaction_layout(void **state)
     }
     for (size_t t = 1; t < NTHREADS; t++) /* the lists as init fills them */
         assert_same_lists(&cm[0], &cm[t]);
-    const mr_collapse_limits lim = {0.5, 0};
+    const mr_collapse_limits lim = {0.5, 0, mr_kernels_get()};
     size_t done = 0, compactions = 0;
     for (size_t step = 0; step < 4 * in.vertex_count && done < in.vertex_count / 2; step++) {
         const uint32_t u = (uint32_t)((step * 7919u) % in.vertex_count);

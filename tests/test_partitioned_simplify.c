@@ -25,7 +25,7 @@
 #include "testutil.h"
 #include "core/omp_compat.h"
 #include "qem/strategies/partitioned.h"
-#include "qem/core/simplifier.h"
+#include "qem/entry.h"
 
 #include <math.h>
 #include <stdbool.h>
@@ -126,7 +126,7 @@ static void check_classification(const mr_mesh *m, unsigned parts)
     o.target_ratio = 0.5;
     mr_simplifier s;
     mr_error err;
-    assert_int_equal(mr_simplifier_init(&s, m->positions, 0, m->vertex_count, m->indices,
+    assert_int_equal(mr_simplify_setup(&s, m->positions, 0, m->vertex_count, m->indices,
                                         m->triangle_count, &o, NULL, &err),
                      MR_OK);
     assert_int_equal(mr_simplifier_fill_queue(&s, &err), MR_OK);
@@ -230,7 +230,7 @@ static void check_classification(const mr_mesh *m, unsigned parts)
                 assert_int_equal(in[i], 1);
         }
     }
-    mr_simplifier_free(&s);
+    mr_simplify_discard(&s);
 }
 
 static void test_classification(void **state)
@@ -616,7 +616,7 @@ static void check_claims(const char *name, const mr_mesh *m)
     o.target_ratio = 0.5;
     mr_simplifier s;
     mr_error err;
-    assert_int_equal(mr_simplifier_init(&s, m->positions, 0, m->vertex_count, m->indices,
+    assert_int_equal(mr_simplify_setup(&s, m->positions, 0, m->vertex_count, m->indices,
                                         m->triangle_count, &o, NULL, &err),
                      MR_OK);
     const size_t nv = m->vertex_count, nt = m->triangle_count;

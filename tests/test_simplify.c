@@ -2,7 +2,7 @@
  * determinism, errors, attributes, bad input. */
 #include "testutil.h"
 #include "qem/core/collapse.h"
-#include "qem/core/simplifier.h"
+#include "qem/entry.h"
 #include "core/omp_compat.h"
 
 #include <math.h>
@@ -214,7 +214,7 @@ static void test_edge_cost_kernel(void **state)
         o.vertex_lock = lock;
         mr_simplifier s;
         mr_error err;
-        assert_int_equal(mr_simplifier_init(&s, m.positions, 0, m.vertex_count, m.indices,
+        assert_int_equal(mr_simplify_setup(&s, m.positions, 0, m.vertex_count, m.indices,
                                              m.triangle_count, &o, NULL, &err),
                          MR_OK);
         for (int round = 0; round < 2; round++) {

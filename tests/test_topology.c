@@ -364,7 +364,7 @@ static void test_high_valence(void **state)
                      MR_OK);
     assert_int_equal(cm.count[1000], 1000);
     assert_int_equal(cm.flags[1000] & (MR_VF_NONMANIFOLD | MR_VF_BOUNDARY), 0);
-    mr_collapse_limits lim = {cos(60 * MR_PI / 180), 0};
+    mr_collapse_limits lim = {cos(60 * MR_PI / 180), 0, mr_kernels_get()};
     double at_rim[3], at_apex[3];
     mr_collapse_load(&cm, 0, at_rim);
     mr_collapse_load(&cm, 1000, at_apex);

@@ -24,7 +24,7 @@
  * (normals renormalised). The output keeps the split: one output vertex
  * per surviving wedge.
  */
-#include "core/simplifier.h"
+#include "entry.h"
 
 #include "../core/omp_compat.h"
 
@@ -156,8 +156,8 @@ static size_t setup_seams(mr_simplifier *s)
     mr_collapse_mesh *m = &s->m;
     attr_ctx *a = s->attr;
     const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
-#pragma omp parallel for schedule(dynamic, 4096) num_threads(s->threads) \
-    if (s->threads > 1 && nv > 65536) reduction(+ : seam_vertices)
+#pragma omp parallel for schedule(dynamic, 4096) num_threads(s->plan.threads) \
+    if (s->plan.threads > 1 && nv > 65536) reduction(+ : seam_vertices)
     for (ptrdiff_t vi = 0; vi < nv; vi++) {
         const uint32_t v = (uint32_t)vi;
         if (m->flags[v] & (MR_VF_REMOVED | MR_VF_NONMANIFOLD))
@@ -308,7 +308,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         o.vertex_lock = NULL;
     }
     mr_simplifier s;
-    st = mr_simplifier_init(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, lock, err);
+    st = mr_simplify_setup(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, lock, err);
     free(lock);
     if (st != MR_OK || o.quality != MR_QUALITY_BEST) {
         free(gidx); /* else the last step's samples come from it */
@@ -323,7 +323,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         /* the corners in the working order of the triangles */
         uint32_t *corner = mr_alloc_array(3 * tc, sizeof *corner);
         if (!corner) {
-            mr_simplifier_free(&s);
+            mr_simplify_discard(&s);
             free(geo);
             free(gidx);
             free_ctx(&a);
@@ -358,7 +358,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     }
     st = mr_simplifier_fill_queue(&s, err);
     if (st != MR_OK) {
-        mr_simplifier_free(&s);
+        mr_simplify_discard(&s);
         free(geo);
         free(gidx);
         free_ctx(&a);
@@ -366,14 +366,14 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     }
     const double t1 = mr_now_seconds();
     double max_error;
-    size_t collapses = mr_simplifier_run(&s, &o, &max_error);
+    size_t collapses = mr_simplify_run(&s, &max_error);
     if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
-        mr_simplifier_release_run(&s);
-        st = mr_simplifier_refine(&s, &o, in->positions, 0, gidx, tc, err);
+        mr_simplify_release_run(&s);
+        st = mr_simplifier_refine(&s, in->positions, 0, gidx, tc, err);
         free(gidx);
         gidx = NULL;
         if (st != MR_OK) {
-            mr_simplifier_free(&s);
+            mr_simplify_discard(&s);
             free(geo);
             free(gidx);
             free_ctx(&a);
@@ -382,7 +382,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     }
     const double t2 = mr_now_seconds();
     if (s.cancelled) {
-        mr_simplifier_free(&s);
+        mr_simplify_discard(&s);
         free(geo);
         free_ctx(&a);
         return mr_simplifier_cancelled(err);
@@ -454,9 +454,8 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     const size_t output_points = s.m.live_vertices;
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
-    const mr_queued_profile profile = s.profile;
-    const mr_partition_profile pprofile = s.pprofile;
-    mr_simplifier_free(&s);
+    const mr_simplify_stats profile = s.profile; /* the strategy's counts */
+    mr_simplify_discard(&s);
     free(geo);
     free_ctx(&a);
     if (st != MR_OK)
@@ -464,6 +463,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     if (origin)
         *origin = org;
     if (stats) {
+        *stats = profile;
         stats->input_vertices = input_vertices;
         stats->locked_vertices = blocked;
         stats->input_triangles = tc;
@@ -478,8 +478,6 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         stats->seconds_setup = t1 - t0;
         stats->seconds_collapse = t2 - t1;
         stats->seconds_output = mr_now_seconds() - t2;
-        mr_queued_profile_stats(&profile, stats);
-        mr_partition_profile_stats(&pprofile, stats);
     }
     return MR_OK;
 }

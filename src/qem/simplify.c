@@ -1,20 +1,18 @@
 /*
  * Quadric-error simplification (Garland & Heckbert 1997): the entry point
- * (mr_simplify) and the dispatcher that alone picks the strategy.
+ * mr_simplify, and what both entry points share (entry.h): the strategy
+ * chosen by the options, the run in its stages, the strategy's state.
  *
- * The simplifier core -- the working mesh, quadrics, costs, plans, the
- * validity test and the collapse -- is shared by every strategy: setup.c
- * (options, mesh, quadrics, targets), cost.c (costs, plans, validity, the
- * collapse) and output.c (why a run stopped, pruning, output). A strategy
- * owns only its own queue or candidate arrays and decides which collapses
- * run when: greedy.c (MR_STRATEGY_GREEDY, the sequential reference: one
- * collapse at a time from a heap) and batched.c (MR_STRATEGY_BATCHED, the
- * default: passes over all edges); partitioned.c (MR_STRATEGY_PARTITIONED:
- * slabs of vertices applying their interior collapses concurrently) and
- * parallel/queued.c (the concurrent-queue strategies) are the others. mr_mesh_simplify (mesh_simplify.c)
- * drives the same phases with attribute hooks.
+ * The layers below: the core (core/: the working mesh, quadrics, costs,
+ * plans, the validity test and the collapse, set-up, output, the surface
+ * fit), which knows no strategy, and the strategies on it (strategies/:
+ * greedy, the sequential reference; batched, the default; partitioned and
+ * partitioned-boundary; parallel/queued.c, the concurrent queues), which
+ * decide which collapses run when and read only the plan. mr_mesh_simplify
+ * (mesh_simplify.c) drives the same phases with attribute hooks.
  */
-#include "core/simplifier.h"
+#include "entry.h"
+#include "strategies/parallel/filter_layout.h"
 
 #include "../core/omp_compat.h"
 
@@ -30,109 +28,123 @@ void mr_simplify_options_default(mr_simplify_options *o)
     o->partitions = 0;        /* MR_PARTITIONS_DEFAULT */
 }
 
-void mr_simplified_free(mr_simplified *r)
-{
-    if (!r)
-        return;
-    free(r->positions);
-    free(r->indices);
-    free(r->origin);
-    memset(r, 0, sizeof *r);
-}
-
 /* ---- the strategy --------------------------------------------------------- */
 
-/* Start the strategy: its queue or candidate arrays, filled from the
- * mesh as set up (mr_mesh_simplify's seams included). Deterministic: the
- * same input and options give the same queue. On failure the simplifier
- * must still be freed; on success mr_simplifier_run must follow (the
- * greedy strategy's state is released at the end of its run). */
+const mr_strategy_ops *mr_simplify_strategy(const mr_simplifier *s)
+{
+    switch (s->plan.strategy) {
+    case MR_STRATEGY_GREEDY: return &mr_strategy_greedy;
+    case MR_STRATEGY_PARTITIONED: return &mr_strategy_partitioned;
+    case MR_STRATEGY_PARTITIONED_BOUNDARY: return &mr_strategy_partitioned_boundary;
+    case MR_STRATEGY_BATCHED: return &mr_strategy_batched;
+    default: return &mr_strategy_queued;
+    }
+}
+
+/* The options' checks that belong to the strategies. */
+static mr_status check_strategy(const mr_simplify_options *o, mr_error *err)
+{
+    if (!o)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: options are required (a target must be set)");
+    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_PARTITIONED_BOUNDARY)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: unknown strategy %d", (int)o->strategy);
+    if (mr_strategy_is_queued(o->strategy) && o->collapse == MR_COLLAPSE_FULL)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: the concurrent-queue strategies (ppq, rppq, fppq, "
+                             "multiqueue) make half-edge collapses only: set "
+                             "MR_COLLAPSE_HALF (--collapse half)");
+    if (mr_strategy_is_queued(o->strategy) && o->filter_levels > MR_FILTER_MAX_LEVELS)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: %u filter levels: at most %d", o->filter_levels,
+                             MR_FILTER_MAX_LEVELS);
+    if (o->strategy >= MR_STRATEGY_PARTITIONED && o->partitions > MR_PARTITIONS_MAX)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: %u partitions: at most %d", o->partitions,
+                             MR_PARTITIONS_MAX);
+    return MR_OK;
+}
+
+mr_status mr_simplify_setup(mr_simplifier *s, const float *positions, size_t stride,
+                            size_t vertex_count, const uint32_t *indices,
+                            size_t triangle_count, const mr_simplify_options *o,
+                            const uint8_t *extra_flags, mr_error *err)
+{
+    memset(s, 0, sizeof *s);
+    mr_status st = check_strategy(o, err);
+    if (st != MR_OK)
+        return st;
+    mr_simplify_plan plan;
+    memset(&plan, 0, sizeof plan);
+    plan.strategy = (int)o->strategy;
+    /* the pass strategies work the triangles block by block */
+    plan.spatial_order =
+        o->strategy == MR_STRATEGY_BATCHED || o->strategy >= MR_STRATEGY_PARTITIONED;
+    /* the vertex queues rank vertices by quadric cost (mr_simplifier_plan) */
+    plan.edge_plans = !mr_strategy_is_queued(o->strategy);
+    plan.filter_levels = o->filter_levels;
+    plan.multiqueue_factor = o->multiqueue_factor;
+    plan.partitions = o->partitions;
+    return mr_simplifier_init(s, positions, stride, vertex_count, indices, triangle_count, o,
+                              &plan, extra_flags, err);
+}
+
 mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)
 {
-    if (s->batched)
-        return mr_simplifier_batched_init(s, err);
-    if (s->queued)
-        return mr_simplifier_queued_init(s, err);
-    if (s->partitioned)
-        return mr_simplifier_partitioned_init(s, err);
-    return mr_simplifier_greedy_init(s, err);
+    return mr_simplify_strategy(s)->start(s, err);
 }
 
-mr_status mr_simplifier_cancelled(mr_error *err)
+void mr_simplify_release_run(mr_simplifier *s)
 {
-    return mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
-                         "simplify: cancelled by the progress callback");
+    mr_simplify_strategy(s)->release(s);
+    mr_simplifier_release_quadrics(s);
 }
 
-static size_t run_strategy(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+void mr_simplify_discard(mr_simplifier *s)
 {
-    return s->batched          ? mr_simplifier_run_batched(s, o, max_error)
-           : s->queued         ? mr_simplifier_run_queued(s, o, max_error)
-           : s->boundary_aware ? mr_simplifier_run_partitioned_boundary(s, o, max_error)
-           : s->partitioned    ? mr_simplifier_run_partitioned(s, o, max_error)
-                               : mr_simplifier_run_greedy(s, o, max_error);
-}
-
-static void add_profiles(mr_simplifier *s, const mr_queued_profile *q,
-                         const mr_partition_profile *p)
-{
-    s->profile.pops += q->pops;
-    s->profile.locks += q->locks;
-    s->profile.lock_failures += q->lock_failures;
-    s->profile.checks += q->checks;
-    s->profile.updates += q->updates;
-    s->profile.compactions += q->compactions;
-    s->pprofile.passes += p->passes;
-    s->pprofile.interior += p->interior;
-    s->pprofile.boundary += p->boundary;
-    s->pprofile.boundary_seq += p->boundary_seq;
-    s->pprofile.tail += p->tail;
-    s->pprofile.rebalances += p->rebalances;
-    s->pprofile.deferred += p->deferred;
-    for (int i = 0; i < 4; i++)
-        s->pprofile.trigger[i] += p->trigger[i];
+    if (s->state)
+        mr_simplify_strategy(s)->release(s);
+    mr_simplifier_free(s);
 }
 
 /*
  * The strategy's run, in up to two stages. The first keeps the corners
  * (MR_VF_CORNER: may_go_onto's rule) in place; when it ends short of the
  * targets -- every other collapse within the error bound made or refused
- * -- the corners are released and the strategy goes on from there with
- * its queue filled anew, so a corner moves only where the target cannot
- * be reached without it. Without corners (a closed mesh, ragged
- * boundaries) the run is one stage.
+ * -- the corners are released and the strategy goes on from there (with
+ * its queue filled anew where its state went with the first stage), so a
+ * corner moves only where the target cannot be reached without it.
+ * Without corners (a closed mesh, ragged boundaries) the run is one
+ * stage.
  */
-size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+size_t mr_simplify_run(mr_simplifier *s, double *max_error)
 {
-    size_t done = run_strategy(s, o, max_error);
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
-    if (s->corners && !s->cancelled && !mr_simplifier_reached(s, &g)) {
+    const mr_strategy_ops *run = mr_simplify_strategy(s);
+    double worst;
+    size_t done = run->run(s, &worst);
+    if (s->corners && !s->cancelled && !mr_simplifier_reached(s)) {
         mr_simplifier_release_corners(s);
-        const mr_queued_profile q = s->profile;
-        const mr_partition_profile p = s->pprofile;
-        /* The vertex queues' state went with their first stage: filled
-         * anew from clean lists (a lazy run leaves deleted triangles in
-         * them). No memory for it: the run ends there. */
-        bool go = s->batched || s->partitioned;
+        /* the lists clean for a fresh start (a lazy run leaves deleted
+         * triangles in them); no memory for it: the run ends there */
+        bool go = !run->one_run;
         if (!go) {
             mr_collapse_mesh *m = &s->m;
             for (size_t v = 0; v < m->vertex_count; v++)
                 mr_collapse_clean(m, (uint32_t)v);
             mr_error ignored;
-            go = mr_simplifier_fill_queue(s, &ignored) == MR_OK;
+            go = run->start(s, &ignored) == MR_OK;
         }
         if (go) {
-            double e2;
-            done += run_strategy(s, o, &e2);
-            *max_error = e2 > *max_error ? e2 : *max_error;
-            add_profiles(s, &q, &p);
+            double w2;
+            done += run->run(s, &w2);
+            worst = w2 > worst ? w2 : worst;
         }
     }
-    mr_simplifier_progress(s, o, 1.0);
-    if (s->memoryless) /* its costs are no distances */
-        *max_error = mr_simplifier_error(s, o, mr_simplifier_vertex_error(s));
-    mr_simplifier_finish(s, o, *max_error);
+    mr_simplifier_progress(s, 1.0);
+    /* in the memoryless mode the costs are no distances */
+    *max_error = mr_simplifier_error(s, s->memoryless ? mr_simplifier_vertex_error(s) : worst);
+    mr_simplifier_finish(s, *max_error);
     return done;
 }
 
@@ -161,44 +173,43 @@ static mr_status simplify(const float *positions, size_t stride, size_t vertex_c
     memset(out, 0, sizeof *out);
     const double t0 = mr_now_seconds();
     mr_simplifier s;
-    mr_status st = mr_simplifier_init(&s, positions, stride, vertex_count, indices,
-                                      triangle_count, options, NULL, err);
+    mr_status st = mr_simplify_setup(&s, positions, stride, vertex_count, indices,
+                                     triangle_count, options, NULL, err);
     if (st != MR_OK)
         return st;
     free(s.order); /* the output follows the working order */
     s.order = NULL;
     st = mr_simplifier_fill_queue(&s, err);
     if (st != MR_OK) {
-        mr_simplifier_free(&s);
+        mr_simplify_discard(&s);
         return st;
     }
     const double t1 = mr_now_seconds();
     double max_error;
-    size_t collapses = mr_simplifier_run(&s, options, &max_error);
+    size_t collapses = mr_simplify_run(&s, &max_error);
     if (options->quality == MR_QUALITY_BEST && !s.cancelled) {
-        mr_simplifier_release_run(&s);
-        st = mr_simplifier_refine(&s, options, positions, stride, indices, triangle_count, err);
+        mr_simplify_release_run(&s);
+        st = mr_simplifier_refine(&s, positions, stride, indices, triangle_count, err);
         if (st != MR_OK) {
-            mr_simplifier_free(&s);
+            mr_simplify_discard(&s);
             return st;
         }
     }
     const double t2 = mr_now_seconds();
     if (s.cancelled) {
-        mr_simplifier_free(&s);
+        mr_simplify_discard(&s);
         return mr_simplifier_cancelled(err);
     }
     /* Only the mesh is needed from here: release the rest before the
-     * output is allocated (it would set the peak). The greedy strategy's
-     * heap went at the end of its run. */
-    mr_simplifier_release_run(&s);
+     * output is allocated (it would set the peak). The vertex queues'
+     * state went at the end of their run. */
+    mr_simplify_release_run(&s);
     st = mr_simplifier_output(&s, positions, stride, out, err);
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const mr_simplify_stop stop = s.stop;
     const size_t pruned = s.pruned;
-    mr_queued_profile_stats(&s.profile, &out->stats);
-    mr_partition_profile_stats(&s.pprofile, &out->stats);
-    mr_simplifier_free(&s);
+    out->stats = s.profile; /* the strategy's counts; the rest below */
+    mr_simplify_discard(&s);
     if (st != MR_OK)
         return st;
     const double t3 = mr_now_seconds();

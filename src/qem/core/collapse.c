@@ -468,7 +468,7 @@ static bool valid_large(const mr_collapse_mesh *m, uint32_t u, uint32_t v, const
         for (size_t i = nf; i < nf4; i++)
             for (int k = 0; k < 9; k++)
                 fan[k * RING + i] = fan[k * RING];
-        if (!mr_kernels_get()->fan_ok(fan, nf4, t, limits->min_cos_turn))
+        if (!limits->kernels->fan_ok(fan, nf4, t, limits->min_cos_turn))
             goto done;
     }
     ok = true;
@@ -623,7 +623,7 @@ bool mr_collapse_valid(const mr_collapse_mesh *m, uint32_t u, uint32_t v,
     for (size_t i = nf; i < nf4 && nf; i++)
         for (int k = 0; k < 9; k++)
             fan[k * RING + i] = fan[k * RING];
-    return mr_kernels_get()->fan_ok(fan, nf4, t, limits->min_cos_turn);
+    return limits->kernels->fan_ok(fan, nf4, t, limits->min_cos_turn);
 }
 
 /* ---- apply ------------------------------------------------------------------ */

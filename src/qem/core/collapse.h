@@ -32,6 +32,7 @@
 
 #include "../../core/internal.h"
 #include "../../mesh/adjacency.h"
+#include "kernels.h"
 
 #define MR_COLLAPSE_NONE UINT32_MAX
 
@@ -88,6 +89,7 @@ typedef struct mr_collapse_limits {
                             always refused) */
     int half_edge;       /* half-edge collapse: u may not leave the
                             boundary (or a seam) for an inner vertex */
+    const mr_kernels *kernels; /* the vector kernels (fan_ok) */
 } mr_collapse_limits;
 
 /* Build the working mesh: positions are normalised as (p - centre) *

@@ -52,7 +52,8 @@ static inline void free_cost_inputs_at(const mr_quadricf *q, const float *pos, u
  *   a corner:         never (where a boundary or seam turns, a tile's or
  *                     a decal's corner: mr_simplifier_mark_corners; kept
  *                     in place while the target can be reached without
- *                     moving it, then released: mr_simplifier_run);
+ *                     moving it, then released: mr_simplify_run, the
+ *                     entry's);
  *   on a boundary:    only onto the boundary (a boundary vertex, locked or
  *                     not, or a non-manifold one, where boundaries may
  *                     meet; an inner edge between two boundary vertices is
@@ -310,7 +311,7 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
         return;
     }
     const uint8_t pin = PINNING;
-    const mr_kernels *kern = mr_kernels_get();
+    const mr_kernels *kern = s->plan.kernels;
     float in[FREE_INPUTS * COST_BATCH];
     double out[COST_BATCH], x[3 * COST_BATCH];
     uint32_t lane[COST_BATCH], lk[COST_BATCH], lr[COST_BATCH];
@@ -382,7 +383,7 @@ static void fan_sums(const mr_simplifier *s, uint32_t r, uint32_t k, const doubl
     const mr_fan_input in = {m->pos, m->tris, mr_collapse_vertex_tris(m, r),
                              mr_collapse_vertex_tris(m, k), m->count[r], m->count[k], r, k};
     double sum[MR_FAN_SUMS] = {0};
-    mr_kernels_get()->fan_sums(&in, o, A != NULL, sum); /* kernels.c */
+    s->plan.kernels->fan_sums(&in, o, A != NULL, sum); /* kernels.c */
     memcpy(g, sum + MR_FAN_G, 3 * sizeof *g);
     *h = sum[MR_FAN_H];
     if (!A)
@@ -395,7 +396,7 @@ static void fan_sums(const mr_simplifier *s, uint32_t r, uint32_t k, const doubl
 
 /* The least-cost point of the merged quadric on the volume's plane
  * g.(x - o) = h, from the target (the quadric's optimum): see
- * mr_simplifier_keep_volume. */
+ * keep_volume. */
 static void volume_move(const mr_simplifier *s, uint32_t r, uint32_t k, const double o[3],
                         const double g[3], double h, double target[3], double *cost)
 {
@@ -453,8 +454,8 @@ static void volume_move(const mr_simplifier *s, uint32_t r, uint32_t k, const do
  * quadric, or a fan whose g vanishes (a flat or closed-up neighbourhood),
  * and in the memoryless mode (its plans keep the volume).
  */
-void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
-                               double *cost)
+static void keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
+                        double *cost)
 {
     const mr_collapse_mesh *m = &s->m;
     if ((m->flags[r] | m->flags[k]) & PINNING || s->half || s->memoryless)
@@ -463,6 +464,13 @@ void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, d
     double g[3] = {0, 0, 0}, h = 0;
     fan_sums(s, r, k, o, g, &h, NULL, NULL, NULL, NULL);
     volume_move(s, r, k, o, g, h, target, cost);
+}
+
+void mr_simplifier_place(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
+                         double *cost)
+{
+    if (s->keep_volume)
+        keep_volume(s, r, k, target, cost);
 }
 
 /* ---- memoryless placement and cost (MR_QUALITY_BEST) ------------------------ */
@@ -631,7 +639,7 @@ static void merge_quadrics(mr_simplifier *s, uint32_t r, uint32_t k, const doubl
                           t[2] - m->pos[3 * r + 2]};
     const double dk[3] = {t[0] - m->pos[3 * k], t[1] - m->pos[3 * k + 1],
                           t[2] - m->pos[3 * k + 2]};
-    mr_kernels_get()->merge(&s->q[k], &s->q[r], dk, dr);
+    s->plan.kernels->merge(&s->q[k], &s->q[r], dk, dr);
 }
 
 unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,

@@ -20,7 +20,7 @@
  */
 static mr_simplify_stop stop_reason(const mr_simplifier *s, const mr_simplify_goal *g)
 {
-    if (mr_simplifier_reached(s, g))
+    if (mr_simplifier_reached(s))
         return MR_STOP_TARGET;
     const mr_collapse_mesh *m = &s->m;
     bool movable = false;
@@ -151,19 +151,34 @@ done:
     return dropped;
 }
 
-void mr_simplifier_finish(mr_simplifier *s, const mr_simplify_options *o, double max_error)
+void mr_simplifier_finish(mr_simplifier *s, double max_error)
 {
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
-    s->stop = stop_reason(s, &g);
+    s->stop = stop_reason(s, &s->plan.goal);
     s->pruned = 0;
-    if (o->prune) {
+    if (s->plan.prune) {
         /* the error bound, or the largest error the collapses made */
-        const double e = o->max_error > 0 ? o->max_error : max_error;
-        s->pruned = prune(s, mr_simplifier_normalised(s, o, e));
-        if (s->pruned && mr_simplifier_reached(s, &g))
+        const double e = s->plan.error_bound > 0 ? s->plan.error_bound
+                                                 : mr_simplifier_normalised(s, max_error);
+        s->pruned = prune(s, e);
+        if (s->pruned && mr_simplifier_reached(s))
             s->stop = MR_STOP_TARGET; /* the pruning reached it */
     }
+}
+
+mr_status mr_simplifier_cancelled(mr_error *err)
+{
+    return mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
+                         "simplify: cancelled by the progress callback");
+}
+
+void mr_simplified_free(mr_simplified *r)
+{
+    if (!r)
+        return;
+    free(r->positions);
+    free(r->indices);
+    free(r->origin);
+    memset(r, 0, sizeof *r);
 }
 
 /* ---- output ---------------------------------------------------------------- */
@@ -208,7 +223,7 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
         return mr_fail_nomem(err, NULL, (nbv + nbt) * sizeof *boff);
     }
     size_t *toff = boff + nbv + 1;
-    const int nthreads = s->threads > 0 ? s->threads : 1;
+    const int nthreads = s->plan.threads > 0 ? s->plan.threads : 1;
     const bool par = nthreads > 1 && vc + tc > 4 * (size_t)BLOCK;
     size_t n = 0, t = 0;
 #pragma omp parallel num_threads(nthreads) if (par)

@@ -404,14 +404,13 @@ mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint
 
 /* Report the fit's step k of ITERATIONS + 1 (the input's hierarchy, then
  * the sweeps): true when the progress callback asked to stop. */
-static bool fit_report(mr_simplifier *s, const mr_simplify_options *opt, int k)
+static bool fit_report(mr_simplifier *s, int k)
 {
-    return mr_simplifier_report(s, opt, 1 - s->fit_share + s->fit_share * k / (ITERATIONS + 1));
+    return mr_simplifier_report(s, 1 - s->fit_share + s->fit_share * k / (ITERATIONS + 1));
 }
 
-mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
-                               const float *positions, size_t stride, const uint32_t *indices,
-                               size_t triangle_count, mr_error *err)
+mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
+                               const uint32_t *indices, size_t triangle_count, mr_error *err)
 {
     mr_collapse_mesh *m = &s->m;
     if (stride == 0)
@@ -423,7 +422,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
     for (size_t t = 0; t < m->triangle_count; t++)
         nlive += m->tris[3 * t] != MR_COLLAPSE_NONE;
     if (nlive == 0 || triangle_count == 0) {
-        fit_report(s, opt, ITERATIONS + 1);
+        fit_report(s, ITERATIONS + 1);
         return MR_OK;
     }
     const size_t step = triangle_count > SAMPLES_PER_TRIANGLE * nlive
@@ -464,19 +463,19 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
 
     /* the input in normalised coordinates, its hierarchy */
     const ptrdiff_t niv = (ptrdiff_t)ivc, nsi = (ptrdiff_t)ns;
-    const bool par = s->threads > 1;
-#pragma omp parallel for schedule(static) num_threads(s->threads) if (par && niv > 65536)
+    const bool par = s->plan.threads > 1;
+#pragma omp parallel for schedule(static) num_threads(s->plan.threads) if (par && niv > 65536)
     for (ptrdiff_t v = 0; v < niv; v++) {
         float f[3];
         memcpy(f, (const char *)positions + (size_t)v * stride, sizeof f);
         for (int k = 0; k < 3; k++)
             ipos[3 * v + k] = (float)(((double)f[k] - s->centre[k]) * s->scale);
     }
-    st = mr_tri_bvh_build(&ibvh, ipos, indices, triangle_count, s->threads, err);
+    st = mr_tri_bvh_build(&ibvh, ipos, indices, triangle_count, s->plan.threads, err);
     if (st != MR_OK)
         goto done;
     have_ibvh = true;
-    if (fit_report(s, opt, 1))
+    if (fit_report(s, 1))
         goto done; /* cancelled: the caller fails */
     const input_surface in = {ipos, indices, istart, ilist, &ibvh};
 
@@ -513,7 +512,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
         memcpy(before + 3 * i, m->pos + 3 * (size_t)vout[i], 3 * sizeof *before);
     for (size_t i = 0; i < nout; i++)
         v_pull[i].tri = MR_NO_HINT;
-#pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nsi > 65536)
+#pragma omp parallel for schedule(static) num_threads(s->plan.threads) if (par && nsi > 65536)
     for (ptrdiff_t i = 0; i < nsi; i++) {
         double n[3], l2;
         tri_normal(ipos, indices + 3 * (size_t)i * step, n, &l2);
@@ -526,12 +525,12 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
     for (int it = 0; it < ITERATIONS; it++) {
         mr_tri_bvh obvh;
         if (it == 0) { /* later sweeps walk */
-            st = mr_tri_bvh_build(&obvh, m->pos, live, nlive, s->threads, err);
+            st = mr_tri_bvh_build(&obvh, m->pos, live, nlive, s->plan.threads, err);
             if (st != MR_OK)
                 goto done;
         }
         /* the input's samples against the output */
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(s->threads) if (par && nsi > 4096)
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(s->plan.threads) if (par && nsi > 4096)
         for (ptrdiff_t i = 0; i < nsi; i++) {
             pull *h = &in_pull[i];
             double p[3];
@@ -568,7 +567,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
             mr_tri_bvh_free(&obvh);
         /* the output's samples against the input */
         const ptrdiff_t nl = (ptrdiff_t)nlive;
-#pragma omp parallel for schedule(dynamic, 256) num_threads(s->threads) if (par && nl > 1024)
+#pragma omp parallel for schedule(dynamic, 256) num_threads(s->plan.threads) if (par && nl > 1024)
         for (ptrdiff_t t = 0; t < nl; t++) {
             const uint32_t *tv = live + 3 * t;
             const float *a = m->pos + 3 * (size_t)tv[0], *b = m->pos + 3 * (size_t)tv[1],
@@ -587,7 +586,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
         }
         /* the output's vertices against the input */
         const ptrdiff_t nvo = (ptrdiff_t)nout;
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(s->threads) if (par && nvo > 4096)
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(s->plan.threads) if (par && nvo > 4096)
         for (ptrdiff_t i = 0; i < nvo; i++) {
             const uint32_t v = vout[i];
             pull *o = &v_pull[i];
@@ -608,7 +607,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
          * range of output vertices, so every vertex sums its samples in
          * the same order on any number of threads */
         memset(acc, 0, 9 * nout * sizeof *acc);
-#pragma omp parallel num_threads(s->threads) if (par && nsi > 65536)
+#pragma omp parallel num_threads(s->plan.threads) if (par && nsi > 65536)
         {
             const size_t nth = (size_t)omp_get_num_threads(), th = (size_t)omp_get_thread_num();
             const uint32_t lo = (uint32_t)(nout * th / nth),
@@ -627,7 +626,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
             }
         }
         /* each vertex's least-squares move */
-#pragma omp parallel for schedule(static) num_threads(s->threads) if (par && nvo > 16384)
+#pragma omp parallel for schedule(static) num_threads(s->plan.threads) if (par && nvo > 16384)
         for (ptrdiff_t i = 0; i < nvo; i++) {
             const size_t v = vout[i];
             memcpy(next + 3 * v, m->pos + 3 * v, 3 * sizeof *next);
@@ -692,7 +691,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
             if (moved[v])
                 memcpy(m->pos + 3 * v, next + 3 * v, 3 * sizeof *next);
         }
-        if (it + 1 < ITERATIONS && fit_report(s, opt, it + 2))
+        if (it + 1 < ITERATIONS && fit_report(s, it + 2))
             goto done; /* cancelled */
     }
     /* no pair of triangles that the collapses left apart meets after the
@@ -700,7 +699,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
     for (size_t i = 0; i < nout; i++)
         memcpy(next + 3 * (size_t)vout[i], before + 3 * i, 3 * sizeof *next);
     size_t put_back;
-    st = mr_fit_untangle(m->pos, next, vc, live, nlive, s->limits.min_cos_turn, s->threads,
+    st = mr_fit_untangle(m->pos, next, vc, live, nlive, s->limits.min_cos_turn, s->plan.threads,
                          &put_back, err);
     if (st != MR_OK)
         goto done;
@@ -709,7 +708,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *opt,
         if (memcmp(m->pos + 3 * v, next + 3 * v, 3 * sizeof *next) != 0)
             m->flags[v] |= MR_VF_MOVED;
     }
-    fit_report(s, opt, ITERATIONS + 1); /* the last: a stop here fails the call */
+    fit_report(s, ITERATIONS + 1); /* the last: a stop here fails the call */
 done:
     if (have_ibvh)
         mr_tri_bvh_free(&ibvh);

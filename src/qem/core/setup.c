@@ -16,7 +16,6 @@
 
 #include "../../core/omp_compat.h"
 #include "../../mesh/adjacency.h"
-#include "../strategies/parallel/filter_layout.h"
 
 #include <math.h>
 
@@ -52,7 +51,7 @@ static void inner_quadric(mr_simplifier *s, uint32_t v)
         double *row = in + k * INNER_ROW + n;
         row[0] = row[1] = row[2] = 0;
     }
-    mr_kernels_get()->plane_terms(in, (n + 3) & ~3u, t);
+    s->plan.kernels->plane_terms(in, (n + 3) & ~3u, t);
     mr_quadric q;
     mr_quadric_zero(&q);
     for (uint32_t i = 0; i < n; i++) {
@@ -125,19 +124,16 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
     mr_quadric_store(&s->q[v], &q);
 }
 
-void mr_simplifier_release_run(mr_simplifier *s)
+void mr_simplifier_release_quadrics(mr_simplifier *s)
 {
     free(s->q);
     s->q = NULL;
-    mr_simplifier_batched_free(s);
-    mr_simplifier_queued_free(s);
-    mr_simplifier_partitioned_free(s);
 }
 
 void mr_simplifier_free(mr_simplifier *s)
 {
     mr_collapse_mesh_free(&s->m);
-    mr_simplifier_release_run(s);
+    mr_simplifier_release_quadrics(s);
     free(s->order);
     memset(s, 0, sizeof *s);
 }
@@ -417,7 +413,7 @@ size_t mr_simplifier_mark_corners(mr_simplifier *s, uint8_t line, mr_line_edge o
         return 0; /* no memory: no corners kept, the run as without them */
     /* Each vertex decides from the mesh alone into its own mark, then the
      * marks become flags: the same on any number of threads. */
-    const int nthreads = s->threads;
+    const int nthreads = s->plan.threads;
 #pragma omp parallel for schedule(dynamic, 4096) num_threads(nthreads) \
     if (nthreads > 1 && on > 65536)
     for (ptrdiff_t v = 0; v < nv; v++)
@@ -448,8 +444,8 @@ static bool boundary_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
     return mr_collapse_edge_triangles(&s->m, v, x) == 1;
 }
 
-mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
-                                    size_t input_triangles, mr_error *err)
+mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_triangles,
+                                    mr_error *err)
 {
     if (!o)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -472,14 +468,6 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
     if (o->collapse != MR_COLLAPSE_FULL && o->collapse != MR_COLLAPSE_HALF)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown collapse kind %d", (int)o->collapse);
-    if (o->strategy < MR_STRATEGY_GREEDY || o->strategy > MR_STRATEGY_PARTITIONED_BOUNDARY)
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                             "simplify: unknown strategy %d", (int)o->strategy);
-    if (mr_strategy_queued(o->strategy) && o->collapse != MR_COLLAPSE_HALF)
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                             "simplify: the concurrent-queue strategies (ppq, rppq, fppq, "
-                             "multiqueue) make half-edge collapses only: set "
-                             "MR_COLLAPSE_HALF (--collapse half)");
     if (o->quality != MR_QUALITY_DEFAULT && o->quality != MR_QUALITY_BEST)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: unknown quality %d", (int)o->quality);
@@ -488,14 +476,6 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
                              "simplify: the best quality moves the output's vertices off the "
                              "input's; half-edge collapse keeps them: use MR_COLLAPSE_FULL "
                              "(--collapse full)");
-    if (mr_strategy_queued(o->strategy) && o->filter_levels > MR_FILTER_MAX_LEVELS)
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                             "simplify: %u filter levels: at most %d", o->filter_levels,
-                             MR_FILTER_MAX_LEVELS);
-    if (o->strategy >= MR_STRATEGY_PARTITIONED && o->partitions > MR_PARTITIONS_MAX)
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                             "simplify: %u partitions: at most %d", o->partitions,
-                             MR_PARTITIONS_MAX);
     if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
         o->max_error == 0 && !o->until_error)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
@@ -505,18 +485,48 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_v
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: target of %zu triangles exceeds the input's %zu",
                              o->target_triangles, input_triangles);
-    if (o->target_vertices > input_vertices)
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
-                             "simplify: target of %zu vertices exceeds the input's %zu "
-                             "referenced vertices",
-                             o->target_vertices, input_vertices);
     return MR_OK;
+}
+
+/* ---- targets -------------------------------------------------------------- */
+
+/* The plan's goal, from the options and the mesh as set up: once, before
+ * the strategy starts. */
+static void set_goal(mr_simplifier *s, const mr_simplify_options *o)
+{
+    mr_simplify_goal *g = &s->plan.goal;
+    const mr_collapse_mesh *m = &s->m;
+    size_t target_v = 0;
+    if (o->target_ratio > 0)
+        target_v = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
+    if (o->target_vertices > target_v)
+        target_v = o->target_vertices;
+    if (o->target_vertices && o->target_vertices < target_v)
+        target_v = o->target_vertices;
+    if (o->target_ratio > 0 && o->target_vertices) {
+        size_t a = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
+        target_v = a > o->target_vertices ? a : o->target_vertices; /* first reached */
+    }
+    g->vertices = target_v;
+    g->triangles = o->target_triangles;
+    g->limit = INFINITY;
+    if (o->max_error > 0) {
+        const double rel = s->plan.error_bound;
+        /* memoryless plans test the bound themselves (MR_MEMORYLESS_OVER) */
+        g->limit = s->memoryless ? 0.5 * MR_MEMORYLESS_OVER : rel * rel;
+    }
+    /* Progress: the share of the collapses the vertex target needs. */
+    size_t planned = m->live_vertices > target_v ? m->live_vertices - target_v : 0;
+    if (g->triangles && (m->live_triangles - g->triangles) / 2 < planned)
+        planned = (m->live_triangles - g->triangles) / 2;
+    g->planned = planned;
 }
 
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
                              size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const mr_simplify_options *o,
-                             const uint8_t *extra_flags, mr_error *err)
+                             const mr_simplify_plan *plan, const uint8_t *extra_flags,
+                             mr_error *err)
 {
     memset(s, 0, sizeof *s);
     if (!positions && vertex_count)
@@ -584,16 +594,17 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         s->box[k] = 0.5 * (hi[k] - lo[k]) * s->scale + 1e-6;
     }
 
-    s->threads = mr_thread_count(o ? o->threads : 0);
-    if ((!o || o->strategy == MR_STRATEGY_BATCHED || o->strategy >= MR_STRATEGY_PARTITIONED) &&
-        !order_is_coherent(indices, triangle_count, vertex_count, s->threads)) {
-        st = spatial_order(positions, stride, indices, triangle_count, s->lo, s->hi, s->threads,
+    s->plan = *plan;
+    s->plan.threads = mr_thread_count(o ? o->threads : 0);
+    if (s->plan.spatial_order &&
+        !order_is_coherent(indices, triangle_count, vertex_count, s->plan.threads)) {
+        st = spatial_order(positions, stride, indices, triangle_count, s->lo, s->hi, s->plan.threads,
                            &s->order, err);
         if (st != MR_OK)
             return st;
     }
     st = mr_collapse_mesh_init(&s->m, positions, stride, vertex_count, indices, triangle_count,
-                               s->order, s->centre, s->scale, s->threads, err);
+                               s->order, s->centre, s->scale, s->plan.threads, err);
     if (st != MR_OK) {
         mr_simplifier_free(s);
         return st;
@@ -607,7 +618,12 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
                              "to simplify",
                              triangle_count);
     }
-    st = mr_simplify_check_options(o, m->live_vertices, triangle_count, err);
+    st = mr_simplify_check_options(o, triangle_count, err);
+    if (st == MR_OK && o->target_vertices > m->live_vertices)
+        st = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                           "simplify: target of %zu vertices exceeds the input's %zu "
+                           "referenced vertices",
+                           o->target_vertices, m->live_vertices);
     if (st != MR_OK) {
         mr_simplifier_free(s);
         return st;
@@ -617,16 +633,21 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     /* the fit takes about as long as the collapses (the armadillo at 10 %,
      * the generated 1M scan) */
     s->fit_share = o->quality == MR_QUALITY_BEST ? 0.5 : 0;
-    s->batched = o->strategy == MR_STRATEGY_BATCHED;
-    s->queued = mr_strategy_queued(o->strategy) ? (int)o->strategy : 0;
+    s->plan.error_absolute = o->error_absolute != 0;
+    s->plan.until_error = o->until_error != 0;
+    s->plan.prune = o->prune != 0;
+    s->plan.error_bound = o->max_error > 0 ? mr_simplifier_normalised(s, o->max_error) : 0;
+    s->plan.kernels = mr_kernels_get();
+    s->plan.progress = o->progress;
+    s->plan.progress_user = o->progress_user;
     /* the edge strategies plan through mr_simplifier_plan_edge; the
      * queued ones rank vertices by quadric cost (mr_simplifier_plan) */
-    s->memoryless = s->keep_volume && !s->half && !s->queued;
+    s->memoryless = s->keep_volume && !s->half && s->plan.edge_plans;
     s->memoryless_limit = INFINITY;
     s->memoryless_scale = 1;
     if (s->memoryless) {
         if (o->max_error > 0) {
-            const double rel = mr_simplifier_normalised(s, o, o->max_error);
+            const double rel = s->plan.error_bound;
             s->memoryless_limit = rel * rel;
         }
         double area = 0;
@@ -646,12 +667,8 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
         if (mean > 0)
             s->memoryless_scale = 1 / (mean * mean);
     }
-    s->partitioned = o->strategy >= MR_STRATEGY_PARTITIONED;
-    s->boundary_aware = o->strategy == MR_STRATEGY_PARTITIONED_BOUNDARY;
-    s->partitions = o->partitions ? o->partitions : MR_PARTITIONS_DEFAULT;
-    s->filter_levels = o->filter_levels;
-    s->multiqueue_factor = o->multiqueue_factor ? o->multiqueue_factor : 2;
     s->limits.half_edge = s->half;
+    s->limits.kernels = s->plan.kernels;
     double c = cos(o->max_normal_turn);
     s->limits.min_cos_turn = c > 0 ? c : 0;
     for (size_t v = 0; v < vertex_count; v++) {
@@ -672,44 +689,14 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
     }
     /* A gather over each vertex's own triangles, writing only its own
      * quadric: the same result on any number of threads. */
-    const int nthreads = s->threads;
+    const int nthreads = s->plan.threads;
     const ptrdiff_t nv = (ptrdiff_t)vertex_count;
 #pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
     for (ptrdiff_t v = 0; v < nv; v++)
         if (!(m->flags[v] & MR_VF_REMOVED))
             initial_quadric(s, (uint32_t)v, o->boundary_weight);
     mr_simplifier_mark_corners(s, MR_VF_BOUNDARY, boundary_edge);
+    set_goal(s, o);
     return MR_OK;
 }
 
-/* ---- targets -------------------------------------------------------------- */
-
-void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
-                           mr_simplify_goal *g)
-{
-    const mr_collapse_mesh *m = &s->m;
-    size_t target_v = 0;
-    if (o->target_ratio > 0)
-        target_v = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
-    if (o->target_vertices > target_v)
-        target_v = o->target_vertices;
-    if (o->target_vertices && o->target_vertices < target_v)
-        target_v = o->target_vertices;
-    if (o->target_ratio > 0 && o->target_vertices) {
-        size_t a = (size_t)floor(o->target_ratio * (double)s->input_vertices + 0.5);
-        target_v = a > o->target_vertices ? a : o->target_vertices; /* first reached */
-    }
-    g->vertices = target_v;
-    g->triangles = o->target_triangles;
-    g->limit = INFINITY;
-    if (o->max_error > 0) {
-        const double rel = mr_simplifier_normalised(s, o, o->max_error);
-        /* memoryless plans test the bound themselves (MR_MEMORYLESS_OVER) */
-        g->limit = s->memoryless ? 0.5 * MR_MEMORYLESS_OVER : rel * rel;
-    }
-    /* Progress: the share of the collapses the vertex target needs. */
-    size_t planned = m->live_vertices > target_v ? m->live_vertices - target_v : 0;
-    if (g->triangles && (m->live_triangles - g->triangles) / 2 < planned)
-        planned = (m->live_triangles - g->triangles) / 2;
-    g->planned = planned;
-}

@@ -1,87 +1,75 @@
 /*
- * The simplifier core's state and phases, shared by the strategies
- * (greedy.c, batched.c), the dispatcher that picks one (simplify.c:
- * mr_simplify) and mr_mesh_simplify (attributes). Internal.
+ * The simplifier core: the state of a run and the verbs every strategy
+ * shares -- set-up (setup.c), costs, plans, the tests and the collapse
+ * (cost.c on collapse.c's mesh), the end of a run and the output
+ * (output.c), the surface fit (refine.c). Internal. It knows no strategy:
+ * the strategies (qem/strategies/) stand on it, and the entry points
+ * (qem/simplify.c, qem/mesh_simplify.c) choose one and own its state.
  *
- * A run: mr_simplifier_init (setup.c; mr_mesh_simplify then adds its seams
- * and hooks), mr_simplifier_fill_queue (the strategy's queue or candidate
- * arrays), mr_simplifier_run (the strategy, then why it stopped and the
- * pruning: output.c), the output, mr_simplifier_free.
+ * A call: the entry checks the options and fills a plan's strategy part,
+ * mr_simplifier_init resolves the rest of the options into the plan
+ * (targets, error bound, threads, kernels, progress) and builds the
+ * working mesh and its quadrics; the strategy runs on s->plan alone (it
+ * never sees the options); mr_simplifier_finish says why the run stopped
+ * and prunes; then the output and mr_simplifier_free.
  */
-#ifndef MR_SIMPLIFY_INTERNAL_H
-#define MR_SIMPLIFY_INTERNAL_H
+#ifndef MR_QEM_SIMPLIFIER_H
+#define MR_QEM_SIMPLIFIER_H
 
 #include "../../mesh/adjacency.h"
 #include "collapse.h"
+#include "kernels.h"
 #include "quadric.h"
 
 typedef struct mr_simplifier mr_simplifier;
-/* greedy.c's state (its heap), from mr_simplifier_greedy_init to the end
- * of mr_simplifier_run_greedy. */
-typedef struct mr_greedy mr_greedy;
 
-/* batched.c's state (its own file), from mr_simplifier_batched_init to
- * mr_simplifier_free. */
-typedef struct mr_batched mr_batched;
+/* What the run aims at. */
+typedef struct mr_simplify_goal {
+    size_t vertices, triangles; /* stop at or below (0 = unused) */
+    double limit;               /* largest cost allowed (squared, normalised) */
+    size_t planned;             /* collapses the targets need, for progress */
+} mr_simplify_goal;
 
-/* parallel/queued.c's state (the concurrent-queue strategies), from
- * mr_simplifier_queued_init to the end of mr_simplifier_run_queued. */
-typedef struct mr_queued mr_queued;
-
-/* partitioned.c's state, from mr_simplifier_partitioned_init to
- * mr_simplifier_free. */
-typedef struct mr_partitioned mr_partitioned;
-
-/* Is strategy x one of the concurrent-queue ones (parallel/queued.c)? */
-static inline bool mr_strategy_queued(int x)
-{
-    return x >= MR_STRATEGY_PPQ && x <= MR_STRATEGY_MULTIQUEUE;
-}
-
-/* What the partitioned strategy counts (mr_simplify_stats' fields). */
-typedef struct mr_partition_profile {
-    size_t passes, interior, boundary, boundary_seq, tail, rebalances;
-    size_t deferred;     /* the boundary-aware variant's claim conflicts */
-    size_t trigger[4];   /* its rebalances by trigger (MR_TRIGGER_*) */
-} mr_partition_profile;
-
-/* The boundary-aware variant's rebalance triggers, as counted. */
-enum { MR_TRIGGER_COUNT, MR_TRIGGER_IMBALANCE, MR_TRIGGER_BOUNDARY, MR_TRIGGER_ACCEPTANCE };
-
-/* What the concurrent-queue strategies count, summed over the threads
- * (mr_simplify_stats' profile fields). */
-typedef struct mr_queued_profile {
-    size_t pops, locks, lock_failures, checks, updates, compactions;
-} mr_queued_profile;
+/*
+ * A run's plan: the options resolved once, for the core and the strategy
+ * to read. The entry fills the strategy's part (strategy .. partitions);
+ * mr_simplifier_init the rest.
+ */
+typedef struct mr_simplify_plan {
+    int strategy;            /* mr_strategy */
+    bool spatial_order;      /* work the triangles in a spatial order when
+                                the input's is not coherent (setup.c) */
+    bool edge_plans;         /* the strategy plans edges (plan_edge), so the
+                                best quality may use memoryless plans */
+    unsigned filter_levels, multiqueue_factor, partitions; /* its settings */
+    mr_simplify_goal goal;   /* targets and the error bound, normalised */
+    double error_bound;      /* options.max_error, normalised (0: none) */
+    bool error_absolute;     /* errors in model units, else relative */
+    bool until_error;
+    bool prune;
+    int threads;             /* the threads the run may use */
+    const mr_kernels *kernels;
+    mr_progress_fn progress; /* options.progress, or NULL */
+    void *progress_user;
+} mr_simplify_plan;
 
 struct mr_simplifier {
+    mr_simplify_plan plan;
     mr_collapse_mesh m;
     mr_quadricf *q;          /* per vertex, relative to its position */
     mr_collapse_limits limits;
     int half;
     int keep_volume;         /* MR_QUALITY_BEST: volume-preserving targets
-                                (mr_simplifier_keep_volume) */
+                                (mr_simplifier_place) */
     int memoryless;          /* MR_QUALITY_BEST with an edge strategy:
                                 Lindstrom-Turk's placement and cost
                                 (cost.c, mr_simplifier_plan_edge) */
     double memoryless_scale; /* its costs' unit: 1 / (2 mean triangle area)^2 */
     double memoryless_limit; /* the error bound (normalised, squared) its
                                 plans test themselves, or INFINITY */
-    int batched;             /* MR_STRATEGY_BATCHED: see batched.c */
-    mr_greedy *greedy;       /* else greedy.c's, while it runs */
-    mr_batched *bt;          /* else batched.c's */
-    int queued;              /* the strategy when MR_STRATEGY_PPQ ..
-                                _MULTIQUEUE (queued.c), else 0 */
-    unsigned filter_levels, multiqueue_factor; /* its options */
-    mr_queued *qd;           /* its state, while it runs */
-    mr_queued_profile profile; /* its counts, after the run */
-    int partitioned;         /* MR_STRATEGY_PARTITIONED(_BOUNDARY): partitioned.c */
-    int boundary_aware;      /* MR_STRATEGY_PARTITIONED_BOUNDARY:
-                                partitioned_boundary.c's run */
-    unsigned partitions;     /* its slabs (options.partitions, or the default) */
-    mr_partitioned *pt;      /* its state */
-    mr_partition_profile pprofile; /* its counts, after the run */
-    int threads;             /* threads the run may use (options.threads) */
+    void *state;             /* the strategy's, owned by the entry through
+                                the strategy's verbs */
+    mr_simplify_stats profile; /* the strategy's counts (its profile fields) */
     bool cancelled;          /* the progress callback asked to stop */
     double reported;         /* the last fraction reported */
     double fit_share;        /* of the progress, the surface fit's part
@@ -94,14 +82,14 @@ struct mr_simplifier {
     double box[3];           /* its half extents, normalised: targets stay
                                 inside (|target[k]| <= box[k]) */
     uint32_t *order;         /* or NULL: working triangle t is input triangle
-                                order[t] (batched: setup.c's spatial_order);
-                                from mr_simplifier_init until the caller
-                                frees it (mr_mesh_simplify reorders its
-                                corners by it) */
+                                order[t] (plan.spatial_order: setup.c's
+                                spatial_order); from mr_simplifier_init until
+                                the caller frees it (mr_mesh_simplify reorders
+                                its corners by it) */
     size_t input_vertices;
     size_t corners;          /* flagged MR_VF_CORNER, until released */
     size_t blocked_vertices; /* non-manifold or inconsistently wound: locked */
-    mr_simplify_stop stop;   /* why mr_simplifier_run stopped */
+    mr_simplify_stop stop;   /* why the run stopped (mr_simplifier_finish) */
     size_t pruned;           /* parts dropped by options.prune */
     /* Attribute hooks (mr_mesh_simplify): extra validity, and an action
      * before a collapse r -> k to target is applied. */
@@ -110,21 +98,16 @@ struct mr_simplifier {
     void *attr;              /* the hooks' own state: they write only through it */
 };
 
-/* batched.c's blocks of triangles and the blocks in a group at its first
- * level (setup.c decides by them whether to reorder the triangles). */
+/* Blocks of triangles of the working order, and the blocks in a group of
+ * its first level: the batched strategy works in them, and setup.c decides
+ * by them whether to reorder the triangles (plan.spatial_order). */
 #define MR_BATCH_BLOCK_TRIANGLES 4096
 #define MR_BATCH_FIRST_SHIFT 2
 
-/* What the run aims at, from the options. */
-typedef struct mr_simplify_goal {
-    size_t vertices, triangles; /* stop at or below (0 = unused) */
-    double limit;               /* largest cost allowed (squared, normalised) */
-    size_t planned;             /* collapses the targets need, for progress */
-} mr_simplify_goal;
-
-/* Are the targets met? */
-static inline bool mr_simplifier_reached(const mr_simplifier *s, const mr_simplify_goal *g)
+/* Are the plan's targets met? */
+static inline bool mr_simplifier_reached(const mr_simplifier *s)
 {
+    const mr_simplify_goal *g = &s->plan.goal;
     return s->m.live_vertices <= g->vertices ||
            (g->triangles && s->m.live_triangles <= g->triangles);
 }
@@ -141,59 +124,37 @@ static inline void mr_simplifier_position(const mr_simplifier *s, uint32_t v, fl
 }
 
 /* A normalised distance e as the error the options speak in. */
-static inline double mr_simplifier_error(const mr_simplifier *s, const mr_simplify_options *o,
-                                         double e)
+static inline double mr_simplifier_error(const mr_simplifier *s, double e)
 {
-    return o->error_absolute ? e * s->diagonal : e * s->diagonal / s->error_base;
+    return s->plan.error_absolute ? e * s->diagonal : e * s->diagonal / s->error_base;
 }
 
 /* The inverse: an error in the options' terms as a normalised distance
  * (normalised by the referenced vertices' diagonal; relative errors are
  * relative to the whole input's). */
-static inline double mr_simplifier_normalised(const mr_simplifier *s,
-                                              const mr_simplify_options *o, double e)
+static inline double mr_simplifier_normalised(const mr_simplifier *s, double e)
 {
-    return (o->error_absolute ? e : e * s->error_base) / s->diagonal;
+    return (s->plan.error_absolute ? e : e * s->error_base) / s->diagonal;
 }
 
-/* ---- the vertex queues' candidates (greedy.c, parallel/queued.c) */
-/*
- * Calls visit(w) for every neighbour w of u: the vertex after u in each of
- * its triangles, which covers every inner edge once; plus the vertex before
- * u when both ends are on a boundary (a boundary edge is seen from one
- * side only). Some edges may be visited twice, which is harmless.
- */
-#define MR_FOR_EACH_NEIGHBOUR(s, u, w, ...)                                           \
-    do {                                                                              \
-        const mr_collapse_mesh *m_ = &(s)->m;                                         \
-        const uint32_t *list_ = mr_collapse_vertex_tris(m_, (u));                     \
-        const uint32_t n_ = m_->count[(u)];                                           \
-        const bool ub_ = (m_->flags[(u)] & (MR_VF_BOUNDARY | MR_VF_SEAM)) != 0;       \
-        for (uint32_t i_ = 0; i_ < n_; i_++) {                                        \
-            const uint32_t k_ = list_[i_] % 3;                                        \
-            const uint32_t *t_ = m_->tris + (list_[i_] - k_);                         \
-            {                                                                         \
-                const uint32_t w = t_[k_ == 2 ? 0 : k_ + 1];                          \
-                __VA_ARGS__                                                           \
-            }                                                                         \
-            if (ub_) {                                                                \
-                const uint32_t w = t_[k_ == 0 ? 2 : k_ - 1];                          \
-                if (m_->flags[w] & (MR_VF_BOUNDARY | MR_VF_SEAM)) {                   \
-                    __VA_ARGS__                                                       \
-                }                                                                     \
-            }                                                                         \
-        }                                                                             \
-    } while (0)
-
-/* ---- setup.c: the set-up, the targets, the release */
-mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_vertices,
-                                    size_t input_triangles, mr_error *err);
+/* ---- setup.c: the set-up, the release */
+/* The options' checks that hold for every strategy (the entry checks the
+ * strategy's own). */
+mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_triangles,
+                                    mr_error *err);
+/* The working mesh, its quadrics and corners, and the plan: *plan is the
+ * strategy's part (the entry's), completed from o into s->plan. o must
+ * have passed mr_simplify_check_options. On failure s is left freed. */
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
                              size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const mr_simplify_options *o,
-                             const uint8_t *extra_flags, mr_error *err);
-void mr_simplifier_targets(const mr_simplifier *s, const mr_simplify_options *o,
-                           mr_simplify_goal *g);
+                             const mr_simplify_plan *plan, const uint8_t *extra_flags,
+                             mr_error *err);
+/* Release the quadrics, keeping the mesh (before the surface fit, whose
+ * arrays would otherwise come on top of them, and before the output). The
+ * strategy's state is the entry's to release first. */
+void mr_simplifier_release_quadrics(mr_simplifier *s);
+/* Free the core's state (the strategy's must be gone: s->state NULL). */
 void mr_simplifier_free(mr_simplifier *s);
 /* Is (v, x) an edge of the polyline that mr_simplifier_mark_corners
  * looks at (an open boundary, a seam)? */
@@ -230,33 +191,20 @@ double mr_simplifier_plan_edge(const mr_simplifier *s, uint32_t a, uint32_t b, u
 void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *a,
                               const uint32_t *b, double *cost, uint32_t *r, uint32_t *k,
                               double *target);
-/* May the planned collapse r -> k (to target, at cost) happen now: its
- * cost finite and within limit, the mesh's tests (mr_collapse_valid) and
- * the attribute hook's? The one test every strategy makes. */
-/* Move a planned full collapse's target to keep the enclosed volume
- * (MR_QUALITY_BEST; cost.c), its cost to that point's. Nothing to do in
- * the memoryless mode, whose plans keep the volume already. */
-void mr_simplifier_keep_volume(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
-                               double *cost);
 /* The memoryless mode's cost of a collapse past the error bound: finite, so
  * that the stop reason says "error bound", and above the goal's limit
- * (mr_simplifier_targets) in that mode. */
+ * (setup.c) in that mode. */
 #define MR_MEMORYLESS_OVER 1e300
 /* The largest error the collapses left (normalised distance): in the
  * memoryless mode the strategies' costs are no distances, so the run
  * reports the vertices' quadric errors instead (cost.c). */
 double mr_simplifier_vertex_error(const mr_simplifier *s);
 
-/* Release what only the run needed -- the quadrics and the strategy's
- * state -- keeping the mesh (before the surface fit, whose arrays would
- * otherwise come on top of them). */
-void mr_simplifier_release_run(mr_simplifier *s);
 /* Fit the output's vertices to the input's surface (MR_QUALITY_BEST's last
  * step, after the strategy; refine.c): the input as mr_simplifier_init got
  * it. */
-mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *o,
-                               const float *positions, size_t stride, const uint32_t *indices,
-                               size_t triangle_count, mr_error *err);
+mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t stride,
+                               const uint32_t *indices, size_t triangle_count, mr_error *err);
 /* The fit's last step: every pair of the live triangles (nlive, vertex ids
  * below vc) that meets at pos gets its vertices put back to before -- their
  * positions before the fit -- unless one of them is a vertex of a triangle
@@ -268,8 +216,19 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const mr_simplify_options *o,
 mr_status mr_fit_untangle(float *pos, const float *before, size_t vc, const uint32_t *live,
                           size_t nlive, double min_cos, int threads, size_t *put_back,
                           mr_error *err);
+/* May the planned collapse r -> k (to target, at cost) happen now: its
+ * cost finite and within limit, the mesh's tests (mr_collapse_valid) and
+ * the attribute hook's? The one test every strategy makes: after
+ * mr_simplifier_place, for a full collapse. */
 bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
                            double cost, double limit);
+/* Where a planned collapse r -> k goes: the best quality's full collapses
+ * move to the point that keeps the enclosed volume (Lindstrom-Turk's first
+ * constraint; target and *cost are updated), every other collapse stays
+ * as planned. Every strategy calls it between the plan and
+ * mr_simplifier_allowed, on the ends' clean lists. */
+void mr_simplifier_place(const mr_simplifier *s, uint32_t r, uint32_t k, double target[3],
+                         double *cost);
 /* Is u's queue entry (u, w) allowed (mr_simplifier_plan, then
  * mr_simplifier_allowed with no limit)? Its cost in *cost when not NULL. */
 bool mr_simplifier_valid(const mr_simplifier *s, uint32_t u, uint32_t w, double *cost);
@@ -285,72 +244,36 @@ unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,
                                    const double target[3], uint32_t *out, size_t *removed);
 
 /* ---- output.c: the end of a run */
-/* After the strategy: why it stopped (s->stop) and options.prune
- * (s->pruned); max_error is the run's. */
-void mr_simplifier_finish(mr_simplifier *s, const mr_simplify_options *o, double max_error);
+/* After the strategy: why it stopped (s->stop) and the pruning
+ * (s->pruned); max_error is the run's (in the options' units). */
+void mr_simplifier_finish(mr_simplifier *s, double max_error);
 mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
                                mr_simplified *out, mr_error *err);
 
-/* ---- simplify.c: the dispatcher, which alone picks the strategy */
-mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err);
-size_t mr_simplifier_run(mr_simplifier *s, const mr_simplify_options *o, double *max_error);
-
-/* Report `fraction` of the whole call done (options.progress, when set)
+/* Report `fraction` of the whole call done (plan.progress, when set)
  * from the calling thread; true when the callback asked to stop
  * (s->cancelled is then set): the strategy ends its run as at a reached
  * target, the surface fit after its sweep, and the caller fails with
  * MR_ERR_CANCELLED (mr_simplifier_cancelled). */
-static inline bool mr_simplifier_report(mr_simplifier *s, const mr_simplify_options *o,
-                                        double fraction)
+static inline bool mr_simplifier_report(mr_simplifier *s, double fraction)
 {
-    /* never backwards: a second stage of the run (mr_simplifier_run)
-     * counts from its own start */
+    /* never backwards: a second stage of the run (the entry's) counts
+     * from its own start */
     fraction = fraction > s->reported ? fraction : s->reported;
     s->reported = fraction;
-    if (o->progress && !s->cancelled && o->progress(fraction, o->progress_user) != 0)
+    if (s->plan.progress && !s->cancelled &&
+        s->plan.progress(fraction, s->plan.progress_user) != 0)
         s->cancelled = true;
     return s->cancelled;
 }
 
 /* The strategies' report: `fraction` of the collapses done. */
-static inline bool mr_simplifier_progress(mr_simplifier *s, const mr_simplify_options *o,
-                                          double fraction)
+static inline bool mr_simplifier_progress(mr_simplifier *s, double fraction)
 {
-    return mr_simplifier_report(s, o, (1 - s->fit_share) * fraction);
+    return mr_simplifier_report(s, (1 - s->fit_share) * fraction);
 }
 
 /* The error of a cancelled run. */
 mr_status mr_simplifier_cancelled(mr_error *err);
-
-/* ---- the strategies: start (fill the queue), run */
-mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err);
-size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o,
-                                double *max_error);
-mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err);
-void mr_simplifier_batched_free(mr_simplifier *s);
-size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
-                                 double *max_error);
-mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err);
-void mr_simplifier_queued_free(mr_simplifier *s);
-size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
-                                double *max_error);
-mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err);
-void mr_simplifier_partitioned_free(mr_simplifier *s);
-size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
-                                     double *max_error);
-size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplify_options *o,
-                                              double *max_error);
-/* A run's profile as mr_simplify_stats' fields. */
-void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats);
-void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats *stats);
-/* For the tests: vertex v's slab (or shifted slab), whether edge (a, b)
- * is interior to a shifted slab (the boundary step's test), and the
- * candidates a pass of the partitioned strategy would gather now (no cost
- * limit), each with whether it is interior; returns their number (at most
- * cap are stored). */
-unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs);
-bool mr_partitioned_shifted_interior(const mr_simplifier *s, uint32_t a, uint32_t b);
-size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,
-                            size_t cap);
 
 #endif

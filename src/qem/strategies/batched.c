@@ -107,7 +107,7 @@ enum { W_INVALID = 0, W_VALID = 1 };
  * constant: the layout must not depend on the thread count. */
 #define BLOCK_TRIANGLES MR_BATCH_BLOCK_TRIANGLES
 
-struct mr_batched {
+typedef struct mr_batched {
     mr_candidate *cand;  /* cand_cap */
     size_t cand_cap;
     size_t nblocks;
@@ -131,7 +131,7 @@ struct mr_batched {
     size_t *tspan;       /* per thread: winners spanning groups, then offset */
     size_t *trun;        /* threads + 1: find_winners' runs of blocks */
     int threads;
-};
+} mr_batched;
 
 /* The sign bit of a key (costs are >= 0) marks a round's winner between
  * two sweeps; a key of all ones (a NaN, never a cost) a winner found
@@ -165,14 +165,16 @@ static inline void store_u64(uint64_t *p, uint64_t v, bool par)
         *p = v;
 }
 
-mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
+static void batched_release(mr_simplifier *s);
+
+static mr_status batched_start(mr_simplifier *s, mr_error *err)
 {
     const mr_collapse_mesh *m = &s->m;
     mr_batched *b = mr_calloc_array(1, sizeof *b);
     if (!b)
         return mr_fail_nomem(err, NULL, sizeof *b);
-    s->bt = b;
-    b->threads = s->threads > 0 ? s->threads : 1;
+    s->state = b;
+    b->threads = s->plan.threads > 0 ? s->plan.threads : 1;
     /* Room for every edge, bounded without visiting them: with B edges
      * of one triangle, 3T >= B + 2 (E - B), so E <= (3T + B) / 2; and a
      * one-triangle edge has both ends flagged BOUNDARY or NONMANIFOLD,
@@ -203,14 +205,17 @@ mr_status mr_simplifier_batched_init(mr_simplifier *s, mr_error *err)
         memset(b->best, 0xFF, m->vertex_count * sizeof *b->best);
     if (!b->cand || !b->boff || !b->bn || !b->bw || !b->mark || !b->hist || !b->best ||
         !b->home_lo || !b->home_hi || !b->gcount || !b->trun ||
-        (s->m.lazy && !s->m.dead))
-        return mr_fail_nomem(err, NULL, b->cand_cap * sizeof *b->cand + m->vertex_count * 17);
+        (s->m.lazy && !s->m.dead)) {
+        const size_t bytes = b->cand_cap * sizeof *b->cand + m->vertex_count * 17;
+        batched_release(s);
+        return mr_fail_nomem(err, NULL, bytes);
+    }
     return MR_OK;
 }
 
-void mr_simplifier_batched_free(mr_simplifier *s)
+static void batched_release(mr_simplifier *s)
 {
-    mr_batched *b = s->bt;
+    mr_batched *b = s->state;
     if (!b)
         return;
     free(b->cand);
@@ -234,7 +239,7 @@ void mr_simplifier_batched_free(mr_simplifier *s)
     free(b->trun);
     free(b->wid);
     free(b);
-    s->bt = NULL;
+    s->state = NULL;
 }
 
 /* Edges block `blk` takes (MR_FOR_EACH_TRIANGLE_EDGE), without their
@@ -343,7 +348,7 @@ static void key_chunk(const mr_simplifier *s, mr_candidate *c, size_t n, double 
  * work), then each block keeps its allowed ones. */
 static size_t gather(mr_simplifier *s, double limit)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     const mr_collapse_mesh *m = &s->m;
     const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
     const bool par = bt->threads > 1 &&
@@ -430,7 +435,7 @@ static uint32_t rank_key_small(const mr_batched *bt, size_t rank)
  * resolution of the top 16 bits (1/128 relative). */
 static uint32_t rank_key(const mr_simplifier *s, size_t n, size_t rank)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     const ptrdiff_t nb = (ptrdiff_t)bt->nblocks;
     if (n <= RANK_SMALL)
         return rank_key_small(bt, rank);
@@ -537,7 +542,7 @@ static void sort_by_prio(const mr_batched *bt, const mr_winner *w, uint32_t *a, 
  * within the error bound are candidates to commit (tested then). */
 static void plan_winners(const mr_simplifier *s, mr_winner *w, size_t n, double limit)
 {
-    const mr_candidate *cand = s->bt->cand;
+    const mr_candidate *cand = ((const mr_batched *)s->state)->cand;
     uint32_t pa[PLAN_BATCH], pb[PLAN_BATCH], pr[PLAN_BATCH], pk[PLAN_BATCH];
     double pc[PLAN_BATCH], pt[3 * PLAN_BATCH];
     for (size_t i0 = 0; i0 < n; i0 += PLAN_BATCH) {
@@ -582,12 +587,11 @@ static void plan_winners(const mr_simplifier *s, mr_winner *w, size_t n, double 
 static bool apply_winner(mr_simplifier *s, mr_winner *x, double limit, uint32_t *out,
                          size_t *gone, size_t *deleted)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     mr_collapse_mesh *m = &s->m;
     mr_collapse_clean(m, x->r); /* its ends: no one else reads their lists */
     mr_collapse_clean(m, x->k);
-    if (s->keep_volume)
-        mr_simplifier_keep_volume(s, x->r, x->k, x->target, &x->cost);
+    mr_simplifier_place(s, x->r, x->k, x->target, &x->cost);
     if (!mr_simplifier_allowed(s, x->r, x->k, x->target, x->cost, limit)) {
         bt->cand[x->at].key = DEAD_KEY; /* leaves the candidates */
         x->state = W_INVALID;
@@ -671,7 +675,7 @@ static inline void apply_counted(mr_simplifier *s, mr_winner *x, double limit, b
 static void apply_levels(mr_simplifier *s, mr_winner *w, const uint32_t *idx, size_t n,
                          const mr_simplify_goal *g, mr_applied *res)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     mr_collapse_mesh *m = &s->m;
     const int nt = bt->threads;
     const bool par = nt > 1 && n >= 2048;
@@ -825,7 +829,7 @@ static void apply_levels(mr_simplifier *s, mr_winner *w, const uint32_t *idx, si
 static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simplify_goal *g,
                         bool sorted, double *worst, size_t *invalid)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     mr_collapse_mesh *m = &s->m;
     const int nt = bt->threads;
     const size_t pmin = s->memoryless ? PLAN_PAR_MEMORYLESS : PLAN_PAR;
@@ -858,7 +862,7 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
         if (!sorted)
             sort_by_prio(bt, w, ord, nv);
         size_t i = 0;
-        while (i < nv && !mr_simplifier_reached(s, g)) {
+        while (i < nv && !mr_simplifier_reached(s)) {
             /* the next winners whose bounds stay short of the target */
             const size_t lv = m->live_vertices - g->vertices;
             const size_t lt = g->triangles ? m->live_triangles - g->triangles : SIZE_MAX;
@@ -870,7 +874,7 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
             apply_levels(s, w, ord + i, k, g, &res);
             i += k;
         }
-        for (; i < nv && !mr_simplifier_reached(s, g); i++)
+        for (; i < nv && !mr_simplifier_reached(s); i++)
             apply_counted(s, &w[ord[i]], g->limit, false, NULL, NULL, &res.made, &res.bad,
                           &res.worst);
     }
@@ -883,7 +887,7 @@ static size_t run_chunk(mr_simplifier *s, mr_winner *w, size_t n, const mr_simpl
  * count too: the range is a bound). */
 static void home_ranges(mr_simplifier *s)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     const mr_collapse_mesh *m = &s->m;
     const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
 #pragma omp parallel for schedule(static) num_threads(bt->threads) \
@@ -922,7 +926,7 @@ static void home_ranges(mr_simplifier *s)
  */
 static size_t find_winners(mr_simplifier *s)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     const size_t nb = bt->nblocks;
     size_t live_total = 0;
     for (size_t i = 0; i < nb; i++)
@@ -1019,13 +1023,11 @@ static size_t find_winners(mr_simplifier *s)
     return bt->wid ? bt->bw[nb] : 0; /* no memory: stop here */
 }
 
-size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
-                                 double *max_error)
+static size_t batched_run(mr_simplifier *s, double *max_error)
 {
-    mr_batched *bt = s->bt;
+    mr_batched *bt = s->state;
     mr_collapse_mesh *m = &s->m;
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
+    const mr_simplify_goal g = s->plan.goal;
     size_t next_report = g.planned / 100 + 1, done = 0;
     double worst = 0;
     double share = PASS_SHARE;
@@ -1049,7 +1051,7 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
         finished = true; /* no memory: nothing collapses */
 
     for (unsigned pass = 0; !finished;) {
-        if (mr_simplifier_reached(s, &g))
+        if (mr_simplifier_reached(s))
             break;
         const size_t n = gather(s, g.limit);
         if (n == 0)
@@ -1116,11 +1118,11 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
                 round_done += made;
                 refused += invalid;
                 done += made;
-                if (mr_simplifier_reached(s, &g))
+                if (mr_simplifier_reached(s))
                     finished = true;
-                if (o->progress && done >= next_report) {
+                if (s->plan.progress && done >= next_report) {
                     if (mr_simplifier_progress(
-                            s, o, g.planned ? (double)done / (double)g.planned : 1.0))
+                            s, g.planned ? (double)done / (double)g.planned : 1.0))
                         finished = true;
                     next_report = done + g.planned / 100 + 1;
                 }
@@ -1139,6 +1141,8 @@ size_t mr_simplifier_run_batched(mr_simplifier *s, const mr_simplify_options *o,
         }
     }
     const double e = sqrt(worst);
-    *max_error = mr_simplifier_error(s, o, e);
+    *max_error = e;
     return done;
 }
+
+const mr_strategy_ops mr_strategy_batched = {batched_start, batched_run, batched_release, false};

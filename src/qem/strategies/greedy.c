@@ -5,9 +5,9 @@
  * collapses (to the quadric-optimal position) queue edges; half-edge
  * collapses, as in the filter-priority-queue paper (and OpenMesh's
  * decimater), queue vertices. Its state (mr_greedy: the heap, and the
- * vertex queue's best and stale) is its own, from
- * mr_simplifier_greedy_init to the end of mr_simplifier_run_greedy; costs,
- * plans, validity and the collapse are the core's (cost.c).
+ * vertex queue's best and stale) is its own (s->state), from greedy_start
+ * to the end of greedy_run; costs, plans, validity and the collapse are
+ * the core's (core/cost.c).
  *
  * The vertex queue holds one entry per VERTEX, its cheapest collapse; its
  * rules (the updates after a collapse, lazy validity at the top) are
@@ -16,7 +16,7 @@
  *
  * The edge queue is described where it starts, below.
  */
-#include "../core/simplifier.h"
+#include "strategy.h"
 
 #include "heap.h"
 #include "vertex_queue.h"
@@ -25,11 +25,11 @@
 
 #define NONE MR_COLLAPSE_NONE
 
-struct mr_greedy {
+typedef struct mr_greedy {
     mr_heap heap;   /* vertices (half collapses) or edges (full ones) */
     uint32_t *best; /* half: per vertex, other end of its queued collapse */
     uint8_t *stale; /* half: per vertex, key is only a lower bound */
-};
+} mr_greedy;
 
 /* ---- half collapses: the vertex queue's rules (vertex_queue.h) on the heap */
 
@@ -299,27 +299,27 @@ static mr_status edge_fill_queue(mr_simplifier *s, mr_greedy *gr, mr_error *err)
 
 static void greedy_free(mr_simplifier *s)
 {
-    mr_greedy *gr = s->greedy;
+    mr_greedy *gr = s->state;
     if (!gr)
         return;
     mr_heap_free(&gr->heap);
     free(gr->best);
     free(gr->stale);
     free(gr);
-    s->greedy = NULL;
+    s->state = NULL;
 }
 
 /* Fill the queue: for half collapses every vertex with its best collapse,
  * for full ones every edge. Pushed in id order, so the heap -- and
  * everything after -- is deterministic. On failure nothing of it is left
  * (the simplifier must still be freed). */
-mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err)
+static mr_status greedy_start(mr_simplifier *s, mr_error *err)
 {
     const size_t vertex_count = s->m.vertex_count;
     mr_greedy *gr = mr_calloc_array(1, sizeof *gr);
     if (!gr)
         return mr_fail_nomem(err, NULL, sizeof *gr);
-    s->greedy = gr;
+    s->state = gr;
     mr_status st;
     if (!s->half) { /* full collapses queue edges: see edge_fill_queue */
         st = edge_fill_queue(s, gr, err);
@@ -355,20 +355,18 @@ mr_status mr_simplifier_greedy_init(mr_simplifier *s, mr_error *err)
     return MR_OK;
 }
 
-size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, double *max_error)
+static size_t greedy_run(mr_simplifier *s, double *max_error)
 {
-    mr_greedy *gr = s->greedy;
+    mr_greedy *gr = s->state;
     mr_collapse_mesh *m = &s->m;
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
-    const size_t planned = g.planned;
-    const double limit = g.limit;
+    const size_t planned = s->plan.goal.planned;
+    const double limit = s->plan.goal.limit;
     size_t next_report = planned / 100 + 1, done = 0;
     double worst = 0;
     const mr_vertex_queue vq = vertex_queue(gr);
 
     while (!mr_heap_empty(&gr->heap)) {
-        if (mr_simplifier_reached(s, &g))
+        if (mr_simplifier_reached(s))
             break;
         if (!s->half) {
             const uint32_t h = mr_heap_top(&gr->heap);
@@ -378,8 +376,7 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
             double cost = mr_simplifier_plan_edge(s, a, b, &r, &k, target);
             if (cost > limit)
                 break;
-            if (s->keep_volume)
-                mr_simplifier_keep_volume(s, r, k, target, &cost);
+            mr_simplifier_place(s, r, k, target, &cost);
             if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
                 mr_heap_remove(&gr->heap, h);
                 m->flags[a] |= MR_VF_BLOCKED;
@@ -402,8 +399,8 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
             edge_unblock_ring(s, gr, k);
             worst = cost > worst ? cost : worst;
             done++;
-            if (o->progress && done >= next_report) {
-                if (mr_simplifier_progress(s, o, planned ? (double)done / (double)planned : 1.0))
+            if (s->plan.progress && done >= next_report) {
+                if (mr_simplifier_progress(s, planned ? (double)done / (double)planned : 1.0))
                     break;
                 next_report += planned / 100 + 1;
             }
@@ -428,15 +425,16 @@ size_t mr_simplifier_run_greedy(mr_simplifier *s, const mr_simplify_options *o, 
         mr_vq_update_around(s, &vq, r, k);
         worst = cost > worst ? cost : worst;
         done++;
-        if (o->progress && done >= next_report) {
-            if (mr_simplifier_progress(s, o, planned ? (double)done / (double)planned : 1.0))
+        if (s->plan.progress && done >= next_report) {
+            if (mr_simplifier_progress(s, planned ? (double)done / (double)planned : 1.0))
                 break;
             next_report += planned / 100 + 1;
         }
     }
     /* The queue is done with: its memory goes before the output's. */
     greedy_free(s);
-    double e = sqrt(worst);
-    *max_error = mr_simplifier_error(s, o, e);
+    *max_error = sqrt(worst);
     return done;
 }
+
+const mr_strategy_ops mr_strategy_greedy = {greedy_start, greedy_run, greedy_free, true};

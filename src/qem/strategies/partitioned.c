@@ -148,7 +148,7 @@ static bool mr_part_room(pcand **buf, size_t *cap, size_t n)
  * vertices listed slab by slab (in id order). */
 void mr_part_balance(mr_simplifier *s)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
     const bool par = pt->threads > 1 && nv > 65536;
@@ -213,15 +213,15 @@ void mr_part_balance(mr_simplifier *s)
 
 /* ---- set-up ---------------------------------------------------------------- */
 
-mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
+mr_status mr_part_start(mr_simplifier *s, mr_error *err)
 {
     mr_collapse_mesh *m = &s->m;
     mr_partitioned *pt = mr_calloc_array(1, sizeof *pt);
     if (!pt)
         return mr_fail_nomem(err, NULL, sizeof *pt);
-    s->pt = pt;
-    pt->threads = s->threads > 0 ? s->threads : 1;
-    pt->parts = s->partitions ? s->partitions : MR_PARTITIONS_DEFAULT;
+    s->state = pt;
+    pt->threads = s->plan.threads > 0 ? s->plan.threads : 1;
+    pt->parts = s->plan.partitions ? s->plan.partitions : MR_PARTITIONS_DEFAULT;
     m->lazy = true; /* only a collapse's two ends read its lists */
     mr_collapse_prepare(m);
     pt->part = mr_alloc_array(m->vertex_count + 1, sizeof *pt->part);
@@ -236,18 +236,23 @@ mr_status mr_simplifier_partitioned_init(mr_simplifier *s, mr_error *err)
                                 sizeof *pt->bcount);
     pt->slab2 = mr_calloc_array((size_t)pt->parts + 1, sizeof *pt->slab2);
     pt->hist = mr_alloc_array((size_t)pt->threads * HIST_BUCKETS, sizeof *pt->hist);
-    if (s->boundary_aware && !(pt->claim = mr_calloc_array(m->vertex_count + 1, 1)))
+    if (s->plan.strategy == MR_STRATEGY_PARTITIONED_BOUNDARY &&
+        !(pt->claim = mr_calloc_array(m->vertex_count + 1, 1))) {
+        mr_part_release(s);
         return mr_fail_nomem(err, NULL, m->vertex_count);
+    }
     if (!pt->part || !pt->part2 || !pt->impure || !pt->bcand || !pt->bcount || !pt->slab2 ||
-        !pt->pure || !pt->mark || !pt->slab || !pt->hist || !m->dead)
+        !pt->pure || !pt->mark || !pt->slab || !pt->hist || !m->dead) {
+        mr_part_release(s);
         return mr_fail_nomem(err, NULL, m->vertex_count * 12 + m->triangle_count * 36);
+    }
     mr_part_balance(s);
     return MR_OK;
 }
 
-void mr_simplifier_partitioned_free(mr_simplifier *s)
+void mr_part_release(mr_simplifier *s)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     if (!pt)
         return;
     for (unsigned p = 0; pt->slab && p < pt->parts; p++) {
@@ -277,7 +282,7 @@ void mr_simplifier_partitioned_free(mr_simplifier *s)
     free(pt->bplan);
     free(pt->bstate);
     free(pt);
-    s->pt = NULL;
+    s->state = NULL;
 }
 
 /* ---- a pass ---------------------------------------------------------------- */
@@ -326,7 +331,7 @@ static inline bool is_pure(const mr_partitioned *pt, uint32_t v)
  * slab, interior (both ends pure) and boundary. */
 static void block_gather(mr_simplifier *s, size_t blk, double limit)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     size_t t0, t1;
     block_range(pt, m, blk, &t0, &t1);
@@ -407,7 +412,7 @@ static void block_scatter(mr_partitioned *pt, size_t blk)
  */
 static size_t mr_part_gather(mr_simplifier *s, double limit)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     const ptrdiff_t nb = (ptrdiff_t)pt->nblocks;
     const size_t np = pt->parts;
@@ -478,7 +483,7 @@ static size_t mr_part_gather(mr_simplifier *s, double limit)
  * resolution of the top 16 bits (as batched.c's rank_key). */
 static uint32_t mr_part_rank_key(mr_simplifier *s, size_t n, size_t rank)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const int nt = n > 65536 ? pt->threads : 1;
     const ptrdiff_t np = (ptrdiff_t)pt->parts;
 #pragma omp parallel num_threads(nt) if (nt > 1)
@@ -575,7 +580,7 @@ static void add_demand(mr_partitioned *pt, const mr_collapse_mesh *m, pslab *sl)
  * Returns false when out of memory. */
 static bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     pslab *sl = &pt->slab[p];
     pcand *c = sl->buf;
@@ -607,7 +612,7 @@ static bool mr_part_select(mr_simplifier *s, unsigned p, uint32_t lim, bool tail
  * pauses when the room is spent, stops at its quota. */
 static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
     pcand *c = sl->buf;
     size_t at = sl->room0;
@@ -648,8 +653,8 @@ static void slab_apply(mr_simplifier *s, pslab *sl, double limit)
         double target[3] = {x->target[0], x->target[1], x->target[2]}, cost = x->cost;
         mr_collapse_clean(m, r);
         mr_collapse_clean(m, k);
-        if (s->keep_volume) /* on a copy: a paused slab plans again from x */
-            mr_simplifier_keep_volume(s, r, k, target, &cost);
+        /* on a copy: a paused slab plans again from x */
+        mr_simplifier_place(s, r, k, target, &cost);
         if (!mr_simplifier_allowed(s, r, k, target, cost, limit)) {
             sl->refused++;
             continue;
@@ -705,7 +710,7 @@ void mr_part_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl
 size_t mr_part_apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double limit, double *worst,
                           bool *quota_hit)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
     const ptrdiff_t np = (ptrdiff_t)ns;
     bool stuck = false;
@@ -802,7 +807,7 @@ static bool ring_in(const mr_collapse_mesh *m, const uint16_t *part2, uint32_t v
  * cleaned before a collapse, which only shortens them). */
 static bool slab_demand(const mr_simplifier *s, pslab *sl)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     sl->demand = 0;
     sl->next = 0;
     sl->keep = 0;
@@ -816,7 +821,7 @@ void mr_part_next_round(mr_simplifier *s, pslab *sl)
     sl->keep = 0;
     sl->next = 0;
     sl->demand = 0;
-    add_demand(s->pt, &s->m, sl);
+    add_demand(s->state, &s->m, sl);
 }
 
 /*
@@ -831,7 +836,7 @@ void mr_part_next_round(mr_simplifier *s, pslab *sl)
 static size_t shifted(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst,
                       bool *quota_hit, size_t *made)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     const size_t ns = (size_t)pt->parts + 1;
     *made = 0;
@@ -902,10 +907,10 @@ static size_t shifted(mr_simplifier *s, size_t n, const mr_simplify_goal *g, dou
  * made. */
 size_t mr_part_sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g, double *worst)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
     size_t made = 0;
-    for (size_t i = 0; i < n && !mr_simplifier_reached(s, g); i++) {
+    for (size_t i = 0; i < n && !mr_simplifier_reached(s); i++) {
         const pcand e = pt->seq[i];
         if (pt->mark[e.a] | pt->mark[e.b])
             continue;
@@ -914,8 +919,7 @@ size_t mr_part_sequential(mr_simplifier *s, size_t n, const mr_simplify_goal *g,
         uint32_t r, k;
         double target[3];
         double cost = mr_simplifier_plan_edge(s, e.a, e.b, &r, &k, target);
-        if (s->keep_volume)
-            mr_simplifier_keep_volume(s, r, k, target, &cost);
+        mr_simplifier_place(s, r, k, target, &cost);
         if (!mr_simplifier_allowed(s, r, k, target, cost, g->limit))
             continue;
         mr_simplifier_collapse(s, r, k, target);
@@ -934,7 +938,7 @@ static bool mr_part_seq_room(mr_partitioned *pt, size_t n)
 
 size_t mr_part_merge(mr_simplifier *s, bool tail)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     size_t ns = 0;
     for (unsigned p = 0; p < pt->parts; p++)
         ns += pt->slab[p].nbd + (tail ? pt->slab[p].nin : 0);
@@ -957,7 +961,7 @@ size_t mr_part_merge(mr_simplifier *s, bool tail)
 bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bool force_tail,
                    mr_part_pass *ps)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const ptrdiff_t np = (ptrdiff_t)pt->parts;
     const bool par = pt->threads > 1 && np > 1;
     ps->n = mr_part_gather(s, g->limit);
@@ -988,19 +992,17 @@ bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bo
     return true;
 }
 
-size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options *o,
-                                     double *max_error)
+static size_t partitioned_run(mr_simplifier *s, double *max_error)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
-    mr_partition_profile *prof = &s->pprofile;
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
+    mr_partition_profile *prof = &pt->profile;
+    const mr_simplify_goal g = s->plan.goal;
     size_t next_report = g.planned / 100 + 1, done = 0;
     double worst = 0, share = 1.0;
     bool force_tail = false;
     memset(prof, 0, sizeof *prof);
-    while (!mr_simplifier_reached(s, &g)) {
+    while (!mr_simplifier_reached(s)) {
         if (2 * m->live_vertices <= pt->balanced_live) {
             mr_part_balance(s);
             prof->rebalances++;
@@ -1018,14 +1020,14 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             prof->interior += made;
             pass_done += made;
             done += made;
-            if (mr_part_progress(s, o, &g, done, &next_report))
+            if (mr_part_progress(s, &g, done, &next_report))
                 break; /* cancelled */
         }
         /* the boundary candidates (a tail pass: all), one global order */
         size_t k = mr_part_merge(s, ps.tail);
         if (k == SIZE_MAX)
             break; /* no memory: stop here */
-        if (!ps.tail && !mr_simplifier_reached(s, &g)) {
+        if (!ps.tail && !mr_simplifier_reached(s)) {
             size_t made2;
             k = shifted(s, k, &g, &worst, &quota_hit, &made2);
             if (k == SIZE_MAX)
@@ -1041,46 +1043,53 @@ size_t mr_simplifier_run_partitioned(mr_simplifier *s, const mr_simplify_options
             prof->boundary_seq += made;
         pass_done += made;
         done += made;
-        if (mr_part_progress(s, o, &g, done, &next_report))
+        if (mr_part_progress(s, &g, done, &next_report))
             break; /* cancelled */
         force_tail = quota_hit;
         if (!mr_part_next(pass_done, &ps, &share))
             break; /* nothing valid is left */
     }
-    *max_error = mr_simplifier_error(s, o, sqrt(worst));
+    mr_part_add_profile(s, prof);
+    *max_error = sqrt(worst);
     return done;
 }
 
-void mr_partition_profile_stats(const mr_partition_profile *p, mr_simplify_stats *stats)
+void mr_part_add_profile(mr_simplifier *s, const mr_partition_profile *p)
 {
-    stats->partition_passes = p->passes;
-    stats->interior_collapses = p->interior;
-    stats->boundary_collapses = p->boundary + p->boundary_seq;
-    stats->boundary_sequential = p->boundary_seq;
-    stats->tail_collapses = p->tail;
-    stats->rebalances = p->rebalances;
-    stats->claim_conflicts = p->deferred;
-    stats->rebalance_count = p->trigger[MR_TRIGGER_COUNT];
-    stats->rebalance_imbalance = p->trigger[MR_TRIGGER_IMBALANCE];
-    stats->rebalance_boundary = p->trigger[MR_TRIGGER_BOUNDARY];
-    stats->rebalance_acceptance = p->trigger[MR_TRIGGER_ACCEPTANCE];
+    mr_simplify_stats *stats = &s->profile;
+    stats->partition_passes += p->passes;
+    stats->interior_collapses += p->interior;
+    stats->boundary_collapses += p->boundary + p->boundary_seq;
+    stats->boundary_sequential += p->boundary_seq;
+    stats->tail_collapses += p->tail;
+    stats->rebalances += p->rebalances;
+    stats->claim_conflicts += p->deferred;
+    stats->rebalance_count += p->trigger[MR_TRIGGER_COUNT];
+    stats->rebalance_imbalance += p->trigger[MR_TRIGGER_IMBALANCE];
+    stats->rebalance_boundary += p->trigger[MR_TRIGGER_BOUNDARY];
+    stats->rebalance_acceptance += p->trigger[MR_TRIGGER_ACCEPTANCE];
 }
+
+const mr_strategy_ops mr_strategy_partitioned = {mr_part_start, partitioned_run, mr_part_release,
+                                             false};
 
 unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs)
 {
-    return shifted_slabs ? s->pt->part2[v] : s->pt->part[v];
+    const mr_partitioned *pt = s->state;
+    return shifted_slabs ? pt->part2[v] : pt->part[v];
 }
 
 bool mr_partitioned_shifted_interior(const mr_simplifier *s, uint32_t a, uint32_t b)
 {
-    const uint16_t q = s->pt->part2[a];
-    return ring_in(&s->m, s->pt->part2, a, q) && ring_in(&s->m, s->pt->part2, b, q);
+    const mr_partitioned *pt = s->state;
+    const uint16_t q = pt->part2[a];
+    return ring_in(&s->m, pt->part2, a, q) && ring_in(&s->m, pt->part2, b, q);
 }
 
 size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,
                             size_t cap)
 {
-    const mr_partitioned *pt = s->pt;
+    const mr_partitioned *pt = s->state;
     mr_part_gather(s, INFINITY);
     size_t n = 0;
     for (unsigned p = 0; p < pt->parts; p++) {

@@ -96,7 +96,18 @@ typedef struct pslab {
     size_t keep;
 } pslab;
 
-struct mr_partitioned {
+/* What the partitioned strategies count (mr_simplify_stats' fields). */
+typedef struct mr_partition_profile {
+    size_t passes, interior, boundary, boundary_seq, tail, rebalances;
+    size_t deferred;     /* the boundary-aware variant's claim conflicts */
+    size_t trigger[4];   /* its rebalances by trigger (MR_TRIGGER_*) */
+} mr_partition_profile;
+
+/* The boundary-aware variant's rebalance triggers, as counted. */
+enum { MR_TRIGGER_COUNT, MR_TRIGGER_IMBALANCE, MR_TRIGGER_BOUNDARY, MR_TRIGGER_ACCEPTANCE };
+
+typedef struct mr_partitioned {
+    mr_partition_profile profile; /* this run's counts */
     unsigned parts;
     int threads;
     uint16_t *part;       /* per vertex: its slab */
@@ -134,7 +145,7 @@ struct mr_partitioned {
     pplan *bplan;         /* per merged boundary candidate: its plan, */
     uint8_t *bstate;      /* and its test (partitioned_boundary.c's B_*) */
     size_t bcap;
-};
+} mr_partitioned;
 
 /* claim[] bits: an end of an accepted collapse; in the closed 1-ring of
  * one (an end is in its own). */
@@ -207,6 +218,10 @@ int mr_part_trigger(mr_part_triggers *tr, size_t live, const pslab *slabs, unsig
                     size_t gathered, size_t nbd, size_t walked, size_t made);
 
 /* ---- partitioned.c, used by both */
+mr_status mr_part_start(mr_simplifier *s, mr_error *err);
+void mr_part_release(mr_simplifier *s);
+/* Add a run's counts to s->profile. */
+void mr_part_add_profile(mr_simplifier *s, const mr_partition_profile *p);
 void mr_part_balance(mr_simplifier *s);
 void mr_part_quotas(const mr_simplifier *s, const mr_simplify_goal *g, pslab *sl, size_t ns,
                     size_t all);
@@ -235,13 +250,13 @@ bool mr_part_begin(mr_simplifier *s, const mr_simplify_goal *g, double share, bo
 
 /* Report progress once `done` collapses pass *next (then moved on a
  * hundredth of the plan); true when the callback asked to stop. */
-static inline bool mr_part_progress(mr_simplifier *s, const mr_simplify_options *o,
-                                    const mr_simplify_goal *g, size_t done, size_t *next)
+static inline bool mr_part_progress(mr_simplifier *s, const mr_simplify_goal *g, size_t done,
+                                    size_t *next)
 {
-    if (!o->progress || done < *next)
+    if (!s->plan.progress || done < *next)
         return false;
     *next = done + g->planned / 100 + 1;
-    return mr_simplifier_progress(s, o, g->planned ? (double)done / (double)g->planned : 1.0);
+    return mr_simplifier_progress(s, g->planned ? (double)done / (double)g->planned : 1.0);
 }
 
 /* After a pass that made `made` collapses: false when the run is over
@@ -266,5 +281,15 @@ size_t mr_part_apply_slabs(mr_simplifier *s, pslab *slabs, size_t ns, double lim
 /* Slab sl's candidates buf[0..keep) for another round: nin = keep, and
  * its refs room bound anew (the plans stay: their ends have not moved). */
 void mr_part_next_round(mr_simplifier *s, pslab *sl);
+
+/* For the tests: vertex v's slab (or shifted slab), whether edge (a, b)
+ * is interior to a shifted slab (the boundary step's test), and the
+ * candidates a pass of the partitioned strategy would gather now (no cost
+ * limit), each with whether it is interior; returns their number (at most
+ * cap are stored). */
+unsigned mr_partitioned_slab(const mr_simplifier *s, uint32_t v, bool shifted_slabs);
+bool mr_partitioned_shifted_interior(const mr_simplifier *s, uint32_t a, uint32_t b);
+size_t mr_partitioned_edges(mr_simplifier *s, uint32_t *a, uint32_t *b, uint8_t *interior,
+                            size_t cap);
 
 #endif /* MR_QEM_PARTITIONED_H */

@@ -155,7 +155,7 @@ static inline void apply_one(mr_simplifier *s, const paccept *x, size_t need, ui
  * applied). */
 static bool apply_batch(mr_simplifier *s, pbatch *b)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
     const size_t ni = (b->n + APPLY_ITEM - 1) / APPLY_ITEM;
     if (ni == 0)
@@ -236,7 +236,7 @@ enum { B_SKIP, B_VALID, B_WALK };
 static inline void prefetch_ahead(const mr_simplifier *s, size_t i, size_t n,
                                   const uint8_t *state)
 {
-    const mr_partitioned *pt = s->pt;
+    const mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     static const size_t ahead[3] = {PF0, PF1, PF2};
     for (int st = 0; st < 3; st++) {
@@ -265,7 +265,7 @@ static inline void prefetch_ahead(const mr_simplifier *s, size_t i, size_t n,
  * tested by the walk itself. Returns false when out of memory. */
 static bool boundary_test(mr_simplifier *s, size_t n, double limit)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     const mr_collapse_mesh *m = &s->m;
     if (n > pt->bcap || !pt->bplan) {
         free(pt->bplan);
@@ -294,8 +294,7 @@ static bool boundary_test(mr_simplifier *s, size_t n, double limit)
         }
         pplan *x = &pt->bplan[i];
         x->cost = mr_simplifier_plan_edge(s, e.a, e.b, &x->r, &x->k, x->target);
-        if (s->keep_volume)
-            mr_simplifier_keep_volume(s, x->r, x->k, x->target, &x->cost);
+        mr_simplifier_place(s, x->r, x->k, x->target, &x->cost);
         pt->bstate[i] = mr_simplifier_allowed(s, x->r, x->k, x->target, x->cost, limit)
                             ? B_VALID
                             : B_SKIP;
@@ -312,7 +311,7 @@ static bool boundary_test(mr_simplifier *s, size_t n, double limit)
 static bool boundary_claim(mr_simplifier *s, size_t *n, const mr_simplify_goal *g, double *worst,
                            size_t *deferred)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
     pbatch *b = &pt->bbatch;
     b->n = b->need = 0;
@@ -338,8 +337,7 @@ static bool boundary_claim(mr_simplifier *s, size_t *n, const mr_simplify_goal *
             mr_collapse_clean(m, e.a);
             mr_collapse_clean(m, e.b);
             x.cost = mr_simplifier_plan_edge(s, e.a, e.b, &x.r, &x.k, x.target);
-            if (s->keep_volume)
-                mr_simplifier_keep_volume(s, x.r, x.k, x.target, &x.cost);
+            mr_simplifier_place(s, x.r, x.k, x.target, &x.cost);
             if (!mr_simplifier_allowed(s, x.r, x.k, x.target, x.cost, g->limit))
                 continue;
         }
@@ -382,14 +380,12 @@ int mr_part_trigger(mr_part_triggers *tr, size_t live, const pslab *slabs, unsig
     return -1;
 }
 
-size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplify_options *o,
-                                              double *max_error)
+static size_t boundary_run(mr_simplifier *s, double *max_error)
 {
-    mr_partitioned *pt = s->pt;
+    mr_partitioned *pt = s->state;
     mr_collapse_mesh *m = &s->m;
-    mr_partition_profile *prof = &s->pprofile;
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
+    mr_partition_profile *prof = &pt->profile;
+    const mr_simplify_goal g = s->plan.goal;
     size_t next_report = g.planned / 100 + 1, done = 0;
     double worst = 0, share = 1.0;
     bool force_tail = false, rebalance = false;
@@ -397,7 +393,7 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
     const bool par = pt->threads > 1 && np > 1;
     mr_part_triggers tr = {m->live_vertices, 0, 0, 0};
     memset(prof, 0, sizeof *prof);
-    while (!mr_simplifier_reached(s, &g)) {
+    while (!mr_simplifier_reached(s)) {
         if (rebalance) {
             mr_part_balance(s);
             prof->rebalances++;
@@ -434,7 +430,7 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
             prof->interior += made_in;
             pass_done += made_in;
             done += made_in;
-            if (mr_part_progress(s, o, &g, done, &next_report))
+            if (mr_part_progress(s, &g, done, &next_report))
                 break; /* cancelled */
         }
         /* step 3 (a tail pass: step 4 on all the candidates) */
@@ -449,7 +445,7 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
         } else {
             pbatch *bb = &pt->bbatch;
             for (unsigned round = 0; round < ROUNDS && k && ok; round++) {
-                if (mr_simplifier_reached(s, &g))
+                if (mr_simplifier_reached(s))
                     break;
                 memset(pt->claim, 0, m->vertex_count);
                 ok = boundary_claim(s, &k, &g, &worst, &prof->deferred) &&
@@ -463,7 +459,7 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
             if (!ok)
                 break; /* no memory: stop here */
         }
-        if (mr_part_progress(s, o, &g, done, &next_report))
+        if (mr_part_progress(s, &g, done, &next_report))
             break; /* cancelled */
         force_tail = quota_hit;
         if (!ps.tail) {
@@ -477,6 +473,10 @@ size_t mr_simplifier_run_partitioned_boundary(mr_simplifier *s, const mr_simplif
         if (!mr_part_next(pass_done, &ps, &share))
             break; /* nothing valid is left */
     }
-    *max_error = mr_simplifier_error(s, o, sqrt(worst));
+    mr_part_add_profile(s, prof);
+    *max_error = sqrt(worst);
     return done;
 }
+
+const mr_strategy_ops mr_strategy_partitioned_boundary = {mr_part_start, boundary_run,
+                                                      mr_part_release, false};

@@ -6,7 +6,7 @@
 #ifndef MR_QEM_PASSES_H
 #define MR_QEM_PASSES_H
 
-#include "../core/simplifier.h"
+#include "strategy.h"
 
 /* A cost as the bits of its float (costs are >= 0: the bits order as the
  * values), and back. */

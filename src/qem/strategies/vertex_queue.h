@@ -27,7 +27,35 @@
 #ifndef MR_VERTEX_QUEUE_H
 #define MR_VERTEX_QUEUE_H
 
-#include "../core/simplifier.h"
+#include "strategy.h"
+
+/*
+ * Calls visit(w) for every neighbour w of u: the vertex after u in each of
+ * its triangles, which covers every inner edge once; plus the vertex before
+ * u when both ends are on a boundary (a boundary edge is seen from one
+ * side only). Some edges may be visited twice, which is harmless.
+ */
+#define MR_FOR_EACH_NEIGHBOUR(s, u, w, ...)                                           \
+    do {                                                                              \
+        const mr_collapse_mesh *m_ = &(s)->m;                                         \
+        const uint32_t *list_ = mr_collapse_vertex_tris(m_, (u));                     \
+        const uint32_t n_ = m_->count[(u)];                                           \
+        const bool ub_ = (m_->flags[(u)] & (MR_VF_BOUNDARY | MR_VF_SEAM)) != 0;       \
+        for (uint32_t i_ = 0; i_ < n_; i_++) {                                        \
+            const uint32_t k_ = list_[i_] % 3;                                        \
+            const uint32_t *t_ = m_->tris + (list_[i_] - k_);                         \
+            {                                                                         \
+                const uint32_t w = t_[k_ == 2 ? 0 : k_ + 1];                          \
+                __VA_ARGS__                                                           \
+            }                                                                         \
+            if (ub_) {                                                                \
+                const uint32_t w = t_[k_ == 0 ? 2 : k_ - 1];                          \
+                if (m_->flags[w] & (MR_VF_BOUNDARY | MR_VF_SEAM)) {                   \
+                    __VA_ARGS__                                                       \
+                }                                                                     \
+            }                                                                         \
+        }                                                                             \
+    } while (0)
 
 typedef struct mr_vertex_queue {
     uint32_t *best;  /* per vertex: the other end of its queued collapse */

@@ -81,7 +81,7 @@
  * exactly what greedy.c's heap has at its top, and every step makes the
  * same decision: the output is greedy.c's half-edge output, byte for byte.
  */
-#include "../../core/simplifier.h"
+#include "../strategy.h"
 #include "../vertex_queue.h"
 
 #include "../../../core/omp_compat.h"
@@ -94,6 +94,12 @@
 #include <stdatomic.h>
 
 #define NONE MR_COLLAPSE_NONE
+
+/* What the concurrent-queue strategies count, per thread and then summed
+ * (mr_simplify_stats' profile fields). */
+typedef struct mr_queued_profile {
+    size_t pops, locks, lock_failures, checks, updates;
+} mr_queued_profile;
 
 /* Per thread, on cache lines of its own. */
 typedef struct qthread {
@@ -113,7 +119,7 @@ typedef struct qthread {
 
 enum { STEP_DONE, STEP_RETRY, STEP_SYNC };
 
-struct mr_queued {
+typedef struct mr_queued {
     int kind;                /* MR_STRATEGY_PPQ .. _MULTIQUEUE */
     mr_ppq ppq;              /* PPQ, RPPQ */
     mr_fppq fppq;
@@ -137,7 +143,7 @@ struct mr_queued {
     char pad3[64];
     _Atomic int sync, compact, stop; /* safe point asked, and why */
     size_t compactions;
-};
+} mr_queued;
 
 /* ---- the queue: one interface over the four -------------------------------- */
 
@@ -477,7 +483,7 @@ static bool safe_point(mr_simplifier *s, mr_queued *qd)
 
 /* One thread's loop. */
 static void run_thread(mr_simplifier *s, mr_queued *qd, qthread *t, bool caller,
-                       const mr_simplify_options *o, size_t planned)
+                       size_t planned)
 {
     uint32_t ticket = NONE;
     mr_spin sp = MR_SPIN_INIT;
@@ -509,12 +515,12 @@ static void run_thread(mr_simplifier *s, mr_queued *qd, qthread *t, bool caller,
         } else {
             sp.turns = 0;
         }
-        if (caller && o->progress && (++turns & 255) == 0) {
+        if (caller && s->plan.progress && (++turns & 255) == 0) {
             size_t made = 0;
             for (int i = 0; i < qd->threads; i++)
                 made += atomic_load_explicit(&qd->th[i].made, memory_order_relaxed);
             if (made >= next_report) {
-                if (mr_simplifier_progress(s, o, planned ? (double)made / (double)planned : 1.0))
+                if (mr_simplifier_progress(s, planned ? (double)made / (double)planned : 1.0))
                     ask(qd, &qd->stop); /* every thread stops at the safe point */
                 next_report = made + planned / 100 + 1;
             }
@@ -543,22 +549,22 @@ static void queued_free(mr_queued *qd)
     free(qd);
 }
 
-void mr_simplifier_queued_free(mr_simplifier *s)
+static void queued_release(mr_simplifier *s)
 {
-    queued_free(s->qd);
-    s->qd = NULL;
+    queued_free(s->state);
+    s->state = NULL;
 }
 
-mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
+static mr_status queued_start(mr_simplifier *s, mr_error *err)
 {
     mr_collapse_mesh *m = &s->m;
     const size_t nv = m->vertex_count;
     mr_queued *qd = mr_calloc_array(1, sizeof *qd);
     if (!qd)
         return mr_fail_nomem(err, NULL, sizeof *qd);
-    s->qd = qd;
-    qd->kind = s->queued;
-    qd->threads = s->threads > 0 ? s->threads : 1;
+    s->state = qd;
+    qd->kind = s->plan.strategy;
+    qd->threads = s->plan.threads > 0 ? s->plan.threads : 1;
     m->lazy = true; /* shared collapses count their opposite vertices' dead entries */
     mr_collapse_prepare(m);
     qd->best = mr_alloc_array(nv, sizeof *qd->best);
@@ -567,21 +573,22 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
     qd->lock = mr_calloc_array(nv, sizeof *qd->lock);
     qd->th = mr_calloc_array((size_t)qd->threads, sizeof *qd->th);
     if (!qd->best || !qd->key || !qd->stale || !qd->lock || !qd->th || !m->dead) {
-        mr_simplifier_queued_free(s);
+        queued_release(s);
         return mr_fail_nomem(err, NULL, nv * 14);
     }
     const unsigned levels =
-        s->filter_levels ? s->filter_levels : mr_fppq_default_levels(qd->threads);
+        s->plan.filter_levels ? s->plan.filter_levels : mr_fppq_default_levels(qd->threads);
     mr_status st;
     switch (qd->kind) {
     case MR_STRATEGY_FPPQ: st = mr_fppq_init(&qd->fppq, nv, levels, err); break;
     case MR_STRATEGY_MULTIQUEUE:
-        st = mr_multiqueue_init(&qd->mq, nv, qd->threads, s->multiqueue_factor, err);
+        st = mr_multiqueue_init(&qd->mq, nv, qd->threads,
+                                s->plan.multiqueue_factor ? s->plan.multiqueue_factor : 2, err);
         break;
     default: st = mr_ppq_init(&qd->ppq, nv, err); break;
     }
     if (st != MR_OK) {
-        mr_simplifier_queued_free(s);
+        queued_release(s);
         return st;
     }
     qd->top = mr_fppq_top_nodes(levels);
@@ -619,7 +626,7 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
         if (!ids || !keys) {
             free(ids);
             free(keys);
-            mr_simplifier_queued_free(s);
+            queued_release(s);
             return mr_fail_nomem(err, NULL, count * 8);
         }
         size_t i = 0;
@@ -636,13 +643,11 @@ mr_status mr_simplifier_queued_init(mr_simplifier *s, mr_error *err)
     return MR_OK;
 }
 
-size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
-                                double *max_error)
+static size_t queued_run(mr_simplifier *s, double *max_error)
 {
-    mr_queued *qd = s->qd;
+    mr_queued *qd = s->state;
     mr_collapse_mesh *m = &s->m;
-    mr_simplify_goal g;
-    mr_simplifier_targets(s, o, &g);
+    const mr_simplify_goal g = s->plan.goal;
     qd->limit = g.limit;
     qd->strict_one = qd->threads == 1 && qd->kind != MR_STRATEGY_MULTIQUEUE;
     qd->has_t = g.triangles != 0;
@@ -650,44 +655,35 @@ size_t mr_simplifier_run_queued(mr_simplifier *s, const mr_simplify_options *o,
     atomic_store(&qd->rem_t, qd->has_t ? (int64_t)m->live_triangles - (int64_t)g.triangles
                                        : INT64_MAX);
     atomic_store(&qd->cursor, m->refs_size);
-    if (mr_simplifier_reached(s, &g))
+    if (mr_simplifier_reached(s))
         atomic_store(&qd->work, 0); /* nothing to do */
     const int nt = qd->threads;
 #pragma omp parallel num_threads(nt) if (nt > 1)
     {
         const int me = omp_get_thread_num();
-        run_thread(s, qd, &qd->th[me], me == 0, o, g.planned);
+        run_thread(s, qd, &qd->th[me], me == 0, g.planned);
     }
     size_t made = 0;
     double worst = 0;
-    mr_queued_profile *p = &s->profile;
-    memset(p, 0, sizeof *p);
+    mr_simplify_stats *p = &s->profile; /* added: a second stage adds to the first */
     for (int i = 0; i < nt; i++) {
         qthread *t = &qd->th[i];
         m->live_vertices -= t->gone;
         m->live_triangles -= t->deleted;
         made += atomic_load(&t->made);
         worst = t->worst > worst ? t->worst : worst;
-        p->pops += t->p.pops;
-        p->locks += t->p.locks;
+        p->queue_pops += t->p.pops;
+        p->lock_acquisitions += t->p.locks;
         p->lock_failures += t->p.lock_failures;
-        p->checks += t->p.checks;
-        p->updates += t->p.updates;
+        p->topology_checks += t->p.checks;
+        p->priority_updates += t->p.updates;
     }
-    p->compactions = qd->compactions;
+    p->compactions += qd->compactions;
     const size_t end = atomic_load(&qd->cursor);
     m->refs_size = end < m->refs_capacity ? end : m->refs_capacity;
-    mr_simplifier_queued_free(s);
-    *max_error = mr_simplifier_error(s, o, sqrt(worst));
+    queued_release(s);
+    *max_error = sqrt(worst);
     return made;
 }
 
-void mr_queued_profile_stats(const mr_queued_profile *p, mr_simplify_stats *stats)
-{
-    stats->queue_pops = p->pops;
-    stats->lock_acquisitions = p->locks;
-    stats->lock_failures = p->lock_failures;
-    stats->topology_checks = p->checks;
-    stats->priority_updates = p->updates;
-    stats->compactions = p->compactions;
-}
+const mr_strategy_ops mr_strategy_queued = {queued_start, queued_run, queued_release, true};
