@@ -209,10 +209,11 @@ static int read_mesh(const char *path, mr_mesh *m)
     return CLI_OK;
 }
 
-/* The distances of panel p (read from `path`) to the reference: the heat
- * values (when asked) and the caption's error figures. Errors name the
- * panel's file. */
-static int measure(const render_args *a, const mr_mesh *ref, const char *path, panel_data *p,
+/* The distances of panel p (read from `path`) to the reference, prepared
+ * once for every panel (its hierarchy, its samples), whose bounding box has
+ * diagonal diag: the heat values (when asked) and the caption's error
+ * figures. Errors name the panel's file. */
+static int measure(const mr_reference *ref, double diag, const char *path, panel_data *p,
                    int heat)
 {
     mr_error err;
@@ -223,28 +224,17 @@ static int measure(const render_args *a, const mr_mesh *ref, const char *path, p
         d = malloc(sizeof(float) * (n ? n : 1));
         if (!d)
             return cli_fail("%s: out of memory for its distances to the reference", path);
-        if (mr_surface_distances(ref->positions, ref->vertex_count, ref->indices,
-                                 ref->triangle_count, m->positions, m->vertex_count, m->indices,
-                                 m->triangle_count, 0, d, &p->heat_max, &err) != MR_OK) {
+        if (mr_surface_distances_with(ref, m->positions, m->vertex_count, m->indices,
+                                      m->triangle_count, d, &p->heat_max, &err) != MR_OK) {
             free(d);
             return cli_fail_in(path, NULL, &err);
         }
     }
-    mr_stats s;
-    if (mr_stats_compute(ref->positions, 0, ref->vertex_count, ref->indices,
-                         ref->triangle_count, &s, &err) != MR_OK) {
-        free(d);
-        return cli_fail_in(a->error_to ? a->error_to : a->inputs[0], NULL, &err);
-    }
-    double diag = s.bbox_diagonal > 0 ? s.bbox_diagonal : 1;
+    diag = diag > 0 ? diag : 1;
     if (m->triangle_count) {
-        mr_compare_options co;
-        mr_compare_options_default(&co);
-        co.samples = (size_t)a->samples;
         mr_compare_result r;
-        if (mr_compare(ref->positions, ref->vertex_count, ref->indices, ref->triangle_count,
-                       m->positions, m->vertex_count, m->indices, m->triangle_count, &co, &r,
-                       &err) != MR_OK) {
+        if (mr_compare_with(ref, m->positions, m->vertex_count, m->indices, m->triangle_count,
+                            &r, &err) != MR_OK) {
             free(d);
             return cli_fail_in(path, NULL, &err);
         }
@@ -324,30 +314,40 @@ static int run(int argc, char **argv)
         refm = &p[0].mesh;
         ref_path = a.inputs[0];
     }
+    /* The reference, prepared once (its bounding box, its hierarchy and
+     * samples) for every panel that is measured against it. */
+    mr_error err;
+    mr_reference *rref = NULL;
+    double diag = 0;
+    if (rc < 0 && refm && sheet) {
+        mr_stats s;
+        if (mr_stats_compute(refm->positions, 0, refm->vertex_count, refm->indices,
+                             refm->triangle_count, &s, &err) != MR_OK)
+            rc = cli_fail_in(ref_path, NULL, &err);
+        diag = s.bbox_diagonal;
+        mr_compare_options co;
+        mr_compare_options_default(&co);
+        co.samples = (size_t)a.samples;
+        if (rc < 0 && mr_reference_build(refm->positions, refm->vertex_count, refm->indices,
+                                         refm->triangle_count, &co, &rref, &err) != MR_OK)
+            rc = cli_fail_in(ref_path, NULL, &err);
+    }
     /* Every panel but the reference's gets its distances; an input that is
      * the --error-to file itself is shown plain, as the reference. */
     double heat_max = 0;
     for (int i = 0; i < a.n_inputs && rc < 0 && sheet; i++) {
         int is_ref = a.error_to ? !strcmp(a.inputs[i], a.error_to) : i == 0;
         if (refm && !is_ref &&
-            measure(&a, refm, a.inputs[i], &p[i], a.error_to != NULL) != CLI_OK)
+            measure(rref, diag, a.inputs[i], &p[i], a.error_to != NULL) != CLI_OK)
             rc = CLI_FAIL;
         if (p[i].heat && p[i].heat_max > heat_max)
             heat_max = p[i].heat_max;
         make_caption(a.inputs[i], &p[i], is_ref && refm);
     }
+    mr_reference_free(rref);
 
-    mr_error err;
     uint8_t *img = NULL;
     int w = 0, h = 0;
-    double diag = 0;
-    if (rc < 0 && a.error_to) {
-        mr_stats s;
-        if (mr_stats_compute(ref.positions, 0, ref.vertex_count, ref.indices,
-                             ref.triangle_count, &s, &err) != MR_OK)
-            rc = cli_fail_in(a.error_to, NULL, &err);
-        diag = s.bbox_diagonal;
-    }
     if (rc < 0 && sheet) {
         mr_sheet_options so;
         mr_sheet_options_default(&so);

@@ -635,6 +635,22 @@ mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
                      const mr_compare_options *options, mr_compare_result *result,
                      mr_error *err);
 
+/* A reference surface prepared once for several measurements against it
+ * (a sheet of reductions, a sweep): its checks, its surface samples and its
+ * nearest-triangle hierarchy, built by mr_reference_build with the
+ * options' samples, seed and threads, which every measurement with it then
+ * uses. The arrays must stay valid and unchanged until mr_reference_free.
+ * mr_compare_with gives mr_compare's figures bit for bit. */
+typedef struct mr_reference mr_reference;
+mr_status mr_reference_build(const float *positions, size_t vertex_count,
+                             const uint32_t *indices, size_t triangle_count,
+                             const mr_compare_options *options, mr_reference **out,
+                             mr_error *err);
+void mr_reference_free(mr_reference *ref);
+mr_status mr_compare_with(const mr_reference *ref, const float *test_positions,
+                          size_t test_vertex_count, const uint32_t *test_indices,
+                          size_t test_triangle_count, mr_compare_result *result, mr_error *err);
+
 /* Vertex similarity of two reductions of the same mesh: the share of
  * output vertices of `a` for which `b` has an output vertex descending from
  * the same input vertex at the same position (bitwise). origin arrays as
@@ -891,6 +907,13 @@ mr_status mr_surface_distances(const float *ref_positions, size_t ref_vertex_cou
                                const uint32_t *test_indices, size_t test_triangle_count,
                                int threads, float *face_distance, double *max_out,
                                mr_error *err);
+
+/* The same against a prepared reference (mr_reference_build), on its
+ * threads: the same values. */
+mr_status mr_surface_distances_with(const mr_reference *ref, const float *test_positions,
+                                    size_t test_vertex_count, const uint32_t *test_indices,
+                                    size_t test_triangle_count, float *face_distance,
+                                    double *max_out, mr_error *err);
 
 /* ---- comparison sheets --------------------------------------------------- */
 

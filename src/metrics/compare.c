@@ -25,7 +25,7 @@
  * vertices (those on the surface); a *_rel value is 0 when the diagonal
  * is 0. Referenced vertices must have finite coordinates.
  */
-#include "../geometry/distance.h"
+#include "reference.h"
 #include "../mesh/adjacency.h"
 
 #include <math.h>
@@ -386,6 +386,97 @@ static void fill_result(const surface *ref, const surface *test, const partial t
     r->modified_hausdorff_rel = relative(r->modified_hausdorff, r->diagonal);
 }
 
+struct mr_reference {
+    surface s;
+    mr_tri_bvh tree;
+    mr_compare_options options;
+    int threads;
+};
+
+const mr_tri_bvh *mr_reference_hierarchy(const mr_reference *ref) { return &ref->tree; }
+
+int mr_reference_threads(const mr_reference *ref) { return ref->threads; }
+
+static void reference_surface(surface *s, const float *positions, size_t vertex_count,
+                              const uint32_t *indices, size_t triangle_count,
+                              const mr_compare_options *opt)
+{
+    *s = (surface){.name = "reference mesh", .pos = positions, .vertex_count = vertex_count,
+                   .idx = indices, .triangle_count = triangle_count, .samples = opt->samples,
+                   .seed = mr_mix64(opt->seed ^ 0x7265666572656e63ull)};
+}
+
+mr_status mr_reference_build(const float *positions, size_t vertex_count,
+                             const uint32_t *indices, size_t triangle_count,
+                             const mr_compare_options *options, mr_reference **out,
+                             mr_error *err)
+{
+    if (!out)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "no output for the reference");
+    *out = NULL;
+    mr_reference *r = mr_calloc_array(1, sizeof *r);
+    if (!r)
+        return mr_fail_nomem(err, NULL, sizeof *r);
+    mr_compare_options_default(&r->options);
+    if (options)
+        r->options = *options;
+    r->threads = mr_thread_count(r->options.threads);
+    reference_surface(&r->s, positions, vertex_count, indices, triangle_count, &r->options);
+    mr_status st = prepare(&r->s, r->threads, err);
+    if (st == MR_OK)
+        st = mr_tri_bvh_build(&r->tree, r->s.pos, r->s.idx, r->s.triangle_count, r->threads,
+                              err);
+    if (st != MR_OK) {
+        mr_reference_free(r);
+        return st;
+    }
+    *out = r;
+    return MR_OK;
+}
+
+void mr_reference_free(mr_reference *r)
+{
+    if (!r)
+        return;
+    mr_tri_bvh_free(&r->tree);
+    surface_free(&r->s);
+    free(r);
+}
+
+mr_status mr_compare_with(const mr_reference *ref, const float *test_positions,
+                          size_t test_vertex_count, const uint32_t *test_indices,
+                          size_t test_triangle_count, mr_compare_result *result, mr_error *err)
+{
+    if (!result || !ref)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "reference or result is NULL");
+    memset(result, 0, sizeof *result);
+    const int nt = ref->threads;
+    surface test = {.name = "test mesh", .pos = test_positions,
+                    .vertex_count = test_vertex_count, .idx = test_indices,
+                    .triangle_count = test_triangle_count, .samples = ref->options.samples,
+                    .seed = mr_mix64(ref->options.seed ^ 0x746573746d657368ull)};
+    mr_tri_bvh tree;
+    mr_point_bvh points;
+    memset(&tree, 0, sizeof tree);
+    memset(&points, 0, sizeof points);
+    mr_status st = prepare(&test, nt, err);
+    if (st == MR_OK)
+        st = mr_tri_bvh_build(&tree, test.pos, test.idx, test.triangle_count, nt, err);
+    if (st == MR_OK)
+        st = mr_point_bvh_build(&points, test.pos, test.verts, test.vert_count, nt, err);
+    partial total[KINDS];
+    if (st == MR_OK) {
+        job jb = {{&ref->s, &test}, {&ref->tree, &tree}, &points, {0}, {0}};
+        st = run_queries(&jb, nt, total, err);
+    }
+    if (st == MR_OK)
+        fill_result(&ref->s, &test, total, result);
+    mr_point_bvh_free(&points);
+    mr_tri_bvh_free(&tree);
+    surface_free(&test);
+    return st;
+}
+
 mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
                      const uint32_t *ref_indices, size_t ref_triangle_count,
                      const float *test_positions, size_t test_vertex_count,
@@ -396,46 +487,14 @@ mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
     if (!result)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "result is NULL");
     memset(result, 0, sizeof *result);
-    mr_compare_options opt;
-    mr_compare_options_default(&opt);
-    if (options)
-        opt = *options;
-    const int nt = mr_thread_count(opt.threads);
-
-    surface s[2];
-    memset(s, 0, sizeof s);
-    s[0] = (surface){.name = "reference mesh", .pos = ref_positions,
-                     .vertex_count = ref_vertex_count, .idx = ref_indices,
-                     .triangle_count = ref_triangle_count, .samples = opt.samples,
-                     .seed = mr_mix64(opt.seed ^ 0x7265666572656e63ull)};
-    s[1] = (surface){.name = "test mesh", .pos = test_positions,
-                     .vertex_count = test_vertex_count, .idx = test_indices,
-                     .triangle_count = test_triangle_count, .samples = opt.samples,
-                     .seed = mr_mix64(opt.seed ^ 0x746573746d657368ull)};
-    mr_tri_bvh tree[2];
-    mr_point_bvh points;
-    memset(tree, 0, sizeof tree);
-    memset(&points, 0, sizeof points);
-
-    mr_status st = MR_OK;
-    for (int i = 0; i < 2 && st == MR_OK; i++)
-        st = prepare(&s[i], nt, err);
-    for (int i = 0; i < 2 && st == MR_OK; i++)
-        st = mr_tri_bvh_build(&tree[i], s[i].pos, s[i].idx, s[i].triangle_count, nt, err);
-    if (st == MR_OK)
-        st = mr_point_bvh_build(&points, s[1].pos, s[1].verts, s[1].vert_count, nt, err);
-    partial total[KINDS];
-    if (st == MR_OK) {
-        job jb = {{&s[0], &s[1]}, {&tree[0], &tree[1]}, &points, {0}, {0}};
-        st = run_queries(&jb, nt, total, err);
-    }
-    if (st == MR_OK)
-        fill_result(&s[0], &s[1], total, result);
-    mr_point_bvh_free(&points);
-    mr_tri_bvh_free(&tree[0]);
-    mr_tri_bvh_free(&tree[1]);
-    surface_free(&s[0]);
-    surface_free(&s[1]);
+    mr_reference *ref;
+    mr_status st = mr_reference_build(ref_positions, ref_vertex_count, ref_indices,
+                                      ref_triangle_count, options, &ref, err);
+    if (st != MR_OK)
+        return st;
+    st = mr_compare_with(ref, test_positions, test_vertex_count, test_indices,
+                         test_triangle_count, result, err);
+    mr_reference_free(ref);
     return st;
 }
 
