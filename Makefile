@@ -8,7 +8,11 @@ FUZZ_SECONDS ?= 60
 
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
 BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
-TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest
+TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest \
+             python3-matplotlib
+# The report's plots (bench/plots.py): Debian's matplotlib, run by Debian's
+# /usr/bin/python3 (the tests' report check draws them too).
+REPORT_PKGS = python3-matplotlib
 FUZZ_PKGS  = clang libclang-rt-14-dev
 # ThreadSanitizer: clang's TSan runtime, LLVM's OpenMP runtime with its
 # Archer tool (libomp-14-dev: libomp.so, omp.h, libarcher.so) and
@@ -112,11 +116,14 @@ bench: build
 	    bench/bench_python.py --cli $(BUILD)/meshreduce; fi
 
 # The benchmark sweep (meshes x targets x algorithms x threads, with the
-# installed peers; several minutes), then bench/REPORT.md with its plots and
-# comparison sheets in bench/report/.
+# installed peers; several minutes), then its plots (bench/plots.py,
+# matplotlib), then bench/REPORT.md with its comparison sheets in
+# bench/report/.
 report: build
+	@scripts/need-packages.sh $(REPORT_PKGS)
 	$(CMAKE) --build $(BUILD) -j $(JOBS) --target bench_peers
 	./$(BUILD)/bench/sweep --csv bench/report/sweep.csv
+	/usr/bin/python3 bench/plots.py bench/report/sweep.csv --out bench/report
 	./$(BUILD)/bench/report bench/report/sweep.csv --out bench
 
 clean:

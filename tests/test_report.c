@@ -2,6 +2,7 @@
 #include "testutil.h"
 
 #include <libgen.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -80,9 +81,21 @@ static void test_sweep_and_report(void **state)
     tu_assert_contains(md, "![scan-20k](report/sheet-scan-20k.png)");
     tu_assert_contains(md, "| scan-20k | 10% | meshreduce-full | 2 |");
     free(md);
-    static const char *pngs[] = {"time-threads", "speedup-threads", "peers", "error-scan-20k",
-                                 "sheet-scan-20k"};
-    for (size_t i = 0; i < sizeof pngs / sizeof *pngs; i++) {
+    /* The plots: bench/plots.py with Debian's matplotlib (make check
+     * installs it; without it, the sheet alone is checked). */
+    const bool plots = system("/usr/bin/python3 -c 'import matplotlib' 2>/dev/null") == 0;
+    if (plots) {
+        snprintf(cmd, sizeof cmd,
+                 "/usr/bin/python3 '%s/bench/plots.py' '%s/sweep.csv' --out '%s/report' "
+                 ">/dev/null 2>&1",
+                 MR_SOURCE_DIR, dir, dir);
+        assert_int_equal(system(cmd), 0);
+    } else {
+        print_message("no matplotlib for /usr/bin/python3: the plots are not checked\n");
+    }
+    static const char *pngs[] = {"sheet-scan-20k", "time-threads", "speedup-threads", "peers",
+                                 "error-scan-20k"};
+    for (size_t i = 0; i < (plots ? sizeof pngs / sizeof *pngs : 1); i++) {
         char *png = tu_read_file(tu_fmt("%s/report/%s.png", dir, pngs[i]), &n);
         assert_non_null(png);
         assert_true(n > 1000);
@@ -99,6 +112,16 @@ static void test_sweep_and_report(void **state)
     buf[got] = '\0';
     assert_int_not_equal(pclose(p), 0);
     tu_assert_contains(buf, "not a sweep CSV");
+    if (plots) { /* and the plots' script says the same */
+        snprintf(cmd, sizeof cmd,
+                 "/usr/bin/python3 '%s/bench/plots.py' '%s/bad.csv' --out '%s/bad' 2>&1",
+                 MR_SOURCE_DIR, dir, dir);
+        p = popen(cmd, "r");
+        got = fread(buf, 1, sizeof buf - 1, p);
+        buf[got] = '\0';
+        assert_int_not_equal(pclose(p), 0);
+        tu_assert_contains(buf, "not a sweep CSV");
+    }
 }
 
 int main(void)
