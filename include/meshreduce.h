@@ -340,6 +340,16 @@ const char *mr_generator_name(mr_generator kind);
 mr_status mr_generate(mr_generator kind, size_t triangles, uint64_t seed,
                       mr_mesh *mesh, mr_error *err);
 
+/* Generate straight into a file: mr_generate's mesh written as by
+ * mr_mesh_write (the same bytes). A sphere or a scan written as PLY is
+ * streamed, never held in memory whole (blocks of a million vertices or
+ * triangles: about 30 MB at any size, up to the 32-bit indices' 4.29
+ * billion triangles); the torus and the other formats are made in memory
+ * first. vertices_out and triangles_out (may be NULL) receive the counts. */
+mr_status mr_generate_file(mr_generator kind, size_t triangles, uint64_t seed, const char *path,
+                           const mr_write_options *options, size_t *vertices_out,
+                           size_t *triangles_out, mr_error *err);
+
 /* ------------------------------------------------------------------------ */
 /* Simplification: greedy quadric-error edge collapse                       */
 /* ------------------------------------------------------------------------ */

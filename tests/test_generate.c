@@ -3,10 +3,13 @@
  * tests do not depend on the library's own statistics. */
 #include "testutil.h"
 
+#include "mesh/generate.h"
+
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -259,6 +262,109 @@ static void assert_within_5_percent(size_t got, size_t wanted)
 /* ------------------------------------------------------------------------ */
 /* Names and arguments                                                      */
 /* ------------------------------------------------------------------------ */
+
+/* ---- in pieces and streamed --------------------------------------------- */
+
+/* The generator in pieces gives mr_generate's positions and triangles for
+ * any range: the whole mesh read back in ragged blocks, and every
+ * frequency from 1 to 12 (the inverse of the face-interior numbering). */
+static void test_stream_pieces(void **state)
+{
+    (void)state;
+    const size_t sizes[] = {20, 80, 180, 320, 500, 720, 980, 1280, 1620, 2000, 2420, 2880,
+                            50000};
+    for (int kind = 0; kind < 2; kind++) {
+        const mr_generator k = kind ? MR_GEN_SCAN : MR_GEN_SPHERE;
+        for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++) {
+            mr_mesh m;
+            mr_error err;
+            assert_int_equal(mr_generate(k, sizes[si], 7, &m, &err), MR_OK);
+            mr_gen_stream *gs;
+            assert_int_equal(mr_gen_stream_open(k, sizes[si], 7, &gs, &err), MR_OK);
+            assert_int_equal(mr_gen_stream_vertex_count(gs), m.vertex_count);
+            assert_int_equal(mr_gen_stream_triangle_count(gs), m.triangle_count);
+            float *pos = malloc(12 * m.vertex_count);
+            uint32_t *idx = malloc(12 * m.triangle_count);
+            assert_non_null(pos);
+            assert_non_null(idx);
+            /* ragged blocks: 1, 2, 3, ... items, then the rest */
+            for (size_t v = 0, n = 1; v < m.vertex_count; v += n, n++) {
+                n = n < m.vertex_count - v ? n : m.vertex_count - v;
+                mr_gen_stream_positions(gs, v, n, pos + 3 * v);
+            }
+            for (size_t t = 0, n = 1; t < m.triangle_count; t += n, n += 3) {
+                n = n < m.triangle_count - t ? n : m.triangle_count - t;
+                assert_int_equal(mr_gen_stream_triangles(gs, t, n, idx + 3 * t, &err), MR_OK);
+            }
+            assert_memory_equal(pos, m.positions, 12 * m.vertex_count);
+            assert_memory_equal(idx, m.indices, 12 * m.triangle_count);
+            free(pos);
+            free(idx);
+            mr_gen_stream_close(gs);
+            mr_mesh_free(&m);
+        }
+    }
+    mr_gen_stream *gs;
+    mr_error err;
+    assert_int_equal(mr_gen_stream_open(MR_GEN_TORUS, 1000, 1, &gs, &err), MR_ERR_UNSUPPORTED);
+}
+
+/* mr_generate_file writes mr_generate's mesh as mr_mesh_write does, byte
+ * for byte: streamed for the sphere and the scan as PLY (binary little and
+ * big endian, ascii; past one block of a million vertices and triangles),
+ * in memory for the torus and OBJ. */
+static void test_generate_file_bytes(void **state)
+{
+    (void)state;
+    const bool quick = getenv("MR_TEST_QUICK") != NULL;
+    struct {
+        mr_generator kind;
+        size_t triangles;
+        const char *ext;
+        mr_encoding enc;
+    } cases[] = {
+        {MR_GEN_SCAN, 20, "ply", MR_ENCODING_DEFAULT},
+        {MR_GEN_SPHERE, 5000, "ply", MR_ENCODING_BINARY_BE},
+        {MR_GEN_SCAN, 30000, "ply", MR_ENCODING_ASCII},
+        {MR_GEN_SCAN, quick ? 300000 : 2200000, "ply", MR_ENCODING_DEFAULT},
+        {MR_GEN_TORUS, 3000, "ply", MR_ENCODING_DEFAULT},
+        {MR_GEN_SCAN, 3000, "obj", MR_ENCODING_DEFAULT},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+        mr_write_options o;
+        mr_write_options_default(&o);
+        o.encoding = cases[c].enc;
+        char a[1024], b[1024];
+        snprintf(a, sizeof a, "%s", tu_tmp_path(tu_fmt("gen-stream-%zu.%s", c, cases[c].ext)));
+        snprintf(b, sizeof b, "%s", tu_tmp_path(tu_fmt("gen-mesh-%zu.%s", c, cases[c].ext)));
+        mr_error err;
+        size_t nv, nt;
+        assert_int_equal(mr_generate_file(cases[c].kind, cases[c].triangles, 3, a, &o, &nv, &nt,
+                                          &err),
+                         MR_OK);
+        mr_mesh m;
+        assert_int_equal(mr_generate(cases[c].kind, cases[c].triangles, 3, &m, &err), MR_OK);
+        assert_int_equal(nv, m.vertex_count);
+        assert_int_equal(nt, m.triangle_count);
+        assert_int_equal(mr_mesh_write(b, &m, &o, &err), MR_OK);
+        mr_mesh_free(&m);
+        size_t na, nb;
+        char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
+        assert_non_null(da);
+        assert_non_null(db);
+        assert_int_equal(na, nb);
+        assert_memory_equal(da, db, na);
+        free(da);
+        free(db);
+        unlink(a);
+        unlink(b);
+    }
+    /* a bad destination: the error, and no file */
+    mr_error err;
+    assert_int_equal(mr_generate_file(MR_GEN_SCAN, 1000, 1, tu_tmp_path("no/such/dir/x.ply"),
+                                      NULL, NULL, NULL, &err),
+                     MR_ERR_IO);
+}
 
 static void test_names(void **state)
 {
@@ -564,6 +670,8 @@ int main(void)
         cmocka_unit_test(test_same_seed_same_mesh),
         cmocka_unit_test(test_seed_changes_mesh),
         cmocka_unit_test(test_thread_count_independent),
+        cmocka_unit_test(test_stream_pieces),
+        cmocka_unit_test(test_generate_file_bytes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

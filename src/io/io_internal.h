@@ -54,6 +54,34 @@ mr_status mr_write_stl(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
 mr_status mr_write_xyz(FILE *f, const mr_mesh *mesh, const mr_write_options *options,
                        const char *name, mr_error *err);
 
+/*
+ * The PLY writer as a stream, for outputs that never stand in memory whole
+ * (a generated mesh of a billion triangles, the out-of-core paths): the
+ * header with the counts, then the vertices and then the faces in blocks
+ * of any size, then the end, which checks the counts. The bytes are
+ * mr_write_ply's for the same mesh and options. The stream writes to an
+ * open FILE (an output file of output.h).
+ */
+typedef struct mr_ply_writer {
+    const mr_mesh *mesh; /* the rows' arrays (a block, when streaming) */
+    bool ascii, swap;
+    bool normals, texcoords, colors;
+} mr_ply_writer;
+typedef struct mr_ply_stream {
+    FILE *f;
+    const char *name;
+    size_t vertex_count, triangle_count, vertices_written, triangles_written;
+    mr_ply_writer w;
+} mr_ply_stream;
+mr_status mr_ply_stream_begin(mr_ply_stream *s, FILE *f, size_t vertex_count,
+                              size_t triangle_count, unsigned attributes,
+                              const mr_write_options *options, const char *name, mr_error *err);
+/* block: vertex_count vertices with the attribute arrays begin asked for */
+mr_status mr_ply_stream_vertices(mr_ply_stream *s, const mr_mesh *block, mr_error *err);
+mr_status mr_ply_stream_faces(mr_ply_stream *s, const uint32_t *indices, size_t count,
+                              mr_error *err);
+mr_status mr_ply_stream_end(mr_ply_stream *s, mr_error *err);
+
 /* Check that every coordinate of the mesh's positions is finite and every
  * index is below vertex_count; on failure report the first bad element.
  * Readers that cannot check while parsing call this at the end. */

@@ -26,7 +26,7 @@
  * count. Only sqrt, floor and exp (scan) and sin, cos (torus) come from the
  * math library.
  */
-#include "../core/internal.h"
+#include "generate.h"
 
 #include <math.h>
 
@@ -388,12 +388,12 @@ static double scan_radius(const scan_params *p, const double dir[3], uint32_t v)
 
 /* Write vertex v from an unnormalised direction: on the unit sphere, or
  * displaced as the scan when scan is non-NULL. */
-static void place_vertex(float *pos, uint32_t v, const double w[3], const scan_params *scan)
+/* Vertex v's position into o[0..2]. */
+static void place_vertex(float *o, uint32_t v, const double w[3], const scan_params *scan)
 {
     double n = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
     double dir[3] = {w[0] / n, w[1] / n, w[2] / n};
     double r = scan ? scan_radius(scan, dir, v) * SCAN_SCALE : 1.0;
-    float *o = pos + 3 * (size_t)v;
     o[0] = (float)(dir[0] * r);
     o[1] = (float)(dir[1] * r);
     o[2] = (float)(dir[2] * r);
@@ -411,7 +411,7 @@ static void geodesic_positions(const geodesic *g, const scan_params *scan, float
 {
     const long f = (long)g->f;
     for (int c = 0; c < 12; c++)
-        place_vertex(pos, (uint32_t)c, g->corner[c], scan);
+        place_vertex(pos + 3 * (size_t)c, (uint32_t)c, g->corner[c], scan);
 
     /* Each edge point is computed once, from its edge's lower corner, so
      * both faces beside it see the same vertex. */
@@ -421,7 +421,8 @@ static void geodesic_positions(const geodesic *g, const scan_params *scan, float
         long e = q / (f - 1), k = q % (f - 1) + 1;
         double w[3];
         corner_mix(g, g->edge[e][0], (double)(f - k), g->edge[e][1], (double)k, 0, 0.0, w);
-        place_vertex(pos, g->edge_base + (uint32_t)q, w, scan);
+        const uint32_t v = g->edge_base + (uint32_t)q;
+        place_vertex(pos + 3 * (size_t)v, v, w, scan);
     }
 
     /* Face interiors, one task per row of a face. */
@@ -436,17 +437,23 @@ static void geodesic_positions(const geodesic *g, const scan_params *scan, float
             corner_mix(g, c[0], (double)((uint32_t)f - i - j), c[1], (double)i, c[2],
                        (double)j, w);
             uint32_t v = g->face_base + (uint32_t)t * g->face_inner + face_local(g->f, i, j);
-            place_vertex(pos, v, w, scan);
+            place_vertex(pos + 3 * (size_t)v, v, w, scan);
         }
     }
 }
 
-/* Triangles of face t, row j: (f - j) upward ones interleaved with
- * (f - j - 1) downward ones, after j (2f - j) triangles of earlier rows. */
-static void geodesic_row_triangles(const geodesic *g, int t, uint32_t j, uint32_t *idx)
+/* The first triangle of face t's row j: after t f^2 triangles of earlier
+ * faces and j (2f - j) of earlier rows. */
+static inline uint64_t row_start(uint64_t f, uint64_t t, uint64_t j)
+{
+    return t * f * f + j * (2 * f - j);
+}
+
+/* Triangles of face t, row j, into o: (f - j) upward ones interleaved with
+ * (f - j - 1) downward ones. */
+static void geodesic_row_triangles(const geodesic *g, int t, uint32_t j, uint32_t *o)
 {
     const uint32_t f = g->f;
-    uint32_t *o = idx + 3 * ((size_t)t * f * f + (size_t)j * (2 * f - j));
     for (uint32_t i = 0; i + j < f; i++) {
         uint32_t a = geodesic_vertex(g, t, i, j), b = geodesic_vertex(g, t, i + 1, j),
                  c = geodesic_vertex(g, t, i, j + 1);
@@ -486,10 +493,133 @@ static mr_status generate_geodesic(size_t triangles, const uint64_t *seed, mr_me
     const long rows = 20 * (long)f;
 #pragma omp parallel for schedule(dynamic, 16)
     for (long r = 0; r < rows; r++)
-        geodesic_row_triangles(&g, (int)(r / f), (uint32_t)(r % f), m.indices);
+        geodesic_row_triangles(&g, (int)(r / f), (uint32_t)(r % f),
+                               m.indices + 3 * row_start(f, (uint64_t)(r / f), (uint64_t)(r % f)));
     *mesh = m;
     return MR_OK;
 }
+
+/* ---- the geodesic mesh in pieces (mr_gen_stream) ------------------------- */
+
+struct mr_gen_stream {
+    geodesic g;
+    scan_params scan;
+    bool has_scan;
+    uint64_t triangles;
+};
+
+/* The corner weights of vertex v: the point of generate_geodesic's
+ * numbering (corners, edge points, face interiors row by row). */
+static void vertex_weights(const geodesic *g, uint32_t v, double w[3])
+{
+    const uint32_t f = g->f;
+    if (v < 12) {
+        memcpy(w, g->corner[v], 3 * sizeof *w);
+        return;
+    }
+    if (v < g->face_base) {
+        const uint32_t q = v - g->edge_base, e = q / (f - 1), k = q % (f - 1) + 1;
+        corner_mix(g, g->edge[e][0], (double)(f - k), g->edge[e][1], (double)k, 0, 0.0, w);
+        return;
+    }
+    const uint32_t r = v - g->face_base, t = r / g->face_inner, local = r % g->face_inner;
+    /* the row j whose block holds local: face_local(f, 1, j) <= local */
+    uint32_t j = 1;
+    {
+        const double a = (double)f - 0.5; /* face_local(f, 1, j) = (j-1)(f-1) - (j-1)j/2 */
+        double jj = a - sqrt(a * a - 2.0 * (double)local); /* (j-1) estimated */
+        j = (uint32_t)(jj > 0 ? jj : 0) + 1;
+        while (j > 1 && face_local(f, 1, j) > local)
+            j--;
+        while (j + 1 <= f - 2 && face_local(f, 1, j + 1) <= local)
+            j++;
+    }
+    const uint32_t i = local - face_local(f, 1, j) + 1;
+    const int *c = g->face[t];
+    corner_mix(g, c[0], (double)(f - i - j), c[1], (double)i, c[2], (double)j, w);
+}
+
+mr_status mr_gen_stream_open(mr_generator kind, size_t triangles, uint64_t seed,
+                             mr_gen_stream **out, mr_error *err)
+{
+    *out = NULL;
+    if (kind != MR_GEN_SPHERE && kind != MR_GEN_SCAN)
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, NULL,
+                             "only the sphere and the scan are generated in pieces");
+    if (triangles == 0)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "triangle count must be positive");
+    if ((uint64_t)triangles > GEN_MAX_REQUEST)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
+                             "%zu triangles exceed the 32-bit index limit", triangles);
+    const uint32_t f = geodesic_frequency(triangles);
+    const uint64_t tri = 20 * (uint64_t)f * f;
+    if (tri > GEN_MAX_TRIANGLES)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
+                             "%zu triangles exceed the 32-bit index limit", triangles);
+    mr_gen_stream *gs = mr_calloc_array(1, sizeof *gs);
+    if (!gs)
+        return mr_fail_nomem(err, NULL, sizeof *gs);
+    geodesic_init(&gs->g, f);
+    gs->has_scan = kind == MR_GEN_SCAN;
+    if (gs->has_scan)
+        scan_params_init(&gs->scan, seed, f);
+    gs->triangles = tri;
+    *out = gs;
+    return MR_OK;
+}
+
+size_t mr_gen_stream_vertex_count(const mr_gen_stream *gs) { return gs->g.vertex_count; }
+
+size_t mr_gen_stream_triangle_count(const mr_gen_stream *gs) { return (size_t)gs->triangles; }
+
+void mr_gen_stream_positions(const mr_gen_stream *gs, size_t first, size_t count, float *pos)
+{
+    const ptrdiff_t n = (ptrdiff_t)count;
+#pragma omp parallel for schedule(dynamic, 1024) if (n > 4096)
+    for (ptrdiff_t i = 0; i < n; i++) {
+        const uint32_t v = (uint32_t)(first + (size_t)i);
+        double w[3];
+        vertex_weights(&gs->g, v, w);
+        place_vertex(pos + 3 * i, v, w, gs->has_scan ? &gs->scan : NULL);
+    }
+}
+
+mr_status mr_gen_stream_triangles(const mr_gen_stream *gs, size_t first, size_t count,
+                                  uint32_t *idx, mr_error *err)
+{
+    const geodesic *g = &gs->g;
+    const uint64_t f = g->f, end = first + count;
+    if (count == 0)
+        return MR_OK;
+    /* the rows (t, j) that meet [first, end); a row whole inside is made in
+     * place, the one or two cut by the ends in a buffer */
+    const uint64_t t0 = first / (f * f), t1 = (end - 1) / (f * f);
+    const long rows = (long)((t1 - t0 + 1) * f);
+    uint32_t *row = mr_alloc_array(3 * 2 * (size_t)f, sizeof *row);
+    if (!row)
+        return mr_fail_nomem(err, NULL, 24 * (size_t)f);
+#pragma omp parallel for schedule(dynamic, 16) if (count > 65536)
+    for (long r = 0; r < rows; r++) {
+        const uint64_t t = t0 + (uint64_t)r / f, j = (uint64_t)r % f;
+        const uint64_t r0 = row_start(f, t, j), rn = 2 * (f - j) - 1;
+        if (r0 >= first && r0 + rn <= end)
+            geodesic_row_triangles(g, (int)t, (uint32_t)j, idx + 3 * (r0 - first));
+    }
+    for (long r = 0; r < rows; r++) {
+        const uint64_t t = t0 + (uint64_t)r / f, j = (uint64_t)r % f;
+        const uint64_t r0 = row_start(f, t, j), rn = 2 * (f - j) - 1;
+        if (r0 + rn <= first || r0 >= end || (r0 >= first && r0 + rn <= end))
+            continue;
+        geodesic_row_triangles(g, (int)t, (uint32_t)j, row);
+        const uint64_t a = r0 > first ? r0 : first, b = r0 + rn < end ? r0 + rn : end;
+        memcpy(idx + 3 * (a - first), row + 3 * (a - r0), 3 * sizeof *idx * (b - a));
+    }
+    free(row);
+    return MR_OK;
+}
+
+void mr_gen_stream_close(mr_gen_stream *gs) { free(gs); }
 
 /* ------------------------------------------------------------------------ */
 /* Torus with holes                                                         */
