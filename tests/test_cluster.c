@@ -3,8 +3,11 @@
 #include "testutil.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 static void cluster_ok(const mr_mesh *m, const mr_cluster_options *o, mr_mesh *out,
                        mr_cluster_stats *st)
@@ -118,6 +121,182 @@ static void test_errors(void **state)
     mr_mesh_free(&m);
 }
 
+/* ---- the file path (mr_cluster_file) ------------------------------------- */
+
+/* In-core: read, cluster, write; the reference bytes. */
+static char *cluster_in_core(const char *in, const char *out, const mr_cluster_options *o,
+                             const mr_write_options *w, size_t *n)
+{
+    mr_mesh m, r;
+    mr_error err;
+    mr_read_options ro;
+    mr_read_options_default(&ro);
+    if (mr_mesh_read(in, &ro, &m, &err) != MR_OK)
+        fail_msg("%s", err.message);
+    if (mr_mesh_cluster(&m, o, &r, NULL, &err) != MR_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(mr_mesh_write(out, &r, w, &err), MR_OK);
+    mr_mesh_free(&m);
+    mr_mesh_free(&r);
+    return tu_read_file(out, n);
+}
+
+/* A binary PLY of the mesh m, written with the given byte order. */
+static void write_ply(const mr_mesh *m, const char *path, mr_encoding enc)
+{
+    mr_write_options w;
+    mr_write_options_default(&w);
+    w.encoding = enc;
+    mr_error err;
+    assert_int_equal(mr_mesh_write(path, m, &w, &err), MR_OK);
+}
+
+/* The file path gives the in-core bytes: a generated scan (little and big
+ * endian, cell and cell_rel, fine and coarse grids, 1, 2, 3 and 8
+ * threads), a mesh with normals, texture coordinates and colors, a file of
+ * quads, an ascii PLY and an OBJ (read whole), and unreferenced vertices;
+ * and bad input fails as in core, with no output. */
+/* tu_tmp_path's buffers are reused after 8 calls: a copy. */
+static void tmp_path(char buf[1024], const char *name)
+{
+    snprintf(buf, 1024, "%s", tu_tmp_path(name));
+}
+
+static void test_cluster_file(void **state)
+{
+    (void)state;
+    char scan[1024], scan_be[1024], out_a[1024], out_b[1024];
+    tmp_path(scan, "cf-scan.ply");
+    tmp_path(scan_be, "cf-scan-be.ply");
+    tmp_path(out_a, "cf-a.ply");
+    tmp_path(out_b, "cf-b.ply");
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(mr_generate(MR_GEN_SCAN, 300000, 4, &m, &err), MR_OK);
+    write_ply(&m, scan, MR_ENCODING_BINARY_LE);
+    write_ply(&m, scan_be, MR_ENCODING_BINARY_BE);
+    struct {
+        const char *in;
+        double cell, cell_rel;
+        int threads;
+    } cases[] = {{scan, 0, 0.002, 1}, {scan, 0, 0.002, 2}, {scan, 0, 0.02, 3},
+                 {scan, 1.5, 0, 8},   {scan_be, 0, 0.005, 2}};
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+        mr_cluster_options o;
+        mr_cluster_options_default(&o);
+        o.cell = cases[c].cell;
+        o.cell_rel = cases[c].cell_rel;
+        o.threads = cases[c].threads;
+        size_t na, nb;
+        char *a = cluster_in_core(cases[c].in, out_a, &o, NULL, &na);
+        mr_cluster_stats st;
+        assert_int_equal(mr_cluster_file(cases[c].in, out_b, &o, NULL, &st, &err), MR_OK);
+        char *b = tu_read_file(out_b, &nb);
+        assert_non_null(a);
+        assert_non_null(b);
+        if (na != nb || memcmp(a, b, na) != 0)
+            fail_msg("case %zu: the file path's output differs from the in-core one", c);
+        assert_true(st.cells > 0 && st.output_triangles > 0);
+        free(a);
+        free(b);
+    }
+
+    /* attributes, unreferenced vertices: normals, uvs and colors on the
+     * scan, and a vertex no triangle uses */
+    mr_mesh at;
+    mr_mesh_init(&at);
+    assert_int_equal(mr_mesh_alloc(&at, m.vertex_count + 1, m.triangle_count,
+                                   MR_ATTR_NORMALS | MR_ATTR_TEXCOORDS | MR_ATTR_COLORS, &err),
+                     MR_OK);
+    memcpy(at.positions, m.positions, 12 * m.vertex_count);
+    memcpy(at.indices, m.indices, 12 * m.triangle_count);
+    for (size_t v = 0; v <= m.vertex_count; v++) {
+        const float *p = v < m.vertex_count ? m.positions + 3 * v : m.positions;
+        if (v == m.vertex_count)
+            memcpy(at.positions + 3 * v, (float[3]){1000, 1000, 1000}, 12);
+        const double l = sqrt((double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2]);
+        for (int k = 0; k < 3; k++)
+            at.normals[3 * v + k] = (float)(p[k] / l);
+        at.texcoords[2 * v] = (float)(p[0] / 100 + 0.5);
+        at.texcoords[2 * v + 1] = (float)(p[1] / 100 + 0.5);
+        for (int k = 0; k < 4; k++)
+            at.colors[4 * v + k] = (float)((int)(fabs(p[k % 3]) * 7) % 256) / 255.0f;
+    }
+    char attr[1024], quads[1024], ascii[1024], obj[1024];
+    tmp_path(attr, "cf-attr.ply");
+    tmp_path(quads, "cf-quads.ply");
+    tmp_path(ascii, "cf-ascii.ply");
+    tmp_path(obj, "cf.obj");
+    write_ply(&at, attr, MR_ENCODING_BINARY_LE);
+    /* quads: the scan's triangles paired in a PLY of 4-corner faces */
+    {
+        FILE *f = fopen(quads, "wb");
+        assert_non_null(f);
+        const size_t nq = m.triangle_count / 2;
+        fprintf(f, "ply\nformat binary_little_endian 1.0\nelement vertex %zu\n"
+                   "property float x\nproperty float y\nproperty float z\n"
+                   "element face %zu\nproperty list uchar int vertex_indices\nend_header\n",
+                m.vertex_count, nq);
+        fwrite(m.positions, 12, m.vertex_count, f);
+        for (size_t q = 0; q < nq; q++) {
+            const uint32_t *t = m.indices + 6 * q;
+            unsigned char four = 4;
+            uint32_t c4[4] = {t[0], t[1], t[2], t[5]};
+            fwrite(&four, 1, 1, f);
+            fwrite(c4, 4, 4, f);
+        }
+        fclose(f);
+    }
+    write_ply(&m, ascii, MR_ENCODING_ASCII);
+    assert_int_equal(mr_mesh_write(obj, &m, NULL, &err), MR_OK);
+    const char *inputs[] = {attr, quads, ascii, obj};
+    for (size_t c = 0; c < 4; c++) {
+        mr_cluster_options o;
+        mr_cluster_options_default(&o);
+        o.cell_rel = 0.004;
+        size_t na, nb;
+        char *a = cluster_in_core(inputs[c], out_a, &o, NULL, &na);
+        assert_int_equal(mr_cluster_file(inputs[c], out_b, &o, NULL, NULL, &err), MR_OK);
+        char *b = tu_read_file(out_b, &nb);
+        if (na != nb || memcmp(a, b, na) != 0)
+            fail_msg("%s: the file path's output differs from the in-core one", inputs[c]);
+        free(a);
+        free(b);
+    }
+
+    /* a face index out of range: the reader's error, and no output */
+    char bad[1024], bad_out[1024], fifo[1024];
+    tmp_path(bad, "cf-bad.ply");
+    tmp_path(bad_out, "cf-bad-out.ply");
+    tmp_path(fifo, "cf.fifo.ply");
+    {
+        size_t n;
+        char *d = tu_read_file(scan, &n);
+        assert_non_null(d);
+        uint32_t big = 0x7fffffff;
+        memcpy(d + n - 4, &big, 4); /* the last face's last index */
+        tu_write_file(bad, d, n);
+        free(d);
+    }
+    mr_cluster_options o;
+    mr_cluster_options_default(&o);
+    o.cell_rel = 0.01;
+    mr_error e2;
+    mr_mesh junk;
+    assert_int_equal(mr_mesh_read(bad, NULL, &junk, &e2), MR_ERR_PARSE);
+    assert_int_equal(mr_cluster_file(bad, bad_out, &o, NULL, NULL, &err), MR_ERR_PARSE);
+    assert_string_equal(err.message, e2.message);
+    assert_false(tu_file_exists(bad_out));
+    /* a FIFO: the out-of-core path needs a regular file */
+    unlink(fifo);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    assert_int_equal(mr_cluster_file(fifo, bad_out, &o, NULL, NULL, &err), MR_ERR_IO);
+    tu_assert_contains(err.message, "not a regular file");
+    unlink(fifo);
+    mr_mesh_free(&m);
+    mr_mesh_free(&at);
+}
+
 static void test_cli(void **state)
 {
     (void)state;
@@ -156,6 +335,7 @@ int main(void)
         cmocka_unit_test(test_deterministic_and_valid),
         cmocka_unit_test(test_point_cloud_means),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_cluster_file),
         cmocka_unit_test(test_cli),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

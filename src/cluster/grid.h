@@ -86,4 +86,20 @@ static inline unsigned mr_grid_key_bits(const mr_grid *g)
     return g->bits[0] + g->bits[1] + g->bits[2];
 }
 
+/* Grid clustering's pieces, shared by the in-core (mr_mesh_cluster) and
+ * the file path (mr_cluster_file), so that both give the same bytes
+ * (gridcluster.c). */
+/* Quadric of one triangle: area * (n n^T, n d, d^2) for its unit normal n
+ * and plane offset d, as 10 numbers a00 a01 a02 a11 a12 a22 b0 b1 b2 c. */
+void mr_cluster_triangle_quadric(const float *p0, const float *p1, const float *p2,
+                                 double q[10]);
+/* Cell cc of out (key `key` in grid): its vertex where its quadric q is
+ * least about the mean of its `count` members (pos_sum / count), kept in
+ * the cell and the box [lo, hi]; its attributes the members' means where
+ * out has arrays for them. */
+void mr_cluster_represent(const mr_grid *grid, uint64_t key, const double q[10],
+                          const double pos_sum[3], const double nrm_sum[3],
+                          const double uv_sum[2], const double col_sum[4], double count,
+                          const double lo[3], const double hi[3], mr_mesh *out, size_t cc);
+
 #endif /* MR_CLUSTER_GRID_H */

@@ -118,7 +118,8 @@ static void jacobi3(double a[3][3], double v[3][3])
 
 /* Quadric of one triangle: area * (n n^T, n d, d^2) for its unit normal
  * n and plane offset d, as 10 numbers a00 a01 a02 a11 a12 a22 b0 b1 b2 c. */
-static void triangle_quadric(const float *p0, const float *p1, const float *p2, double q[10])
+void mr_cluster_triangle_quadric(const float *p0, const float *p1, const float *p2,
+                                 double q[10])
 {
     double u[3], w[3], nrm[3];
     for (int k = 0; k < 3; k++) {
@@ -167,6 +168,37 @@ static void quadric_point(const double q[10], const double m[3], double x[3])
     }
 }
 
+void mr_cluster_represent(const mr_grid *grid, uint64_t key, const double q[10],
+                          const double pos_sum[3], const double nrm_sum[3],
+                          const double uv_sum[2], const double col_sum[4], double count,
+                          const double lo[3], const double hi[3], mr_mesh *out, size_t cc)
+{
+    double mean[3];
+    for (int e = 0; e < 3; e++)
+        mean[e] = pos_sum[e] / count;
+    double x[3];
+    quadric_point(q, mean, x);
+    /* keep it inside its cell, and the cells at the far side of the grid
+     * inside the input's bounding box (which a cell may cross, even past
+     * the float range) */
+    uint64_t ix[3];
+    mr_grid_unpack(grid, key, ix);
+    for (int e = 0; e < 3; e++) {
+        double c0 = grid->lo[e] + (double)ix[e] * grid->cell, c1 = c0 + grid->cell;
+        x[e] = fmin(fmax(x[e], fmax(c0, lo[e])), fmin(c1, hi[e]));
+        out->positions[3 * cc + (size_t)e] = (float)x[e];
+    }
+    if (out->normals)
+        for (int e = 0; e < 3; e++)
+            out->normals[3 * cc + (size_t)e] = (float)(nrm_sum[e] / count);
+    if (out->texcoords)
+        for (int e = 0; e < 2; e++)
+            out->texcoords[2 * cc + (size_t)e] = (float)(uv_sum[e] / count);
+    if (out->colors)
+        for (int e = 0; e < 4; e++)
+            out->colors[4 * cc + (size_t)e] = (float)(col_sum[e] / count);
+}
+
 mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, mr_mesh *out,
                           mr_cluster_stats *stats, mr_error *err)
 {
@@ -190,7 +222,8 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
     if (n >= UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL,
                              "%zu vertices: more than 32-bit indices can address", n);
-    if (options->target_vertices == 0 && !(options->cell > 0 && isfinite(options->cell)))
+    if (options->target_vertices == 0 && options->cell_rel == 0 &&
+        !(options->cell > 0 && isfinite(options->cell)))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "grid cell size must be a finite number > 0 when no target "
                              "vertex count is set, got %g",
@@ -215,6 +248,16 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
     mr_grid grid;
     cells c;
     double cell = options->cell;
+    if (options->target_vertices == 0 && options->cell_rel > 0) {
+        const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+        const double diagonal = sqrt(dx * dx + dy * dy + dz * dz);
+        cell = options->cell_rel * diagonal;
+        if (!(cell > 0) || isinf(cell))
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                                 "a cell of %g of the bounding-box diagonal (%g) is no usable "
+                                 "cell size",
+                                 options->cell_rel, diagonal);
+    }
     if (options->target_vertices > 0) {
         /* Bisection on the cell size, in log scale, for the occupied cell
          * count nearest the target from above. */
@@ -317,8 +360,8 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
             for (size_t i = a; i < np && pairs[i] == cc; i++) {
                 const uint32_t *tri = in->indices + 3 * (size_t)ptri[i];
                 double tq[10];
-                triangle_quadric(P + 3 * (size_t)tri[0], P + 3 * (size_t)tri[1],
-                                 P + 3 * (size_t)tri[2], tq);
+                mr_cluster_triangle_quadric(P + 3 * (size_t)tri[0], P + 3 * (size_t)tri[1],
+                                            P + 3 * (size_t)tri[2], tq);
                 for (int e = 0; e < 10; e++)
                     q[e] += tq[e];
             }
@@ -339,29 +382,8 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
                     for (int e = 0; e < 4; e++)
                         col[e] += in->colors[4 * v + (size_t)e];
             }
-            for (int e = 0; e < 3; e++)
-                mean[e] /= cnt;
-            double x[3];
-            quadric_point(q, mean, x);
-            /* keep it inside its cell, and the cells at the far side of
-             * the grid inside the input's bounding box (which a cell may
-             * cross, even past the float range) */
-            uint64_t ix[3];
-            mr_grid_unpack(&grid, c.keys[cc], ix);
-            for (int e = 0; e < 3; e++) {
-                double c0 = grid.lo[e] + (double)ix[e] * grid.cell, c1 = c0 + grid.cell;
-                x[e] = fmin(fmax(x[e], fmax(c0, lo[e])), fmin(c1, hi[e]));
-                out->positions[3 * cc + (size_t)e] = (float)x[e];
-            }
-            if (in->normals)
-                for (int e = 0; e < 3; e++)
-                    out->normals[3 * cc + (size_t)e] = (float)(nrm[e] / cnt);
-            if (in->texcoords)
-                for (int e = 0; e < 2; e++)
-                    out->texcoords[2 * cc + (size_t)e] = (float)(uv[e] / cnt);
-            if (in->colors)
-                for (int e = 0; e < 4; e++)
-                    out->colors[4 * cc + (size_t)e] = (float)(col[e] / cnt);
+            mr_cluster_represent(&grid, c.keys[cc], q, mean, nrm, uv, col, cnt, lo, hi, out,
+                                 cc);
         }
     }
     st.seconds_representatives = mr_now_seconds() - t1;

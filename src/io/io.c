@@ -4,6 +4,7 @@
  * (output.c). */
 #define _DEFAULT_SOURCE /* madvise under strict C11 */
 #include "io_internal.h"
+#include "mapped.h"
 #include "text.h"
 
 #include <ctype.h>
@@ -140,38 +141,13 @@ mr_status mr_mesh_read(const char *path, const mr_read_options *options, mr_mesh
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "no path or mesh given");
     mr_mesh_init(mesh);
 
-    int fd = open(path, O_RDONLY);
-    if (fd < 0)
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot open for reading: %s",
-                             strerror(errno));
-    struct stat sb;
-    if (fstat(fd, &sb) != 0) {
-        int e = errno;
-        close(fd);
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot stat: %s", strerror(e));
-    }
-    if (S_ISDIR(sb.st_mode)) {
-        close(fd);
-        return mr_fail_plain(err, MR_ERR_IO, path, "is a directory, not a mesh file");
-    }
-    if (!S_ISREG(sb.st_mode)) {
-        close(fd);
-        return mr_fail_plain(err, MR_ERR_IO, path, "is not a regular file");
-    }
-    size_t size = (size_t)sb.st_size;
-    if (size == 0) {
-        close(fd);
-        return mr_fail_plain(err, MR_ERR_EMPTY, path, "file is empty");
-    }
-
-    void *map = mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0);
-    close(fd);
-    if (map == MAP_FAILED)
-        return mr_fail_plain(err, MR_ERR_IO, path, "cannot map file: %s", strerror(errno));
-    madvise(map, size, MADV_SEQUENTIAL | MADV_WILLNEED);
-
-    mr_status st = mr_mesh_read_memory(map, size, path, options, mesh, err);
-    munmap(map, size);
+    mr_mapped_file f;
+    mr_status st = mr_map_file(path, &f, err);
+    if (st != MR_OK)
+        return st;
+    madvise((void *)f.data, f.size, MADV_SEQUENTIAL | MADV_WILLNEED);
+    st = mr_mesh_read_memory(f.data, f.size, path, options, mesh, err);
+    mr_unmap_file(&f);
     return st;
 }
 

@@ -31,6 +31,7 @@
 #ifndef MR_IO_INTERNAL_H
 #define MR_IO_INTERNAL_H
 
+#include "mapped.h"
 #include "output.h"
 
 #include <errno.h>
@@ -81,6 +82,38 @@ mr_status mr_ply_stream_vertices(mr_ply_stream *s, const mr_mesh *block, mr_erro
 mr_status mr_ply_stream_faces(mr_ply_stream *s, const uint32_t *indices, size_t count,
                               mr_error *err);
 mr_status mr_ply_stream_end(mr_ply_stream *s, mr_error *err);
+
+/*
+ * A binary PLY file read in pieces, for the paths that never hold a whole
+ * mesh (the out-of-core cluster): the file is mapped and its header parsed
+ * and checked as mr_read_ply does; the vertices of any range then decode
+ * into a block of arrays (positions, and the attributes the block has
+ * arrays for), a vertex's position reads straight from the map, and the
+ * faces come chunk by chunk (at most mr_ply_source_max_faces triangles a
+ * call, polygons as fans), their pages given back as they are read. The
+ * values are mr_read_ply's for the same file, byte for byte, and so are
+ * the errors (bad indices, non-finite positions: file and offset). Ascii
+ * PLY, vertex elements with lists and triangle strips are refused
+ * (MR_ERR_UNSUPPORTED): such files are read whole.
+ */
+typedef struct mr_ply_source mr_ply_source;
+mr_status mr_ply_source_open(const char *path, int threads, mr_ply_source **out, mr_error *err);
+void mr_ply_source_close(mr_ply_source *s);
+size_t mr_ply_source_vertex_count(const mr_ply_source *s);
+size_t mr_ply_source_triangle_count(const mr_ply_source *s);
+unsigned mr_ply_source_attributes(const mr_ply_source *s); /* MR_ATTR_* */
+size_t mr_ply_source_max_faces(const mr_ply_source *s);
+mr_status mr_ply_source_vertices(mr_ply_source *s, size_t first, size_t count,
+                                 const mr_mesh *block, mr_error *err);
+void mr_ply_source_position(const mr_ply_source *s, uint32_t v, float p[3]);
+/* The next chunk's triangles into idx; *count 0 once every face is read. */
+mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *count,
+                                   mr_error *err);
+/* Give back every page of the map read so far (after random reads). */
+void mr_ply_source_release(mr_ply_source *s);
+/* Map ahead the rows of vertices first..last (before reading their
+ * positions at random). */
+void mr_ply_source_prefetch(const mr_ply_source *s, uint32_t first, uint32_t last);
 
 /* Check that every coordinate of the mesh's positions is finite and every
  * index is below vertex_count; on failure report the first bad element.

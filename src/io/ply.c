@@ -908,16 +908,18 @@ static mr_status nonfinite_error(const ply_reader *r, uint64_t v, size_t at)
                    (unsigned long long)v, (double)p[0], (double)p[1], (double)p[2]);
 }
 
-/* A vertex element without lists: column by column, in blocks of rows
- * spread over the threads. x y z as the first three host-order floats is
- * the common layout and is copied as is. */
-static mr_status decode_vertices_fixed(ply_reader *r, const ply_elem *e)
+/* Rows [i0, i1) of a vertex element without lists into dst's arrays, row
+ * i at dst index i - first (attributes where dst has their arrays), column
+ * by column, in blocks of rows spread over the threads. x y z as the first
+ * three host-order floats is the common layout and is copied as is.
+ * Returns the first row with a non-finite position, or UINT64_MAX. */
+static uint64_t decode_vertex_range(const ply_reader *r, const ply_elem *e, const mr_mesh *dst,
+                                    size_t first, size_t i0, size_t i1)
 {
     const unsigned char *base = (const unsigned char *)r->data + e->start;
     const size_t stride = (size_t)e->row_size;
-    const size_t n = (size_t)e->count;
     slot_map sm;
-    make_slot_map(r->mesh, &sm);
+    make_slot_map(dst, &sm);
 
     struct column {
         size_t off;
@@ -930,48 +932,62 @@ static mr_status decode_vertices_fixed(ply_reader *r, const ply_elem *e)
     size_t off = 0;
     for (size_t i = e->prop_begin; i < e->prop_end; i++) {
         const ply_prop *p = &r->props[i];
-        if (p->slot >= 0 && ncols < SLOTS)
+        if (p->slot >= 0 && sm.dst[p->slot] && ncols < SLOTS)
             cols[ncols++] = (struct column){off, p->type, p->divisor, sm.dst[p->slot],
                                             sm.stride[p->slot]};
         off += type_size[p->type];
     }
     /* x y z leading as host floats: copy 12 bytes per row */
     const bool xyz_first = !r->swap && ncols >= 3 && cols[0].off == 0 && cols[1].off == 4 &&
-                           cols[2].off == 8 && cols[0].dst == r->mesh->positions &&
-                           cols[1].dst == r->mesh->positions + 1 &&
-                           cols[2].dst == r->mesh->positions + 2 && cols[0].type == PT_F32 &&
+                           cols[2].off == 8 && cols[0].dst == dst->positions &&
+                           cols[1].dst == dst->positions + 1 &&
+                           cols[2].dst == dst->positions + 2 && cols[0].type == PT_F32 &&
                            cols[1].type == PT_F32 && cols[2].type == PT_F32;
-    float *colors = r->mesh->colors;
+    float *colors = dst->colors;
     const bool fill = colors && !r->has_alpha;
 
-    const int64_t nblocks = (int64_t)((n + CHUNK_ROWS - 1) / CHUNK_ROWS);
+    const int64_t nblocks = (int64_t)((i1 - i0 + CHUNK_ROWS - 1) / CHUNK_ROWS);
     uint64_t bad = UINT64_MAX;
 #pragma omp parallel for schedule(static) num_threads(r->threads) if (nblocks > 4) \
     reduction(min : bad)
     for (int64_t b = 0; b < nblocks; b++) {
-        size_t i0 = (size_t)b * CHUNK_ROWS, i1 = i0 + CHUNK_ROWS < n ? i0 + CHUNK_ROWS : n;
+        size_t a0 = i0 + (size_t)b * CHUNK_ROWS, a1 = a0 + CHUNK_ROWS < i1 ? a0 + CHUNK_ROWS : i1;
         int c = 0;
         if (xyz_first) {
-            float *pos = r->mesh->positions + 3 * i0;
+            float *pos = dst->positions + 3 * (a0 - first);
             if (stride == 12)
-                memcpy(pos, base + i0 * 12, (i1 - i0) * 12);
+                memcpy(pos, base + a0 * 12, (a1 - a0) * 12);
             else
-                for (size_t i = i0; i < i1; i++, pos += 3)
+                for (size_t i = a0; i < a1; i++, pos += 3)
                     memcpy(pos, base + i * stride, 12);
             c = 3;
         }
         for (; c < ncols; c++)
-            decode_column(base + i0 * stride + cols[c].off, stride, cols[c].type, r->swap,
-                          cols[c].div, cols[c].dst + i0 * (size_t)cols[c].ds, cols[c].ds,
-                          i1 - i0);
+            decode_column(base + a0 * stride + cols[c].off, stride, cols[c].type, r->swap,
+                          cols[c].div, cols[c].dst + (a0 - first) * (size_t)cols[c].ds,
+                          cols[c].ds, a1 - a0);
         if (fill)
-            fill_alpha(colors, i0, i1);
-        uint64_t v = first_nonfinite(r->mesh->positions, i0, i1);
-        if (v < bad)
-            bad = v;
+            fill_alpha(colors, a0 - first, a1 - first);
+        const uint64_t v = first_nonfinite(dst->positions, a0 - first, a1 - first);
+        if (v != UINT64_MAX && v + first < bad)
+            bad = v + first;
     }
+    return bad;
+}
+
+static mr_status nonfinite_at(const ply_reader *r, const ply_elem *e, const float *p, uint64_t v)
+{
+    return fail_at(r, MR_ERR_PARSE, e->start + (size_t)v * (size_t)e->row_size,
+                   "vertex %llu has a non-finite coordinate (%g %g %g)", (unsigned long long)v,
+                   (double)p[0], (double)p[1], (double)p[2]);
+}
+
+/* A vertex element without lists, whole. */
+static mr_status decode_vertices_fixed(ply_reader *r, const ply_elem *e)
+{
+    const uint64_t bad = decode_vertex_range(r, e, r->mesh, 0, 0, (size_t)e->count);
     if (bad != UINT64_MAX)
-        return nonfinite_error(r, bad, e->start + (size_t)bad * stride);
+        return nonfinite_at(r, e, r->mesh->positions + 3 * bad, bad);
     return MR_OK;
 }
 
@@ -1521,6 +1537,197 @@ mr_status mr_read_ply(const char *data, size_t size, const char *name, int threa
     free(r.elems);
     free(r.props);
     return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* A binary PLY file read in pieces (mr_ply_source)                         */
+/* ------------------------------------------------------------------------ */
+
+struct mr_ply_source {
+    ply_reader r;
+    mr_mapped_file file;
+    uint64_t triangles;      /* over every face element */
+    size_t max_chunk;        /* the most triangles one face chunk gives */
+    size_t elem, chunk;      /* the next face chunk */
+    size_t released;         /* the map released up to here (face bytes) */
+    size_t xyz_off[3];       /* x y z in a vertex row */
+    ply_type xyz_type[3];
+};
+
+static mr_status source_unsupported(const mr_ply_source *s, const char *what)
+{
+    return mr_fail_plain(s->r.err, MR_ERR_UNSUPPORTED, s->r.name,
+                         "%s: it is read whole instead (without the out-of-core path), or "
+                         "converted to binary PLY first (meshreduce convert IN OUT.ply)",
+                         what);
+}
+
+mr_status mr_ply_source_open(const char *path, int threads, mr_ply_source **out, mr_error *err)
+{
+    *out = NULL;
+    mr_ply_source *s = mr_calloc_array(1, sizeof *s);
+    if (!s)
+        return mr_fail_nomem(err, path, sizeof *s);
+    mr_status st = mr_map_file(path, &s->file, err);
+    if (st != MR_OK) {
+        free(s);
+        return st;
+    }
+    ply_reader *r = &s->r;
+    r->data = s->file.data;
+    r->size = s->file.size;
+    r->name = path;
+    r->threads = threads > 0 ? threads : 1;
+    r->err = err;
+    if ((st = parse_header(r)) != MR_OK || (st = classify(r)) != MR_OK ||
+        (st = check_counts(r)) != MR_OK)
+        goto fail;
+    if (r->enc == ENC_ASCII) {
+        st = source_unsupported(s, "an ascii PLY file is not read in pieces");
+        goto fail;
+    }
+    if (!r->vertex->fixed) {
+        st = source_unsupported(s, "a vertex element with lists is not read in pieces");
+        goto fail;
+    }
+    for (size_t i = 0; i < r->elem_count; i++)
+        if (r->elems[i].kind == EK_STRIPS) {
+            st = source_unsupported(s, "triangle strips are not read in pieces");
+            goto fail;
+        }
+    if ((st = locate_elements(r)) != MR_OK)
+        goto fail;
+    mr_release_mapped(&s->file, 0, s->file.size); /* what locating the rows read */
+    for (size_t i = 0; i < r->elem_count; i++) {
+        const ply_elem *e = &r->elems[i];
+        if (e->kind != EK_FACE)
+            continue;
+        s->triangles += e->tris;
+        for (size_t c = 0; c < e->chunk_count; c++) {
+            const uint64_t t1 = c + 1 < e->chunk_count ? e->chunks[c + 1].tri : e->tris;
+            const uint64_t n = t1 - e->chunks[c].tri;
+            s->max_chunk = n > s->max_chunk ? (size_t)n : s->max_chunk;
+        }
+    }
+    if (s->triangles > UINT32_MAX) {
+        st = mr_fail_plain(err, MR_ERR_TOO_LARGE, path,
+                           "%llu triangles exceed the 32-bit index limit",
+                           (unsigned long long)s->triangles);
+        goto fail;
+    }
+    size_t off = 0;
+    for (size_t i = r->vertex->prop_begin; i < r->vertex->prop_end; i++) {
+        const ply_prop *p = &r->props[i];
+        if (p->slot >= SLOT_X && p->slot < SLOT_X + 3) {
+            s->xyz_off[p->slot - SLOT_X] = off;
+            s->xyz_type[p->slot - SLOT_X] = p->type;
+        }
+        off += type_size[p->type];
+    }
+    *out = s;
+    return MR_OK;
+fail:
+    mr_ply_source_close(s);
+    return st;
+}
+
+void mr_ply_source_close(mr_ply_source *s)
+{
+    if (!s)
+        return;
+    for (size_t i = 0; i < s->r.elem_count; i++)
+        free(s->r.elems[i].chunks);
+    free(s->r.elems);
+    free(s->r.props);
+    mr_unmap_file(&s->file);
+    free(s);
+}
+
+size_t mr_ply_source_vertex_count(const mr_ply_source *s) { return (size_t)s->r.vertex->count; }
+
+size_t mr_ply_source_triangle_count(const mr_ply_source *s) { return (size_t)s->triangles; }
+
+unsigned mr_ply_source_attributes(const mr_ply_source *s) { return s->r.attrs; }
+
+size_t mr_ply_source_max_faces(const mr_ply_source *s) { return s->max_chunk; }
+
+mr_status mr_ply_source_vertices(mr_ply_source *s, size_t first, size_t count,
+                                 const mr_mesh *block, mr_error *err)
+{
+    s->r.err = err;
+    const ply_elem *e = s->r.vertex;
+    if (first + count > e->count)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, s->r.name,
+                             "vertices %zu..%zu past the %llu the file holds", first,
+                             first + count, (unsigned long long)e->count);
+    mr_populate_mapped(&s->file, e->start + first * (size_t)e->row_size,
+                       e->start + (first + count) * (size_t)e->row_size);
+    const uint64_t bad = decode_vertex_range(&s->r, e, block, first, first, first + count);
+    if (bad != UINT64_MAX)
+        return nonfinite_at(&s->r, e, block->positions + 3 * (bad - first), bad);
+    return MR_OK;
+}
+
+void mr_ply_source_position(const mr_ply_source *s, uint32_t v, float p[3])
+{
+    const ply_elem *e = s->r.vertex;
+    const unsigned char *row =
+        (const unsigned char *)s->r.data + e->start + (size_t)v * (size_t)e->row_size;
+    for (int k = 0; k < 3; k++) {
+        const unsigned char *c = row + s->xyz_off[k];
+        if (s->xyz_type[k] == PT_F32 && !s->r.swap)
+            memcpy(&p[k], c, sizeof(float));
+        else
+            p[k] = (float)rd_real(c, s->xyz_type[k], s->r.swap);
+    }
+}
+
+mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *count,
+                                   mr_error *err)
+{
+    ply_reader *r = &s->r;
+    r->err = err;
+    *count = 0;
+    while (s->elem < r->elem_count &&
+           (r->elems[s->elem].kind != EK_FACE || s->chunk >= r->elems[s->elem].chunk_count)) {
+        s->elem++;
+        s->chunk = 0;
+    }
+    if (s->elem >= r->elem_count)
+        return MR_OK; /* every face read */
+    ply_elem *e = &r->elems[s->elem];
+    ply_chunk *c = &e->chunks[s->chunk];
+    const uint64_t row0 = (uint64_t)s->chunk * CHUNK_ROWS;
+    const uint64_t row1 = row0 + CHUNK_ROWS < e->count ? row0 + CHUNK_ROWS : e->count;
+    const uint64_t t1 = s->chunk + 1 < e->chunk_count ? e->chunks[s->chunk + 1].tri : e->tris;
+    const ply_prop *ip = &r->props[e->index_prop];
+    c->bad_row = UINT64_MAX;
+    mr_populate_mapped(&s->file, c->off,
+                       s->chunk + 1 < e->chunk_count ? e->chunks[s->chunk + 1].off : r->size);
+    if (e->stride && ip->fixed_count == 3 && type_size[ip->type] == 4)
+        decode_tri32_chunk(r, e, c, row0, row1, idx);
+    else
+        decode_fan_chunk(r, e, c, row0, row1, idx);
+    if (c->bad_row != UINT64_MAX)
+        return index_error(r, e, c->bad_row, c->bad_off, c->bad_value);
+    *count = (size_t)(t1 - c->tri);
+    s->chunk++;
+    /* the chunk's bytes are read: give their pages back */
+    if (s->chunk < e->chunk_count && e->chunks[s->chunk].off > s->released) {
+        const size_t end = e->chunks[s->chunk].off;
+        mr_release_mapped(&s->file, s->released, end);
+        s->released = end;
+    }
+    return MR_OK;
+}
+
+void mr_ply_source_release(mr_ply_source *s) { mr_release_mapped(&s->file, 0, s->file.size); }
+
+void mr_ply_source_prefetch(const mr_ply_source *s, uint32_t first, uint32_t last)
+{
+    const ply_elem *e = s->r.vertex;
+    mr_populate_mapped(&s->file, e->start + (size_t)first * (size_t)e->row_size,
+                       e->start + ((size_t)last + 1) * (size_t)e->row_size);
 }
 
 /* ------------------------------------------------------------------------ */
