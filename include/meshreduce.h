@@ -789,7 +789,10 @@ mr_status mr_weld_find_eps(const float *positions, size_t stride, size_t vertex_
 typedef struct mr_cluster_options {
     double cell;            /* cell edge length (absolute), or 0 */
     size_t target_vertices; /* or: the cell size whose grid has about this
-                               many occupied cells (bisection) */
+                               many occupied cells: within 2 %, else the
+                               nearest count a few secant steps in log-log
+                               scale meet (a sample's first, where the
+                               cells are coarse) */
     int threads;            /* 0 = all cores */
     double cell_rel;        /* or (when > 0): the cell edge as this fraction
                                of the diagonal of the bounding box of all the
@@ -815,12 +818,13 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
 /* Cluster the mesh in the file in_path into out_path (written as by
  * mr_mesh_write with `write`, which may be NULL): the same bytes as
  * mr_mesh_read, mr_mesh_cluster and mr_mesh_write, in memory that grows
- * with the output only for a binary PLY input with a cell size (cell or
- * cell_rel): its vertices and faces are read in passes from the mapped
- * file (a provisional cell id per vertex, 4 bytes, and the cells and the
- * surviving triangles), as in Lindstrom's out-of-core clustering. Other
- * inputs, and target_vertices, are read whole and clustered in memory.
- * The input must be a regular file (it is read more than once). */
+ * with the output only for a binary PLY input: its vertices and faces are
+ * read in passes from the mapped file (a provisional cell id per vertex, 4
+ * bytes, and the cells and the surviving triangles), as in Lindstrom's
+ * out-of-core clustering; a target count costs a few passes more over the
+ * vertices (a sample's first). Other inputs are read whole and clustered
+ * in memory. The input must be a regular file (it is read more than
+ * once). */
 mr_status mr_cluster_file(const char *in_path, const char *out_path,
                           const mr_cluster_options *options, const mr_write_options *write,
                           mr_cluster_stats *stats, mr_error *err);

@@ -179,14 +179,17 @@ static void test_cluster_file(void **state)
         const char *in;
         double cell, cell_rel;
         int threads;
-    } cases[] = {{scan, 0, 0.002, 1}, {scan, 0, 0.002, 2}, {scan, 0, 0.02, 3},
-                 {scan, 1.5, 0, 8},   {scan_be, 0, 0.005, 2}};
+        size_t target;
+    } cases[] = {{scan, 0, 0.002, 1, 0}, {scan, 0, 0.002, 2, 0}, {scan, 0, 0.02, 3, 0},
+                 {scan, 1.5, 0, 8, 0},   {scan_be, 0, 0.005, 2, 0}, {scan, 0, 0, 2, 300},
+                 {scan, 0, 0, 1, 5000},  {scan, 0, 0, 3, 60000}};
     for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
         mr_cluster_options o;
         mr_cluster_options_default(&o);
         o.cell = cases[c].cell;
         o.cell_rel = cases[c].cell_rel;
         o.threads = cases[c].threads;
+        o.target_vertices = cases[c].target;
         size_t na, nb;
         char *a = cluster_in_core(cases[c].in, out_a, &o, NULL, &na);
         mr_cluster_stats st;
@@ -297,6 +300,62 @@ static void test_cluster_file(void **state)
     mr_mesh_free(&at);
 }
 
+/* The target search against an exhaustive one: over 400 cell sizes from
+ * a hundredth of the box to the whole box, the count nearest each target;
+ * the search lands within 2 % of the target, or at least as near as any
+ * of those sizes. Meshes and point clouds, targets from 1 to most of the
+ * vertices. */
+static void test_target_search(void **state)
+{
+    (void)state;
+    mr_mesh meshes[2];
+    mr_error err;
+    assert_int_equal(mr_generate(MR_GEN_SCAN, 20000, 5, &meshes[0], &err), MR_OK);
+    assert_int_equal(mr_generate(MR_GEN_TORUS, 8000, 2, &meshes[1], &err), MR_OK);
+    for (int mi = 0; mi < 2; mi++) {
+        const mr_mesh *m = &meshes[mi];
+        double lo[3] = {1e30, 1e30, 1e30}, hi[3] = {-1e30, -1e30, -1e30};
+        for (size_t v = 0; v < m->vertex_count; v++)
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], m->positions[3 * v + k]);
+                hi[k] = fmax(hi[k], m->positions[3 * v + k]);
+            }
+        const double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+        enum { SIZES = 400 };
+        size_t counts[SIZES];
+        for (int i = 0; i < SIZES; i++) {
+            mr_cluster_options o;
+            mr_cluster_options_default(&o);
+            o.cell = extent * 0.01 * pow(100.0, (double)i / (SIZES - 1));
+            mr_mesh out;
+            mr_cluster_stats st;
+            cluster_ok(m, &o, &out, &st);
+            counts[i] = st.cells;
+            mr_mesh_free(&out);
+        }
+        const size_t targets[] = {1, 7, 40, 150, 600, 2500, m->vertex_count / 2};
+        for (size_t ti = 0; ti < sizeof targets / sizeof *targets; ti++) {
+            const size_t n = targets[ti];
+            double best = 1e300;
+            for (int i = 0; i < SIZES; i++)
+                best = fmin(best, fabs((double)counts[i] - (double)n));
+            mr_cluster_options o;
+            mr_cluster_options_default(&o);
+            o.target_vertices = n;
+            mr_mesh out;
+            mr_cluster_stats st;
+            cluster_ok(m, &o, &out, &st);
+            const double miss = fabs((double)st.cells - (double)n);
+            if (miss > 0.02 * (double)n && miss > best)
+                fail_msg("mesh %d, target %zu: %zu cells; an exhaustive search got within %g",
+                         mi, n, st.cells, best);
+            mr_mesh_free(&out);
+        }
+    }
+    mr_mesh_free(&meshes[0]);
+    mr_mesh_free(&meshes[1]);
+}
+
 static void test_cli(void **state)
 {
     (void)state;
@@ -336,6 +395,7 @@ int main(void)
         cmocka_unit_test(test_point_cloud_means),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_cluster_file),
+        cmocka_unit_test(test_target_search),
         cmocka_unit_test(test_cli),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -134,6 +134,59 @@ static uint32_t table_id(cell_table *t, uint64_t key)
     return id;
 }
 
+/* K(c) of the file's vertices (every stride-th), a pass over them: on
+ * bitmaps where the grid is small, else in a cell table. The same counts
+ * as mr_mesh_cluster's of the same points. */
+typedef struct file_count {
+    mr_ply_source *src;
+    size_t n, stride;
+    int threads;
+    const double *lo, *hi;
+    mr_mesh *block; /* positions only */
+} file_count;
+
+static mr_status count_file(double cell, void *user, size_t *k, mr_error *err)
+{
+    const file_count *fc = user;
+    mr_grid grid;
+    mr_grid_init(&grid, fc->lo, fc->hi, cell);
+    const size_t total = mr_grid_cells_total(&grid);
+    const bool bitmap = total <= MR_GRID_BITMAP_CELLS;
+    const size_t words = bitmap ? (total + 63) / 64 : 0;
+    uint64_t *bits = bitmap ? mr_calloc_array(words * (size_t)fc->threads, sizeof *bits) : NULL;
+    if (bitmap && !bits)
+        return mr_fail_nomem(err, NULL, words * 8 * (size_t)fc->threads);
+    cell_table t;
+    memset(&t, 0, sizeof t);
+    mr_status s = MR_OK;
+    for (size_t v0 = 0; v0 < fc->n && s == MR_OK; v0 += VERTEX_BLOCK) {
+        const size_t m = fc->n - v0 < VERTEX_BLOCK ? fc->n - v0 : VERTEX_BLOCK;
+        fc->block->vertex_count = m;
+        if ((s = mr_ply_source_vertices(fc->src, v0, m, fc->block, err)) != MR_OK)
+            break;
+        /* the sample: the vertices whose index is a multiple of stride */
+        const size_t first = (fc->stride - v0 % fc->stride) % fc->stride;
+        if (first >= m)
+            continue;
+        const size_t count = (m - first + fc->stride - 1) / fc->stride;
+        const float *p = fc->block->positions + 3 * first;
+        if (bitmap) {
+            mr_grid_mark(&grid, p, count, fc->stride, fc->threads, bits, words);
+            continue;
+        }
+        for (size_t i = 0; i < count; i++)
+            if (table_id(&t, mr_grid_key(&grid, p + 3 * fc->stride * i)) == EMPTY) {
+                s = mr_fail_nomem(err, NULL, t.count * (SUMS * 8 + 32));
+                break;
+            }
+    }
+    mr_ply_source_release(fc->src);
+    *k = bitmap ? mr_grid_marked(bits, words, fc->threads) : t.count;
+    free(bits);
+    table_free(&t);
+    return s;
+}
+
 /* A block of vertices with the arrays the source has attributes for. */
 static mr_status block_alloc(mr_mesh *b, unsigned attrs, mr_error *err)
 {
@@ -175,7 +228,7 @@ static mr_status cluster_stream(mr_ply_source *src, const char *in_path,
     }
     mr_ply_source_release(src);
     double cell = o->cell;
-    if (s == MR_OK && o->cell_rel > 0) {
+    if (s == MR_OK && o->target_vertices == 0 && o->cell_rel > 0) {
         const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
         const double diagonal = sqrt(dx * dx + dy * dy + dz * dz);
         cell = o->cell_rel * diagonal;
@@ -184,6 +237,27 @@ static mr_status cluster_stream(mr_ply_source *src, const char *in_path,
                               "a cell of %g of the bounding-box diagonal (%g) is no usable "
                               "cell size",
                               o->cell_rel, diagonal);
+    }
+    /* A target: the cells as mr_mesh_cluster finds them (a sample's
+     * search, checked on every vertex, searched on every vertex from there
+     * if the sample missed) */
+    const size_t target = o->target_vertices;
+    if (s == MR_OK && target) {
+        mr_mesh pos;
+        mr_mesh_init(&pos);
+        if ((s = mr_mesh_alloc(&pos, VERTEX_BLOCK, 0, 0, err)) == MR_OK) {
+            file_count fc = {src, n, mr_cluster_sample_stride(n, target),
+                             mr_thread_count(o->threads), lo, hi, &pos};
+            s = mr_cluster_search(lo, hi, target, 0, count_file, &fc, &cell, err);
+            size_t k = 0;
+            if (s == MR_OK && fc.stride > 1) {
+                fc.stride = 1;
+                s = count_file(cell, &fc, &k, err);
+                if (s == MR_OK && !mr_cluster_count_close(k, target))
+                    s = mr_cluster_search(lo, hi, target, cell, count_file, &fc, &cell, err);
+            }
+        }
+        mr_mesh_free(&pos);
     }
     mr_grid grid;
     if (s == MR_OK)
@@ -424,7 +498,7 @@ mr_status mr_cluster_file(const char *in_path, const char *out_path,
     mr_mesh_init(&out);
     mr_ply_source *src = NULL;
     mr_status s = MR_ERR_UNSUPPORTED;
-    if (options->target_vertices == 0 && mr_format_from_path(in_path) == MR_FORMAT_PLY) {
+    if (mr_format_from_path(in_path) == MR_FORMAT_PLY) {
         mr_error quiet;
         s = mr_ply_source_open(in_path, mr_thread_count(options->threads), &src, &quiet);
         if (s != MR_OK && s != MR_ERR_UNSUPPORTED) {

@@ -102,6 +102,49 @@ void mr_grid_init(mr_grid *grid, const double lo[3], const double hi[3], double 
     }
 }
 
+/* ---- occupied cells ---------------------------------------------------------- */
+
+size_t mr_grid_cells_total(const mr_grid *g)
+{
+    const double t = (double)g->dims[0] * (double)g->dims[1] * (double)g->dims[2];
+    return t < (double)SIZE_MAX / 2 ? (size_t)t : SIZE_MAX / 2;
+}
+
+void mr_grid_mark(const mr_grid *g, const float *pos, size_t n, size_t stride, int threads,
+                  uint64_t *bits, size_t words)
+{
+    /* a bitmap a thread (its own range of points, plain stores) */
+    const int team = threads > 1 && n > 65536 ? threads : 1;
+    const uint64_t dx = g->dims[0], dxy = g->dims[0] * g->dims[1];
+#pragma omp parallel num_threads(team) if (team > 1)
+    {
+        const int me = omp_get_thread_num(), nt = omp_get_num_threads();
+        uint64_t *mine = bits + (size_t)me * words;
+        const size_t i0 = n * (size_t)me / (size_t)nt, i1 = n * (size_t)(me + 1) / (size_t)nt;
+        for (size_t i = i0; i < i1; i++) {
+            uint64_t c[3];
+            mr_grid_unpack(g, mr_grid_key(g, pos + 3 * stride * i), c);
+            const uint64_t at = c[0] + dx * c[1] + dxy * c[2];
+            mine[at >> 6] |= UINT64_C(1) << (at & 63);
+        }
+    }
+}
+
+size_t mr_grid_marked(const uint64_t *bits, size_t words, int threads)
+{
+    size_t k = 0;
+    const ptrdiff_t nw = (ptrdiff_t)words;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(+ : k) \
+    if (threads > 1 && nw > 65536)
+    for (ptrdiff_t w = 0; w < nw; w++) {
+        uint64_t u = 0;
+        for (int t = 0; t < threads; t++)
+            u |= bits[(size_t)t * words + (size_t)w];
+        k += (size_t)__builtin_popcountll(u);
+    }
+    return k;
+}
+
 /* ---- the neighbour graph --------------------------------------------------- */
 
 /*

@@ -102,4 +102,31 @@ void mr_cluster_represent(const mr_grid *grid, uint64_t key, const double q[10],
                           const double uv_sum[2], const double col_sum[4], double count,
                           const double lo[3], const double hi[3], mr_mesh *out, size_t cc);
 
+/* Occupied cells counted on bitmaps of every cell of the grid (when it is
+ * small enough to hold them: MR_GRID_BITMAP_CELLS): the cells in all
+ * (dims' product); the points' cells marked with `words` 64-bit words of
+ * bits a thread (bits: threads x words, zeroed), and counted: the same
+ * count on any number of threads. */
+#define MR_GRID_BITMAP_CELLS ((size_t)1 << 25)
+size_t mr_grid_cells_total(const mr_grid *g);
+/* Mark the cells of points pos[3 stride i], i < n, in bits (threads x
+ * words, each thread its own `words`); then the cells marked in any. */
+void mr_grid_mark(const mr_grid *g, const float *pos, size_t n, size_t stride, int threads,
+                  uint64_t *bits, size_t words);
+size_t mr_grid_marked(const uint64_t *bits, size_t words, int threads);
+
+/* The occupied cells of a grid of cell size `cell` over the caller's box. */
+typedef mr_status (*mr_cell_count_fn)(double cell, void *user, size_t *count, mr_error *err);
+/* The cell size whose grid over [lo, hi] has about `target` occupied
+ * cells (within 2 %, else the nearest count its steps met), from a few
+ * counts (gridcluster.c). */
+mr_status mr_cluster_search(const double lo[3], const double hi[3], size_t target,
+                            double start, mr_cell_count_fn count, void *user, double *cell_out,
+                            mr_error *err);
+/* Of n points, every how many a target of `target` cells may be searched
+ * on (a coarse grid's cells hold many points: a sample finds them all). */
+size_t mr_cluster_sample_stride(size_t n, size_t target);
+/* Whether `count` cells meet the target (within the search's tolerance). */
+bool mr_cluster_count_close(size_t count, size_t target);
+
 #endif /* MR_CLUSTER_GRID_H */

@@ -199,6 +199,139 @@ void mr_cluster_represent(const mr_grid *grid, uint64_t key, const double q[10],
             out->colors[4 * cc + (size_t)e] = (float)(col_sum[e] / count);
 }
 
+/* ---- the cell size for a target count -------------------------------------- */
+
+/*
+ * The search evaluates occupied-cell counts K(c) at cell sizes c and steers
+ * by their logarithms: a surface's K falls about as c^-2, so from a first
+ * guess (the box's surface area over the target: c0 = sqrt(A / N)) a
+ * secant step in (log c, log K), kept inside the bracket of what is known
+ * (bisection when it would leave it), meets the target within a few
+ * evaluations. It stops within MR_SEARCH_TOLERANCE of N, or after
+ * MR_SEARCH_STEPS, with the count nearest N (ties: the larger count). The
+ * evaluations depend on the box and the counts alone, so every caller that
+ * counts the same cells (in memory, from a file) finds the same cell.
+ */
+#define MR_SEARCH_TOLERANCE 0.02
+#define MR_SEARCH_STEPS 16
+
+size_t mr_cluster_sample_stride(size_t n, size_t target)
+{
+    /* a cell of the target's grid holds n / target points on average; a
+     * sample that leaves it about 256 of them misses few cells (those the
+     * surface only grazes), which the clustering's own count then checks */
+    const size_t s = target ? n / (256 * target) : 1;
+    return s < 1 ? 1 : s > 16 ? 16 : s;
+}
+
+bool mr_cluster_count_close(size_t count, size_t target)
+{
+    return fabs((double)count - (double)target) <= MR_SEARCH_TOLERANCE * (double)target;
+}
+
+mr_status mr_cluster_search(const double lo[3], const double hi[3], size_t target,
+                            double start, mr_cell_count_fn count, void *user, double *cell_out,
+                            mr_error *err)
+{
+    const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    const double extent = fmax(dx, fmax(dy, dz));
+    if (!(extent > 0)) {
+        *cell_out = 1; /* every vertex at one point: one cell whatever the size */
+        return MR_OK;
+    }
+    const double xmin = log(extent * 1e-7), xmax = log(extent * 2);
+    const double area = 2 * (dx * dy + dy * dz + dz * dx);
+    double x = start > 0             ? log(start)
+               : area > 0            ? 0.5 * log(area / (double)target)
+                                     : log(extent / (double)target);
+    x = fmin(fmax(x, xmin), xmax);
+    const double y_goal = log((double)target);
+    /* bracket: a below (K >= N), b above (K < N) */
+    double a = xmin, b = xmax;
+    bool have_prev = false;
+    double xp = 0, yp = 0, best_x = x;
+    size_t best_k = 0;
+    for (int step = 0; step < MR_SEARCH_STEPS; step++) {
+        size_t k;
+        mr_status st = count(exp(x), user, &k, err);
+        if (st != MR_OK)
+            return st;
+        const double miss = fabs((double)k - (double)target), best_miss =
+            fabs((double)best_k - (double)target);
+        if (step == 0 || miss < best_miss || (miss == best_miss && k > best_k)) {
+            best_k = k;
+            best_x = x;
+        }
+        if (mr_cluster_count_close(k, target))
+            break;
+        if (k >= target)
+            a = x > a ? x : a;
+        else
+            b = x < b ? x : b;
+        const double y = log(k > 0 ? (double)k : 0.5);
+        double slope = -2; /* a surface's */
+        if (have_prev && x != xp) {
+            const double sl = (y - yp) / (x - xp);
+            if (sl < -0.25 && sl > -8)
+                slope = sl;
+        }
+        double xn = x + (y_goal - y) / slope;
+        if (!(xn > a && xn < b))
+            xn = 0.5 * (a + b); /* outside what is known: bisect */
+        if (fabs(xn - x) < 1e-9 || b - a < 1e-9)
+            break; /* nothing left between: the count jumps over the target */
+        xp = x;
+        yp = y;
+        have_prev = true;
+        x = xn;
+    }
+    *cell_out = exp(best_x);
+    return MR_OK;
+}
+
+/* K(c) of points in memory (every stride-th of n): binned and sorted as
+ * for the clustering, or on bitmaps where the grid is small. */
+typedef struct in_core_count {
+    const float *pos;
+    size_t n, stride;
+    int threads;
+    const double *lo, *hi;
+} in_core_count;
+
+static mr_status count_in_core(double cell, void *user, size_t *k, mr_error *err)
+{
+    const in_core_count *ic = user;
+    mr_grid grid;
+    mr_grid_init(&grid, ic->lo, ic->hi, cell);
+    const size_t total = mr_grid_cells_total(&grid);
+    const size_t n = (ic->n + ic->stride - 1) / ic->stride;
+    if (total <= MR_GRID_BITMAP_CELLS) { /* a bit per cell of the grid */
+        const size_t words = (total + 63) / 64;
+        uint64_t *bits = mr_calloc_array(words * (size_t)ic->threads, sizeof *bits);
+        if (!bits)
+            return mr_fail_nomem(err, NULL, words * 8 * (size_t)ic->threads);
+        mr_grid_mark(&grid, ic->pos, n, ic->stride, ic->threads, bits, words);
+        *k = mr_grid_marked(bits, words, ic->threads);
+        free(bits);
+        return MR_OK;
+    }
+    float *sample = NULL;
+    const float *pos = ic->pos;
+    if (ic->stride > 1) {
+        if (!(sample = mr_alloc_array(n, 3 * sizeof *sample)))
+            return mr_fail_nomem(err, NULL, n * 12);
+        for (size_t i = 0; i < n; i++)
+            memcpy(sample + 3 * i, ic->pos + 3 * ic->stride * i, 12);
+        pos = sample;
+    }
+    cells c;
+    mr_status s = bin(pos, n, &grid, ic->threads, 0, &c, err);
+    *k = c.count;
+    cells_free(&c);
+    free(sample);
+    return s;
+}
+
 mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, mr_mesh *out,
                           mr_cluster_stats *stats, mr_error *err)
 {
@@ -244,7 +377,6 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
     if (!mr_points_bounds(in->positions, n, threads, lo, hi, &bad))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "vertex %zu has a non-finite coordinate", bad);
-    double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     mr_grid grid;
     cells c;
     double cell = options->cell;
@@ -258,38 +390,30 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
                                  "cell size",
                                  options->cell_rel, diagonal);
     }
-    if (options->target_vertices > 0) {
-        /* Bisection on the cell size, in log scale, for the occupied cell
-         * count nearest the target from above. */
-        double a = extent > 0 ? extent * 1e-7 : 1, b = extent > 0 ? extent * 2 : 1;
-        size_t best = SIZE_MAX;
-        cell = b;
-        for (int it = 0; it < 40 && b / a > 1.0001; it++) {
-            double m = sqrt(a * b);
-            mr_grid_init(&grid, lo, hi, m);
-            if ((s = bin(in->positions, n, &grid, threads, 0, &c, err)) != MR_OK)
-                return s;
-            size_t k = c.count;
-            cells_free(&c);
-            if (k >= options->target_vertices) {
-                a = m;
-                if (k <= best) {
-                    best = k;
-                    cell = grid.cell;
-                }
-                if (k == options->target_vertices)
-                    break;
-            } else {
-                b = m;
-            }
-        }
-        if (best == SIZE_MAX)
-            cell = a;
+    /* A target: searched on a sample where the cells will be coarse, then
+     * checked by the clustering's own binning; searched on every vertex,
+     * from there, if the sample missed it. */
+    const size_t target = options->target_vertices;
+    size_t stride = target ? mr_cluster_sample_stride(n, target) : 1;
+    if (target) {
+        in_core_count ic = {in->positions, n, stride, threads, lo, hi};
+        if ((s = mr_cluster_search(lo, hi, target, 0, count_in_core, &ic, &cell, err)) != MR_OK)
+            return s;
     }
     mr_grid_init(&grid, lo, hi, cell);
-    st.cell = grid.cell;
     if ((s = bin(in->positions, n, &grid, threads, 1, &c, err)) != MR_OK)
         return s;
+    if (target && stride > 1 && !mr_cluster_count_close(c.count, target)) {
+        cells_free(&c);
+        in_core_count ic = {in->positions, n, 1, threads, lo, hi};
+        if ((s = mr_cluster_search(lo, hi, target, cell, count_in_core, &ic, &cell, err)) !=
+            MR_OK)
+            return s;
+        mr_grid_init(&grid, lo, hi, cell);
+        if ((s = bin(in->positions, n, &grid, threads, 1, &c, err)) != MR_OK)
+            return s;
+    }
+    st.cell = grid.cell;
     const size_t k = c.count;
     st.cells = k;
     uint32_t *label = mr_alloc_array(n, sizeof *label);
