@@ -232,7 +232,13 @@ static mr_status cluster_stream(mr_ply_source *src, const char *in_path,
         const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
         const double diagonal = sqrt(dx * dx + dy * dy + dz * dz);
         cell = o->cell_rel * diagonal;
-        if (!(cell > 0) || isinf(cell))
+        if (diagonal == 0)
+            s = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, in_path,
+                              "all %zu vertices are at one point, so a cell of %g of the "
+                              "bounding-box diagonal (0) is no cell size; give a cell or a "
+                              "target vertex count",
+                              n, o->cell_rel);
+        else if (!(cell > 0) || isinf(cell))
             s = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, in_path,
                               "a cell of %g of the bounding-box diagonal (%g) is no usable "
                               "cell size",
