@@ -60,6 +60,7 @@ from ._core import (  # noqa: F401  (re-exported)
     UnsupportedError,
     __version__,
     cluster,
+    cluster_file,
     compare,
     features,
     generate,
@@ -75,7 +76,7 @@ from ._core import (  # noqa: F401  (re-exported)
 
 __all__ = [
     "Mesh", "Result", "simplify", "read", "write", "compare", "info", "generate",
-    "weld", "cluster", "render", "write_png",
+    "weld", "cluster", "cluster_file", "render", "write_png",
     "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
     "EmptyMeshError", "TooLargeError", "NoMemoryError", "CancelledError", "features", "__version__", "library_version",
 ]

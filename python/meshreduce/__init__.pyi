@@ -159,6 +159,15 @@ def cluster(
     colors: Optional[_Floats] = ...,
     threads: int = ...,
 ) -> Result: ...
+def cluster_file(
+    input: Union[str, "os.PathLike[str]"],
+    output: Union[str, "os.PathLike[str]"],
+    *,
+    cell: Optional[float] = ...,
+    cell_rel: Optional[float] = ...,
+    vertex_count: Optional[int] = ...,
+    threads: int = ...,
+) -> dict[str, Any]: ...
 _Color = Union[int, tuple[int, int, int]]
 def render(
     vertices: _Floats,

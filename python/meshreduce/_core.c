@@ -1495,6 +1495,86 @@ static PyObject *py_cluster(PyObject *self, PyObject *args, PyObject *kw)
     return make(result_class, d);
 }
 
+PyDoc_STRVAR(cluster_file_doc,
+"cluster_file($module, /, input, output, *, cell=None, cell_rel=None, vertex_count=None,\n"
+"             threads=0)\n"
+"--\n"
+"\n"
+"Grid clustering from a file into a file, as `meshreduce cluster IN -o OUT`\n"
+"(mr_cluster_file): a binary PLY input is read in passes, in memory that grows\n"
+"with the output (4 bytes a vertex beside it), the same bytes as cluster() on\n"
+"the mesh read whole; other inputs are read whole. The cell size as in\n"
+"cluster(). Returns the statistics (cell, cells, counts, seconds).");
+
+static PyObject *py_cluster_file(PyObject *self, PyObject *args, PyObject *kw)
+{
+    static char *kwlist[] = {"input", "output", "cell", "cell_rel", "vertex_count", "threads",
+                             NULL};
+    PyObject *input = NULL, *output = NULL, *cell = Py_None, *cell_rel = Py_None,
+             *vcount = Py_None;
+    int threads = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOi", kwlist, path_arg, &input,
+                                     path_arg, &output, &cell, &cell_rel, &vcount, &threads))
+        return NULL;
+    PyObject *result = NULL;
+    mr_cluster_options o;
+    mr_cluster_options_default(&o);
+    const int given = (cell != Py_None) + (cell_rel != Py_None) + (vcount != Py_None);
+    if (given != 1) {
+        PyErr_Format(PyExc_ValueError, "cluster_file: give exactly one of cell, cell_rel or "
+                                       "vertex_count (got %d)",
+                     given);
+        goto done;
+    }
+    if (cell != Py_None || cell_rel != Py_None) {
+        const char *name = cell != Py_None ? "cell" : "cell_rel";
+        double x;
+        if (to_double(cell != Py_None ? cell : cell_rel, name, &x) < 0)
+            goto done;
+        if (!(x > 0)) {
+            PyErr_Format(PyExc_ValueError, "%s must be positive", name);
+            goto done;
+        }
+        if (cell != Py_None)
+            o.cell = x;
+        else
+            o.cell_rel = x;
+    } else {
+        if (to_size(vcount, "vertex_count", &o.target_vertices) < 0)
+            goto done;
+        if (o.target_vertices == 0) {
+            PyErr_Format(PyExc_ValueError, "vertex_count must be positive");
+            goto done;
+        }
+    }
+    if (check_threads(&threads) < 0)
+        goto done;
+    o.threads = threads;
+    mr_cluster_stats cs;
+    memset(&cs, 0, sizeof cs);
+    mr_error err;
+    mr_status st;
+    const char *in_path = PyBytes_AS_STRING(input), *out_path = PyBytes_AS_STRING(output);
+    Py_BEGIN_ALLOW_THREADS
+    st = mr_cluster_file(in_path, out_path, &o, NULL, &cs, &err);
+    Py_END_ALLOW_THREADS
+    if (st != MR_OK) {
+        raise_mr_error(&err);
+        goto done;
+    }
+    result = Py_BuildValue(
+        "{s:d,s:n,s:n,s:n,s:n,s:n,s:{s:d,s:d,s:d,s:d}}", "cell", cs.cell, "cells",
+        (Py_ssize_t)cs.cells, "input_vertices", (Py_ssize_t)cs.input_vertices, "input_triangles",
+        (Py_ssize_t)cs.input_triangles, "output_vertices", (Py_ssize_t)cs.output_vertices,
+        "output_triangles", (Py_ssize_t)cs.output_triangles, "seconds", "cells",
+        cs.seconds_cells, "representatives", cs.seconds_representatives, "triangles",
+        cs.seconds_triangles, "total", cs.seconds_total);
+done:
+    Py_XDECREF(input);
+    Py_XDECREF(output);
+    return result;
+}
+
 /* ------------------------------------------------------------------------ */
 /* render / write_png                                                       */
 /* ------------------------------------------------------------------------ */
@@ -1735,6 +1815,8 @@ static PyMethodDef methods[] = {
     {"weld", (PyCFunction)(void (*)(void))py_weld, METH_VARARGS | METH_KEYWORDS, weld_doc},
     {"cluster", (PyCFunction)(void (*)(void))py_cluster, METH_VARARGS | METH_KEYWORDS,
      cluster_doc},
+    {"cluster_file", (PyCFunction)(void (*)(void))py_cluster_file,
+     METH_VARARGS | METH_KEYWORDS, cluster_file_doc},
     {"render", (PyCFunction)(void (*)(void))py_render, METH_VARARGS | METH_KEYWORDS, render_doc},
     {"write_png", (PyCFunction)(void (*)(void))py_write_png, METH_VARARGS | METH_KEYWORDS,
      write_png_doc},

@@ -687,6 +687,24 @@ def test_cluster_matches_cli(tmp_path):
 
 
 @needs_cli
+def test_cluster_file_matches_cli(tmp_path):
+    src = tmp_path / "scan.ply"
+    cli("generate", "scan", "--triangles", 30000, "-o", src, "-q")
+    for cli_args, kwargs in ((["--cell-rel", "0.01"], {"cell_rel": 0.01}),
+                             (["--target-vertices", "2000"], {"vertex_count": 2000})):
+        out = json.loads(cli("cluster", src, "-o", tmp_path / "cli.ply", "--json", "-q",
+                             *cli_args))
+        st = meshreduce.cluster_file(src, tmp_path / "py.ply", **kwargs)
+        assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
+        assert out["cell"] == st["cell"] and out["cells"] == st["cells"]
+    with pytest.raises(ValueError, match="exactly one of"):
+        meshreduce.cluster_file(src, tmp_path / "x.ply")
+    with pytest.raises(meshreduce.MeshIOError):
+        meshreduce.cluster_file(tmp_path / "missing.ply", tmp_path / "x.ply", cell=1.0)
+    assert not (tmp_path / "x.ply").exists()
+
+
+@needs_cli
 @pytest.mark.skipif(not meshreduce.features["png"], reason="built without libpng")
 def test_render_matches_cli(tmp_path, torus):
     meshreduce.write(tmp_path / "t.ply", torus)
