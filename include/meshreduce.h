@@ -603,6 +603,75 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
                            mr_error *err);
 
 /* ------------------------------------------------------------------------ */
+/* Out-of-core simplification                                               */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Simplification of a mesh file of any size in bounded memory: a binary
+ * PLY input is read in passes (its bounding box; its triangles' centroids
+ * counted into a k-d tree of chunks that fit the budget; its triangles
+ * spilled chunk by chunk to temporary files), each chunk is simplified in
+ * memory with the vertices it shares with other chunks locked, then
+ * neighbouring chunks are merged up the tree, their shared cut unlocked
+ * and reduced with each vertex's quadric carried from below, up to the
+ * root, which meets the targets. The chunks and the tree depend on the
+ * input and the options only (the memory budget among them), never on
+ * the machine or the thread count: the same options give the same bytes.
+ * An input whose in-memory simplification fits the budget (about 160
+ * bytes a triangle) is simplified in memory as mr_mesh_simplify does,
+ * with its bytes. Geometry only on the out-of-core path: normals, texture
+ * coordinates and colors of such an input are not carried (an error says
+ * so); vertices are taken as given (no surface points: a split vertex is
+ * a boundary). Indices stay 32-bit: at most 4,294,967,295 vertices and
+ * triangles.
+ */
+#define MR_MEMORY_DEFAULT ((uint64_t)4 << 30) /* 4 GiB */
+
+typedef struct mr_out_of_core_options {
+    uint64_t memory;      /* bytes (0 = MR_MEMORY_DEFAULT) */
+    const char *temp_dir; /* NULL: $TMPDIR, else the output's directory, else
+                             /tmp. Temporary files there have no name (they
+                             go with the process, however it ends) */
+    uint64_t temp_budget; /* temporary bytes at most (0 = no limit): past
+                             it the call fails */
+} mr_out_of_core_options;
+
+void mr_out_of_core_options_default(mr_out_of_core_options *options);
+
+#define MR_LEVELS_MAX 48
+
+typedef struct mr_simplify_file_stats {
+    mr_simplify_stats simplify;  /* the whole job's: counts, stop, largest
+                                    error; collapses and times summed over
+                                    the chunks (the root's stop) */
+    int out_of_core;             /* 0: simplified in memory */
+    size_t chunks;               /* the tree's leaves */
+    size_t chunk_capacity;       /* triangles a chunk may hold */
+    size_t oversized_chunks;     /* leaves over it (centroids at one point) */
+    unsigned levels;             /* the tree's height + 1 */
+    size_t level_chunks[MR_LEVELS_MAX];    /* chunks simplified at each
+                                              level (0: the leaves) */
+    double level_seconds[MR_LEVELS_MAX];   /* their time */
+    size_t level_triangles[MR_LEVELS_MAX]; /* their input triangles */
+    unsigned passes;             /* passes over the input's faces */
+    uint64_t memory;             /* the budget */
+    uint64_t temp_bytes_peak;    /* temporary disk at most */
+    double seconds_read;         /* the passes over the input */
+    double seconds_simplify;     /* the chunks */
+    double seconds_write;
+    double seconds_total;
+} mr_simplify_file_stats;
+
+/* Simplify the file in_path into out_path (written whole or not at all,
+ * as mr_mesh_write writes) by the options (their targets count the whole
+ * input; options->vertex_lock, when set, has one byte per input vertex),
+ * in ooc's memory (NULL: defaults). stats (optional) get the figures. */
+mr_status mr_simplify_file(const char *in_path, const char *out_path,
+                           const mr_simplify_options *options,
+                           const mr_out_of_core_options *ooc, const mr_write_options *write,
+                           mr_simplify_file_stats *stats, mr_error *err);
+
+/* ------------------------------------------------------------------------ */
 /* Error metrics                                                            */
 /* ------------------------------------------------------------------------ */
 

@@ -33,6 +33,7 @@ LAYERS = [
     ("src/qem/strategies/", 5),
     ("src/render/", 5),
     ("src/qem/", 6),
+    ("src/ooc/", 7),
     ("cli/", 9),
     ("python/", 9),
 ]

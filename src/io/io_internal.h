@@ -109,6 +109,8 @@ void mr_ply_source_position(const mr_ply_source *s, uint32_t v, float p[3]);
 /* The next chunk's triangles into idx; *count 0 once every face is read. */
 mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *count,
                                    mr_error *err);
+/* Start the faces again from the first (another pass). */
+void mr_ply_source_rewind(mr_ply_source *s);
 /* Give back every page of the map read so far (after random reads). */
 void mr_ply_source_release(mr_ply_source *s);
 /* Map ahead the rows of vertices first..last (before reading their

@@ -8,8 +8,11 @@
 #define _GNU_SOURCE /* realpath, lstat, readlink, fchown, gettid under strict C11 */
 #include "output.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
+#include <stdlib.h>
 #include <stdatomic.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -287,7 +290,7 @@ static mr_status plan_output(mr_output_file *out, const char *path, struct stat 
     return MR_OK;
 }
 
-static bool temp_name(mr_output_file *out, const char *dir);
+static bool temp_name(char *buf, size_t cap, const char *dir, const char *prefix);
 
 /* Create a new temporary file in `dir` (its path into out->tmp, named
  * after this process: .meshreduce-PID-XXXXXX) with the given mode, which
@@ -295,15 +298,16 @@ static bool temp_name(mr_output_file *out, const char *dir);
  * (out->slot) before it exists. Not mkstemp: its 0600 would have to be
  * widened by reading the umask, and umask() can only be read by setting
  * it, which races with files other threads create. */
-static int create_temp(mr_output_file *out, const char *dir, mode_t mode)
+static int create_temp(mr_output_file *out, const char *dir, const char *prefix, int access,
+                       mode_t mode)
 {
     out->slot = pending_claim();
     for (int attempt = 0; attempt < 100; attempt++) {
-        if (!temp_name(out, dir))
+        if (!temp_name(out->tmp, sizeof out->tmp, dir, prefix))
             break;
         if (out->slot >= 0)
             pending_arm(out->slot, out->tmp);
-        int fd = open(out->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
+        int fd = open(out->tmp, access | O_CREAT | O_EXCL | O_CLOEXEC, mode);
         pending_opened(out->slot, fd >= 0);
         if (fd >= 0)
             return fd;
@@ -317,8 +321,8 @@ static int create_temp(mr_output_file *out, const char *dir, mode_t mode)
     return -1;
 }
 
-/* A fresh name for a temporary file in dir, into out->tmp. */
-static bool temp_name(mr_output_file *out, const char *dir)
+/* A fresh name for a temporary file in dir, into buf: dir/PREFIXPID-XXXXXX. */
+static bool temp_name(char *buf, size_t cap, const char *dir, const char *prefix)
 {
     static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz"
                                  "ABCDEFGHIJKLMNOPQRSTUVWXYZ";
@@ -331,9 +335,8 @@ static bool temp_name(mr_output_file *out, const char *dir)
     for (int i = 0; i < 6; i++, r /= 62)
         name[i] = digits[r % 62];
     name[6] = '\0';
-    int len = snprintf(out->tmp, sizeof out->tmp, "%s/.meshreduce-%ld-%s", dir, (long)getpid(),
-                       name);
-    if (len < 0 || (size_t)len >= sizeof out->tmp) {
+    int len = snprintf(buf, cap, "%s/%s%ld-%s", dir, prefix, (long)getpid(), name);
+    if (len < 0 || (size_t)len >= cap) {
         errno = ENAMETOOLONG; /* not reached: plan_output checked the length */
         return false;
     }
@@ -350,7 +353,7 @@ static mr_status open_temp(mr_output_file *out, const char *path, const struct s
     dir_of(out->dest, dir, sizeof dir);
     /* a new file gets 0666 less the umask, like any created file; a
      * replacement starts private and then gets the old file's bits */
-    *fd = create_temp(out, dir, exists ? 0600 : 0666);
+    *fd = create_temp(out, dir, ".meshreduce-", O_WRONLY, exists ? 0600 : 0666);
     if (*fd < 0)
         return mr_fail_plain(err, MR_ERR_IO, path, "cannot write (in %s): %s", dir,
                              strerror(errno));
@@ -448,3 +451,84 @@ mr_status mr_fail_write(mr_error *err, const char *name, int errnum)
                          strerror(errnum ? errnum : EIO));
 }
 
+
+/* ------------------------------------------------------------------------ */
+/* Scratch files                                                            */
+/* ------------------------------------------------------------------------ */
+
+/* The scratch names of this host: .meshreduce-scratch-HOST- before the
+ * PID (the host keeps a shared directory's other machines' files apart). */
+static void scratch_prefix(char *buf, size_t cap)
+{
+    char host[256];
+    if (gethostname(host, sizeof host) != 0)
+        strcpy(host, "host");
+    host[sizeof host - 1] = '\0';
+    for (char *c = host; *c; c++)
+        if (*c == '/' || *c == '-')
+            *c = '_';
+    snprintf(buf, cap, ".meshreduce-scratch-%s-", host);
+}
+
+int mr_scratch_open(const char *dir, mr_error *err)
+{
+    int e;
+#ifdef O_TMPFILE
+    int fd = open(dir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (fd >= 0)
+        return fd;
+    e = errno;
+    if (e != EOPNOTSUPP && e != EISDIR && e != EINVAL) {
+        mr_fail_plain(err, MR_ERR_IO, dir, "cannot create a temporary file there: %s",
+                      strerror(e));
+        return -1;
+    }
+#endif
+    /* No O_TMPFILE here: a named file, registered while it has its name,
+     * unlinked at once. */
+    mr_output_file f;
+    char prefix[300];
+    scratch_prefix(prefix, sizeof prefix);
+    int nfd = -1;
+    if (strlen(dir) + strlen(prefix) + 32 < sizeof f.tmp)
+        nfd = create_temp(&f, dir, prefix, O_RDWR, 0600);
+    else
+        errno = ENAMETOOLONG;
+    e = errno;
+    if (nfd >= 0) {
+        unlink(f.tmp);
+        pending_drop(f.slot);
+        return nfd;
+    }
+    mr_fail_plain(err, MR_ERR_IO, dir, "cannot create a temporary file there: %s", strerror(e));
+    return -1;
+}
+
+size_t mr_scratch_sweep(const char *dir)
+{
+    char prefix[300];
+    scratch_prefix(prefix, sizeof prefix);
+    const size_t plen = strlen(prefix);
+    DIR *d = opendir(dir);
+    if (!d)
+        return 0;
+    size_t removed = 0;
+    const struct dirent *de;
+    while ((de = readdir(d)) != NULL) {
+        if (strncmp(de->d_name, prefix, plen) != 0)
+            continue;
+        char *end;
+        errno = 0;
+        const long pid = strtol(de->d_name + plen, &end, 10);
+        if (errno || end == de->d_name + plen || *end != '-' || pid <= 0 || pid == (long)getpid())
+            continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH)
+            continue; /* alive (or not ours to ask): its file */
+        char path[MR_OUTPUT_PATH_CAP];
+        if (snprintf(path, sizeof path, "%s/%s", dir, de->d_name) < (int)sizeof path &&
+            unlink(path) == 0)
+            removed++;
+    }
+    closedir(d);
+    return removed;
+}

@@ -37,4 +37,18 @@ mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, m
  * (MR_ERR_IO); errnum 0 (no errno) reads as an I/O error. */
 mr_status mr_fail_write(mr_error *err, const char *name, int errnum);
 
+/*
+ * Scratch files (the out-of-core paths' spills): mr_scratch_open opens a
+ * new file in dir for reading and writing that has no name -- O_TMPFILE,
+ * where the file system has it; else one created under a registered name,
+ * .meshreduce-scratch-HOST-PID-XXXXXX, and unlinked at once -- so that it
+ * goes with its descriptor however the process ends, SIGKILL included
+ * (bar that moment of a name). Returns the descriptor, or -1 with err set
+ * (naming dir). mr_scratch_sweep removes the scratch names of this host
+ * whose process no longer exists (a SIGKILL at that moment); returns how
+ * many.
+ */
+int mr_scratch_open(const char *dir, mr_error *err);
+size_t mr_scratch_sweep(const char *dir);
+
 #endif /* MR_IO_OUTPUT_H */

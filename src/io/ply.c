@@ -1723,6 +1723,13 @@ mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *coun
 
 void mr_ply_source_release(mr_ply_source *s) { mr_release_mapped(&s->file, 0, s->file.size); }
 
+void mr_ply_source_rewind(mr_ply_source *s)
+{
+    s->elem = 0;
+    s->chunk = 0;
+    s->released = 0;
+}
+
 void mr_ply_source_prefetch(const mr_ply_source *s, uint32_t first, uint32_t last)
 {
     const ply_elem *e = s->r.vertex;

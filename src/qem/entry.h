@@ -16,7 +16,7 @@
 mr_status mr_simplify_setup(mr_simplifier *s, const float *positions, size_t stride,
                             size_t vertex_count, const uint32_t *indices,
                             size_t triangle_count, const mr_simplify_options *o,
-                            const uint8_t *extra_flags, mr_error *err);
+                            const mr_vertex_marks *marks, mr_error *err);
 /* The chosen strategy's verbs. */
 const mr_strategy_ops *mr_simplify_strategy(const mr_simplifier *s);
 /* Start the strategy (its queue, from the mesh as set up, mr_mesh_simplify's

@@ -308,7 +308,8 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         o.vertex_lock = NULL;
     }
     mr_simplifier s;
-    st = mr_simplify_setup(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, lock, err);
+    const mr_vertex_marks marks = {.flags = lock};
+    st = mr_simplify_setup(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, &marks, err);
     free(lock);
     if (st != MR_OK || o.quality != MR_QUALITY_BEST) {
         free(gidx); /* else the last step's samples come from it */

@@ -69,7 +69,7 @@ static mr_status check_strategy(const mr_simplify_options *o, mr_error *err)
 mr_status mr_simplify_setup(mr_simplifier *s, const float *positions, size_t stride,
                             size_t vertex_count, const uint32_t *indices,
                             size_t triangle_count, const mr_simplify_options *o,
-                            const uint8_t *extra_flags, mr_error *err)
+                            const mr_vertex_marks *marks, mr_error *err)
 {
     memset(s, 0, sizeof *s);
     mr_status st = check_strategy(o, err);
@@ -87,7 +87,7 @@ mr_status mr_simplify_setup(mr_simplifier *s, const float *positions, size_t str
     plan.multiqueue_factor = o->multiqueue_factor;
     plan.partitions = o->partitions;
     return mr_simplifier_init(s, positions, stride, vertex_count, indices, triangle_count, o,
-                              &plan, extra_flags, err);
+                              &plan, marks, err);
 }
 
 mr_status mr_simplifier_fill_queue(mr_simplifier *s, mr_error *err)

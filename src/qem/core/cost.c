@@ -609,12 +609,46 @@ double mr_simplifier_vertex_error(const mr_simplifier *s)
 
 /* ---- validity and the collapse -------------------------------------------- */
 
+/* A collapse r -> k into a chunk's cut vertex k (mr_vertex_marks): may
+ * it happen without seeing k's edges in the other chunks? Only when r has
+ * no cut neighbour but k and the edge's opposite vertices (which are k's
+ * neighbours here already): any other could be joined to k elsewhere. */
+static bool cut_collapse_ok(const mr_simplifier *s, uint32_t r, uint32_t k)
+{
+    const mr_collapse_mesh *m = &s->m;
+    const uint32_t *list = mr_collapse_vertex_tris(m, r);
+    uint32_t opp[2] = {k, k};
+    unsigned n = 0;
+    for (uint32_t i = 0; i < m->count[r]; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        if (tri[0] == MR_COLLAPSE_NONE || (tri[0] != k && tri[1] != k && tri[2] != k))
+            continue;
+        const uint32_t j = list[i] % 3, a = tri[(j + 1) % 3], b = tri[(j + 2) % 3];
+        if (n < 2)
+            opp[n++] = a == k ? b : a;
+    }
+    for (uint32_t i = 0; i < m->count[r]; i++) {
+        const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+        if (tri[0] == MR_COLLAPSE_NONE)
+            continue;
+        const uint32_t j = list[i] % 3;
+        for (uint32_t e = 1; e <= 2; e++) {
+            const uint32_t x = tri[(j + e) % 3];
+            if (x != k && x != opp[0] && x != opp[1] && s->cut[x])
+                return false;
+        }
+    }
+    return true;
+}
+
 bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3],
                            double cost, double limit)
 {
     if (!(cost <= limit && cost < INFINITY))
         return false;
     if (!mr_collapse_valid(&s->m, r, k, target, &s->limits))
+        return false;
+    if (s->cut && s->cut[k] && !cut_collapse_ok(s, r, k))
         return false;
     return !s->attr_valid || s->attr_valid(s, r, k);
 }

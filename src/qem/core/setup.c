@@ -66,6 +66,13 @@ static void inner_quadric(mr_simplifier *s, uint32_t v)
     mr_quadric_store(&s->q[v], &q);
 }
 
+/* Is (v, x) an open boundary's edge: one triangle, and not a chunk's cut
+ * (mr_vertex_marks)? */
+static bool open_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
+{
+    return mr_collapse_edge_triangles(&s->m, v, x) == 1 && !(s->cut && s->cut[v] && s->cut[x]);
+}
+
 /* Initial quadric of v, relative to v's position: the planes of its
  * triangles (all through v) and the constraint planes of its boundary
  * edges. */
@@ -110,7 +117,7 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
         const uint32_t k = list[i] % 3;
         const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
         for (int e = 0; e < 2; e++) {
-            if (mr_collapse_edge_triangles(m, v, ends[e]) != 1)
+            if (!open_edge(s, v, ends[e]))
                 continue;
             const double o[3] = {0, 0, 0};
             double b[3];
@@ -119,6 +126,49 @@ static void initial_quadric(mr_simplifier *s, uint32_t v, double boundary_weight
             b[1] -= pv[1];
             b[2] -= pv[2];
             mr_quadric_add_edge_constraint(&q, o, b, n, boundary_weight);
+        }
+    }
+    mr_quadric_store(&s->q[v], &q);
+}
+
+/* The quadric of v carried from the runs before (mr_vertex_marks): theirs,
+ * scaled to this run's normalised lengths (factor r: their unit in this
+ * run's), and the constraint planes of v's open edges that those runs took
+ * for a cut (both ends were cut there) and this one does not. */
+static void carried_quadric(mr_simplifier *s, uint32_t v, const mr_vertex_marks *marks,
+                            double r, double boundary_weight)
+{
+    const mr_collapse_mesh *m = &s->m;
+    mr_quadric q;
+    mr_quadric_load(&q, &marks->quadrics[v]);
+    const double r2 = r * r;
+    q.a00 *= r2, q.a01 *= r2, q.a02 *= r2, q.a11 *= r2, q.a12 *= r2, q.a22 *= r2;
+    q.b0 *= r2 * r, q.b1 *= r2 * r, q.b2 *= r2 * r;
+    q.c *= r2 * r2;
+    q.w *= r2;
+    if ((m->flags[v] & MR_VF_BOUNDARY) && boundary_weight > 0 && marks->was_cut[v]) {
+        const uint32_t *list = mr_collapse_vertex_tris(m, v);
+        double pv[3];
+        mr_collapse_load(m, v, pv);
+        for (uint32_t i = 0; i < m->count[v]; i++) {
+            const uint32_t *tri = m->tris + (list[i] - list[i] % 3);
+            const uint32_t k = list[i] % 3;
+            const uint32_t ends[2] = {tri[(k + 1) % 3], tri[(k + 2) % 3]};
+            for (int e = 0; e < 2; e++) {
+                if (!marks->was_cut[ends[e]] || !open_edge(s, v, ends[e]))
+                    continue;
+                double p[3][3], n[3], b[3];
+                for (int j = 0; j < 3; j++)
+                    mr_collapse_load(m, tri[j], p[j]);
+                if (!(mr_triangle_normal(p[0], p[1], p[2], n) > 0))
+                    continue;
+                mr_collapse_load(m, ends[e], b);
+                b[0] -= pv[0];
+                b[1] -= pv[1];
+                b[2] -= pv[2];
+                const double o[3] = {0, 0, 0};
+                mr_quadric_add_edge_constraint(&q, o, b, n, boundary_weight);
+            }
         }
     }
     mr_quadric_store(&s->q[v], &q);
@@ -438,10 +488,10 @@ void mr_simplifier_release_corners(mr_simplifier *s)
     s->corners = 0;
 }
 
-/* An open boundary's edge: one triangle. */
+/* An open boundary's edge: one triangle, no chunk's cut. */
 static bool boundary_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
 {
-    return mr_collapse_edge_triangles(&s->m, v, x) == 1;
+    return open_edge(s, v, x);
 }
 
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_triangles,
@@ -525,10 +575,14 @@ static void set_goal(mr_simplifier *s, const mr_simplify_options *o)
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
                              size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const mr_simplify_options *o,
-                             const mr_simplify_plan *plan, const uint8_t *extra_flags,
+                             const mr_simplify_plan *plan, const mr_vertex_marks *marks,
                              mr_error *err)
 {
     memset(s, 0, sizeof *s);
+    const uint8_t *extra_flags = marks ? marks->flags : NULL;
+    if (marks && marks->quadrics && (!marks->was_cut || !(marks->unit > 0)))
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: carried quadrics need was_cut and a unit > 0");
     if (!positions && vertex_count)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "simplify: positions are NULL");
     if (!indices && triangle_count)
@@ -691,10 +745,18 @@ mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t st
      * quadric: the same result on any number of threads. */
     const int nthreads = s->plan.threads;
     const ptrdiff_t nv = (ptrdiff_t)vertex_count;
+    s->cut = marks ? marks->cut : NULL;
+    const mr_quadricf *carried = marks ? marks->quadrics : NULL;
+    const double r = carried ? marks->unit * s->scale : 0;
 #pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nv > 65536)
-    for (ptrdiff_t v = 0; v < nv; v++)
-        if (!(m->flags[v] & MR_VF_REMOVED))
+    for (ptrdiff_t v = 0; v < nv; v++) {
+        if (m->flags[v] & MR_VF_REMOVED)
+            continue;
+        if (carried)
+            carried_quadric(s, (uint32_t)v, marks, r, o->boundary_weight);
+        else
             initial_quadric(s, (uint32_t)v, o->boundary_weight);
+    }
     mr_simplifier_mark_corners(s, MR_VF_BOUNDARY, boundary_edge);
     set_goal(s, o);
     return MR_OK;

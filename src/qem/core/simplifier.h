@@ -23,6 +23,33 @@
 
 typedef struct mr_simplifier mr_simplifier;
 
+/*
+ * What a caller adds to a run's vertices, each array one entry per input
+ * vertex (all optional). Besides flags, the marks of a chunk of a larger
+ * mesh (the out-of-core path, qem/chunk.c), whose cut vertices -- those
+ * that triangles of other chunks use too -- the caller locks (flags):
+ *   - an edge of one triangle between two cut vertices may have its other
+ *     triangles elsewhere: it is no open boundary (no constraint planes,
+ *     no corner's polyline);
+ *   - a collapse r -> k into a cut vertex is refused when r has a cut
+ *     neighbour other than k and the edge's opposite vertices: k's edges
+ *     in other chunks are not seen, and the collapse could join k to that
+ *     neighbour twice (mr_simplifier_allowed);
+ *   - quadrics: each vertex's quadric from the runs before (a chunk made
+ *     of simplified chunks), relative to its position, lengths in units
+ *     of `unit` (a quadric's area terms scale by unit^2, and so on), in
+ *     place of its triangles' planes; the open edges those runs could not
+ *     tell from a cut (both ends were cut there: was_cut) get their
+ *     constraint planes now, when one end is no longer cut.
+ */
+typedef struct mr_vertex_marks {
+    const uint8_t *flags;          /* or'ed into the vertices' flags (MR_VF_*) */
+    const uint8_t *cut;            /* nonzero: on the chunk's cut */
+    const mr_quadricf *quadrics;   /* or NULL */
+    const uint8_t *was_cut;        /* with quadrics */
+    double unit;                   /* with quadrics: their length unit */
+} mr_vertex_marks;
+
 /* What the run aims at. */
 typedef struct mr_simplify_goal {
     size_t vertices, triangles; /* stop at or below (0 = unused) */
@@ -96,6 +123,7 @@ struct mr_simplifier {
     bool (*attr_valid)(const mr_simplifier *s, uint32_t r, uint32_t k);
     void (*attr_apply)(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
     void *attr;              /* the hooks' own state: they write only through it */
+    const uint8_t *cut;      /* the marks' cut vertices (a chunk's), or NULL */
 };
 
 /* Blocks of triangles of the working order, and the blocks in a group of
@@ -143,12 +171,13 @@ static inline double mr_simplifier_normalised(const mr_simplifier *s, double e)
 mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_triangles,
                                     mr_error *err);
 /* The working mesh, its quadrics and corners, and the plan: *plan is the
- * strategy's part (the entry's), completed from o into s->plan. o must
- * have passed mr_simplify_check_options. On failure s is left freed. */
+ * strategy's part (the entry's), completed from o into s->plan; marks
+ * (optional) as above, kept until mr_simplifier_free. o must have passed
+ * mr_simplify_check_options. On failure s is left freed. */
 mr_status mr_simplifier_init(mr_simplifier *s, const float *positions, size_t stride,
                              size_t vertex_count, const uint32_t *indices,
                              size_t triangle_count, const mr_simplify_options *o,
-                             const mr_simplify_plan *plan, const uint8_t *extra_flags,
+                             const mr_simplify_plan *plan, const mr_vertex_marks *marks,
                              mr_error *err);
 /* Release the quadrics, keeping the mesh (before the surface fit, whose
  * arrays would otherwise come on top of them, and before the output). The

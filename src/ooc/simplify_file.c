@@ -1,0 +1,1004 @@
+/*
+ * mr_simplify_file: simplification of a mesh file in bounded memory, after
+ * the external-memory octree simplification of Cignoni et al. (OEMM) and
+ * the locked-border group hierarchies of clustered LOD builders, with the
+ * quadrics carried up the hierarchy (chunk.h).
+ *
+ * The budget B (bytes) sets a chunk's capacity C: what B leaves after the
+ * per-vertex table (4 bytes a vertex) and the buffers, at
+ * CHUNK_BYTES_PER_TRIANGLE. An input of at most B / INCORE_BYTES_PER_TRIANGLE
+ * triangles is read whole and simplified by mr_mesh_simplify: its bytes.
+ * Larger ones, out of core:
+ *   1. a pass over the vertices: the bounding box (and the check that
+ *      every position is finite);
+ *   2. passes over the faces: their centroids counted into the chunk tree
+ *      (tree.h) until every leaf holds at most C triangles;
+ *   3. a pass that spills each triangle into its leaf's run of a
+ *      temporary file, each vertex noting the first and last leaf that
+ *      uses it (vertex_range: a vertex whose run leaves a node's is on
+ *      that node's cut);
+ *   4. the tree in post-order: a leaf is read back, its vertices' positions
+ *      fetched, and simplified with its cut locked; an inner node joins
+ *      its two children's results (their shared cut vertices are one
+ *      vertex, their quadrics summed) and simplifies that with the cut
+ *      that is left locked; each result goes to a temporary file until its
+ *      parent reads it. The root takes the options' targets; the nodes
+ *      below aim at SLACK times their share of the target (by input
+ *      triangles), at most C / 2 so that two of them fit a parent, so that
+ *      the root still chooses among SLACK times the collapses it needs --
+ *      and no more than memory requires is decided where the other chunks
+ *      cannot be seen;
+ *   5. the root's result is written.
+ * The counts, splits, orders and sums depend on the file and the options
+ * only: the same bytes on any number of threads.
+ */
+#include "source.h"
+#include "temp.h"
+#include "tree.h"
+#include "../qem/chunk.h"
+#include "../qem/core/simplifier.h"
+#include "../io/io_internal.h"
+#include "../mesh/adjacency.h"
+
+#include "../core/omp_compat.h"
+
+#include <math.h>
+
+/* What a whole-mesh simplification takes, a triangle, at most (the
+ * process's peak over the input's triangles: about 122 measured); what a
+ * chunk's takes (its arrays, the simplifier, its result and the
+ * quadrics carried in and out). */
+#define INCORE_BYTES_PER_TRIANGLE 160
+#define CHUNK_BYTES_PER_TRIANGLE 200
+/* The nodes below the root aim at this many times their share. */
+#define SLACK 4
+/* The smallest chunk worth the name. */
+#define MIN_CAPACITY 1024
+/* Leaves at most: a vertex notes its first and last in 16 bits each. */
+#define MAX_LEAVES 65535u
+/* Passes that refine the tree at most. */
+#define MAX_REFINEMENTS 6
+
+/* Vertices decoded a block; faces a batch (centroids on every thread). */
+enum { VERTEX_BLOCK = 1 << 18, FACE_BATCH = 1 << 18, RELEASE_EVERY = 64 };
+
+/* A vertex's leaves: the first in the low 16 bits, the last in the high;
+ * none yet: first 0xFFFF, last 0. */
+#define RANGE_NONE 0x0000FFFFu
+static inline uint32_t range_first(uint32_t r) { return r & 0xFFFFu; }
+static inline uint32_t range_last(uint32_t r) { return r >> 16; }
+static inline bool range_outside(uint32_t r, uint32_t first, uint32_t last)
+{
+    return range_first(r) < first || range_last(r) > last;
+}
+
+void mr_out_of_core_options_default(mr_out_of_core_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->memory = MR_MEMORY_DEFAULT;
+}
+
+/* One node's result: its vertices (input vertex ids, positions,
+ * quadrics) and triangles, on a temporary file until its parent reads it. */
+typedef struct piece {
+    size_t nv, nt;
+    uint32_t *gid;
+    float *pos;
+    mr_quadricf *q;
+    uint32_t *idx;
+    ooc_file file;
+} piece;
+
+static void piece_free(piece *p)
+{
+    free(p->gid);
+    free(p->pos);
+    free(p->q);
+    free(p->idx);
+    p->gid = p->idx = NULL;
+    p->pos = NULL;
+    p->q = NULL;
+}
+
+typedef struct job {
+    const char *in_path;
+    const mr_simplify_options *o;
+    mr_simplify_file_stats *st;
+    ooc_source src;
+    ooc_temp temp;
+    ooc_tree tree;
+    int threads;
+    size_t batch;            /* faces a batch of a pass */
+    size_t nv, nt;           /* the input's counts */
+    size_t referenced;       /* vertices some triangle uses */
+    double lo[3], hi[3];     /* every vertex's box */
+    double diagonal;         /* its diagonal: the quadrics' unit and the base
+                                of relative errors */
+    uint64_t capacity;       /* C */
+    uint32_t *range;         /* per vertex: its first and last leaf */
+    ooc_file spill;          /* the leaves' triangles */
+    uint64_t *leaf_at;       /* the triangle each leaf's run starts at */
+    uint64_t *leaf_count;    /* triangles written to it */
+    piece *pieces;           /* per node */
+    /* the targets, resolved on the whole input */
+    size_t target_vertices, target_triangles;
+    double share_triangles;  /* the targets as triangles (0: none) */
+    double max_error;        /* absolute (0: none) */
+    /* progress over the whole job, in triangles worked */
+    double done, total;
+    bool cancelled;
+} job;
+
+/* ---- progress -------------------------------------------------------------- */
+
+typedef struct progress_span {
+    job *j;
+    double base, span;
+} progress_span;
+
+static int span_progress(double fraction, void *user)
+{
+    progress_span *p = user;
+    job *j = p->j;
+    const double f = j->total > 0 ? (p->base + p->span * fraction) / j->total : 1;
+    if (j->o->progress && j->o->progress(f > 1 ? 1 : f, j->o->progress_user) != 0) {
+        j->cancelled = true;
+        return 1;
+    }
+    return 0;
+}
+
+/* Report work done; false when the callback asks to stop. */
+static bool report(job *j, double worked, mr_error *err, mr_status *st)
+{
+    j->done += worked;
+    progress_span p = {j, j->done, 0};
+    if (span_progress(0, &p)) {
+        *st = mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
+                            "simplify: cancelled by the progress callback");
+        return false;
+    }
+    return true;
+}
+
+/* ---- passes over the input --------------------------------------------------- */
+
+/* Pass 1: every vertex's box (the source checks each position). */
+static mr_status bounds_pass(job *j, mr_error *err)
+{
+    mr_mesh b;
+    mr_mesh_init(&b);
+    mr_status st = mr_mesh_alloc(&b, VERTEX_BLOCK, 0, j->src.attributes, err);
+    for (int k = 0; k < 3; k++) {
+        j->lo[k] = INFINITY;
+        j->hi[k] = -INFINITY;
+    }
+    for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += VERTEX_BLOCK) {
+        const size_t m = j->nv - v0 < VERTEX_BLOCK ? j->nv - v0 : VERTEX_BLOCK;
+        b.vertex_count = m;
+        if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
+            break;
+        for (size_t i = 0; i < m; i++)
+            for (int k = 0; k < 3; k++) {
+                const double x = b.positions[3 * i + (size_t)k];
+                j->lo[k] = x < j->lo[k] ? x : j->lo[k];
+                j->hi[k] = x > j->hi[k] ? x : j->hi[k];
+            }
+    }
+    b.vertex_count = VERTEX_BLOCK;
+    mr_mesh_free(&b);
+    j->src.release(j->src.impl);
+    const double dx = j->hi[0] - j->lo[0], dy = j->hi[1] - j->lo[1], dz = j->hi[2] - j->lo[2];
+    j->diagonal = sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(j->diagonal > 0))
+        j->diagonal = 1;
+    return st;
+}
+
+/* A pass over the faces in batches: each batch's triangles and their
+ * centroids (on every thread) handed to fn in file order. */
+typedef mr_status (*batch_fn)(job *j, const uint32_t *idx, const double *c, size_t n,
+                              void *user, mr_error *err);
+
+static mr_status face_pass(job *j, batch_fn fn, void *user, mr_error *err)
+{
+    const size_t per = j->src.max_faces + 1;
+    const size_t cap = per > j->batch ? per : j->batch;
+    uint32_t *idx = mr_alloc_array(cap + per, 3 * sizeof *idx);
+    double *c = mr_alloc_array(cap + per, 3 * sizeof *c);
+    if (!idx || !c) {
+        free(idx);
+        free(c);
+        return mr_fail_nomem(err, j->in_path, (cap + per) * 36);
+    }
+    j->src.rewind(j->src.impl);
+    mr_status st = MR_OK;
+    for (size_t chunk = 0, done = 0; st == MR_OK && !done;) {
+        size_t got = 0;
+        while (got < cap && st == MR_OK) {
+            size_t n3;
+            if ((st = j->src.next_faces(j->src.impl, idx + 3 * got, &n3, err)) != MR_OK)
+                break;
+            if (n3 == 0) {
+                done = 1;
+                break;
+            }
+            got += n3;
+            if (++chunk % RELEASE_EVERY == 0)
+                j->src.release(j->src.impl);
+        }
+        if (st != MR_OK || got == 0)
+            break;
+        const ptrdiff_t ng = (ptrdiff_t)got;
+#pragma omp parallel for schedule(static) num_threads(j->threads) if (ng > 4096)
+        for (ptrdiff_t f = 0; f < ng; f++) {
+            float p[3][3];
+            for (int e = 0; e < 3; e++)
+                j->src.position(j->src.impl, idx[3 * f + e], p[e]);
+            for (int k = 0; k < 3; k++)
+                c[3 * f + k] = ooc_centroid(p[0], p[1], p[2], k);
+        }
+        st = fn(j, idx, c, got, user, err);
+        if (st == MR_OK)
+            report(j, 0.1 * (double)got, err, &st);
+    }
+    j->src.release(j->src.impl);
+    free(idx);
+    free(c);
+    j->st->passes++;
+    return st;
+}
+
+static mr_status count_batch(job *j, const uint32_t *idx, const double *c, size_t n, void *user,
+                             mr_error *err)
+{
+    (void)idx, (void)user, (void)err;
+    for (size_t f = 0; f < n; f++)
+        ooc_tree_count(&j->tree, c + 3 * f);
+    return MR_OK;
+}
+
+/* The spill's buffers: a run of triangles per leaf, written when full. */
+typedef struct spill_buffers {
+    uint32_t *buf;     /* leaves x per x 3 */
+    size_t per;        /* triangles a leaf's buffer holds */
+    size_t *fill;
+    uint32_t *leaf;    /* a batch's leaves */
+} spill_buffers;
+
+static mr_status flush_leaf(job *j, spill_buffers *b, size_t l, mr_error *err)
+{
+    if (b->fill[l] == 0)
+        return MR_OK;
+    const uint64_t at = (j->leaf_at[l] + j->leaf_count[l]) * 12;
+    mr_status st = ooc_file_write(&j->temp, &j->spill, at, b->buf + 3 * b->per * l,
+                                  12 * b->fill[l], err);
+    j->leaf_count[l] += b->fill[l];
+    b->fill[l] = 0;
+    return st;
+}
+
+static mr_status spill_batch(job *j, const uint32_t *idx, const double *c, size_t n, void *user,
+                             mr_error *err)
+{
+    spill_buffers *b = user;
+    const ptrdiff_t nn = (ptrdiff_t)n;
+#pragma omp parallel for schedule(static) num_threads(j->threads) if (nn > 4096)
+    for (ptrdiff_t f = 0; f < nn; f++)
+        b->leaf[f] = j->tree.nodes[ooc_tree_locate(&j->tree, c + 3 * f)].leaf;
+    for (size_t f = 0; f < n; f++) {
+        const uint32_t *t = idx + 3 * f;
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+            continue; /* no triangle: the simplifier would drop it */
+        const uint32_t l = b->leaf[f];
+        for (int e = 0; e < 3; e++) {
+            uint32_t r = j->range[t[e]];
+            const uint32_t first = range_first(r) < l ? range_first(r) : l;
+            const uint32_t last = range_last(r) > l ? range_last(r) : l;
+            j->range[t[e]] = first | last << 16;
+        }
+        uint32_t *dst = b->buf + 3 * (b->per * l + b->fill[l]);
+        dst[0] = t[0], dst[1] = t[1], dst[2] = t[2];
+        if (++b->fill[l] == b->per) {
+            mr_status st = flush_leaf(j, b, l, err);
+            if (st != MR_OK)
+                return st;
+        }
+    }
+    return MR_OK;
+}
+
+/* ---- pieces on disk ---------------------------------------------------------- */
+
+static mr_status piece_store(job *j, piece *p, mr_error *err)
+{
+    mr_status st = ooc_file_open(&j->temp, &p->file, err);
+    uint64_t at = 0;
+    const struct {
+        const void *data;
+        size_t bytes;
+    } parts[4] = {{p->gid, 4 * p->nv}, {p->pos, 12 * p->nv}, {p->q, sizeof *p->q * p->nv},
+                  {p->idx, 12 * p->nt}};
+    for (int i = 0; i < 4 && st == MR_OK; i++) {
+        st = ooc_file_write(&j->temp, &p->file, at, parts[i].data, parts[i].bytes, err);
+        at += parts[i].bytes;
+    }
+    piece_free(p);
+    return st;
+}
+
+static mr_status piece_load(job *j, piece *p, mr_error *err)
+{
+    p->gid = mr_alloc_array(p->nv + 1, sizeof *p->gid);
+    p->pos = mr_alloc_array(p->nv + 1, 3 * sizeof *p->pos);
+    p->q = mr_alloc_array(p->nv + 1, sizeof *p->q);
+    p->idx = mr_alloc_array(p->nt + 1, 3 * sizeof *p->idx);
+    if (!p->gid || !p->pos || !p->q || !p->idx) {
+        piece_free(p);
+        return mr_fail_nomem(err, NULL, p->nv * 60 + p->nt * 12);
+    }
+    uint64_t at = 0;
+    mr_status st = MR_OK;
+    void *data[4] = {p->gid, p->pos, p->q, p->idx};
+    const size_t bytes[4] = {4 * p->nv, 12 * p->nv, sizeof *p->q * p->nv, 12 * p->nt};
+    for (int i = 0; i < 4 && st == MR_OK; i++) {
+        st = ooc_file_read(&j->temp, &p->file, at, data[i], bytes[i], err);
+        at += bytes[i];
+    }
+    ooc_file_close(&j->temp, &p->file);
+    if (st != MR_OK)
+        piece_free(p);
+    return st;
+}
+
+/* ---- the nodes ----------------------------------------------------------------- */
+
+/* What a node below the root aims at: SLACK times its share of the
+ * target, and two triangles for each vertex of its cut (which stays,
+ * locked, for the levels above to reduce: counted in, the triangles
+ * inside are not spent on it), at most half a chunk, at most its input. */
+static size_t node_target(const job *j, const ooc_node *n, size_t cuts)
+{
+    /* half a chunk; but the inside keeps a quarter of one whatever the
+     * cut takes (a small chunk high in the tree) */
+    double t = (double)(j->capacity / 2);
+    if (2 * (double)cuts + (double)(j->capacity / 4) > t)
+        t = 2 * (double)cuts + (double)(j->capacity / 4);
+    if (j->share_triangles > 0) {
+        const double share =
+            ceil(SLACK * j->share_triangles * (double)n->triangles / (double)j->nt) +
+            2 * (double)cuts;
+        t = share < t ? share : t;
+    }
+    return t < 1 ? 1 : (size_t)t;
+}
+
+/* The options of node i's run on nt triangles and nv vertices. */
+static void node_options(job *j, uint32_t i, size_t nt, size_t nv, size_t cuts,
+                         progress_span *ps, mr_simplify_options *o)
+{
+    *o = *j->o;
+    o->vertex_lock = NULL;
+    o->progress = span_progress;
+    o->progress_user = ps;
+    o->target_ratio = 0;
+    o->max_error = j->max_error;
+    o->error_absolute = 1;
+    const ooc_node *n = &j->tree.nodes[i];
+    if (n->parent < 0) {
+        /* the root: the targets, as the whole input counts them */
+        o->target_vertices = j->target_vertices < nv ? j->target_vertices : nv;
+        o->target_triangles = j->target_triangles < nt ? j->target_triangles : nt;
+        return;
+    }
+    o->target_vertices = 0;
+    o->until_error = 0;
+    o->prune = 0;
+    const size_t t = node_target(j, n, cuts);
+    o->target_triangles = t < nt ? t : nt;
+}
+
+/* Run the chunk and keep its result as node i's piece (or, for the root,
+ * hand it back in *root). gid: each chunk vertex's input vertex. */
+static mr_status run_chunk(job *j, uint32_t i, const mr_chunk *c, const uint32_t *gid,
+                           mr_chunk_result *root, mr_error *err)
+{
+    const ooc_node *n = &j->tree.nodes[i];
+    progress_span ps = {j, j->done, (double)c->triangle_count};
+    size_t cuts = 0;
+    for (size_t v = 0; v < c->vertex_count; v++)
+        cuts += c->cut[v] != 0;
+    mr_simplify_options o;
+    node_options(j, i, c->triangle_count, c->vertex_count, cuts, &ps, &o);
+    const double t0 = mr_now_seconds();
+    mr_chunk_result r;
+    mr_status st = mr_simplify_chunk(c, &o, &r, err);
+    if (st != MR_OK)
+        return st;
+    j->done += (double)c->triangle_count;
+    mr_simplify_file_stats *fs = j->st;
+    const int level = n->height < MR_LEVELS_MAX ? n->height : MR_LEVELS_MAX - 1;
+    fs->level_chunks[level]++;
+    fs->level_triangles[level] += c->triangle_count;
+    fs->level_seconds[level] += mr_now_seconds() - t0;
+    mr_simplify_stats *s = &fs->simplify;
+    s->collapses += r.mesh.stats.collapses;
+    s->seconds_setup += r.mesh.stats.seconds_setup;
+    s->seconds_collapse += r.mesh.stats.seconds_collapse;
+    s->seconds_output += r.mesh.stats.seconds_output;
+    s->max_error = r.mesh.stats.max_error > s->max_error ? r.mesh.stats.max_error : s->max_error;
+    if (n->parent < 0) {
+        *root = r;
+        return MR_OK;
+    }
+    piece *p = &j->pieces[i];
+    p->nv = r.mesh.vertex_count;
+    p->nt = r.mesh.triangle_count;
+    p->gid = mr_alloc_array(p->nv + 1, sizeof *p->gid);
+    if (!p->gid) {
+        mr_chunk_result_free(&r);
+        return mr_fail_nomem(err, NULL, p->nv * 4);
+    }
+    for (size_t v = 0; v < p->nv; v++)
+        p->gid[v] = gid[r.mesh.origin[v]];
+    p->pos = r.mesh.positions;
+    p->idx = r.mesh.indices;
+    p->q = r.quadrics;
+    r.mesh.positions = NULL;
+    r.mesh.indices = NULL;
+    r.quadrics = NULL;
+    mr_chunk_result_free(&r);
+    return piece_store(j, p, err);
+}
+
+/* A leaf: its triangles read back, its vertices numbered in input order,
+ * their positions fetched. */
+static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *err)
+{
+    const ooc_node *n = &j->tree.nodes[i];
+    const uint32_t l = n->leaf;
+    const size_t nt = (size_t)j->leaf_count[l];
+    if (nt == 0) {
+        if (n->parent < 0)
+            return mr_fail_plain(err, MR_ERR_EMPTY, j->in_path,
+                                 "every one of its triangles uses a vertex twice: no surface "
+                                 "to simplify");
+        memset(&j->pieces[i], 0, sizeof j->pieces[i]);
+        j->pieces[i].file.fd = -1;
+        return MR_OK; /* nothing here */
+    }
+    uint32_t *idx = mr_alloc_array(nt, 3 * sizeof *idx);
+    uint32_t *key = mr_alloc_array(nt, 3 * sizeof *key);
+    uint32_t *val = mr_alloc_array(nt, 3 * sizeof *val);
+    if (!idx || !key || !val) {
+        free(idx);
+        free(key);
+        free(val);
+        return mr_fail_nomem(err, NULL, nt * 36);
+    }
+    mr_status st = ooc_file_read(&j->temp, &j->spill, j->leaf_at[l] * 12, idx, 12 * nt, err);
+    const size_t nc = 3 * nt;
+    for (size_t c = 0; c < nc; c++) {
+        key[c] = idx[c];
+        val[c] = (uint32_t)c;
+    }
+    if (st == MR_OK)
+        st = mr_radix_sort_u32(key, val, nc, 32, j->threads, err);
+    /* the vertices in input order; each corner's local id */
+    size_t nv = 0;
+    for (size_t c = 0; st == MR_OK && c < nc; c++) {
+        if (c == 0 || key[c] != key[c - 1])
+            key[nv++] = key[c];
+        idx[val[c]] = (uint32_t)(nv - 1);
+    }
+    free(val);
+    float *pos = st == MR_OK ? mr_alloc_array(nv, 3 * sizeof *pos) : NULL;
+    uint8_t *cut = st == MR_OK ? mr_alloc_array(nv, 1) : NULL;
+    uint8_t *lock = st == MR_OK && j->o->vertex_lock ? mr_alloc_array(nv, 1) : NULL;
+    if (st == MR_OK && (!pos || !cut || (j->o->vertex_lock && !lock)))
+        st = mr_fail_nomem(err, NULL, nv * 14);
+    if (st == MR_OK) {
+        const uint32_t *gid = key;
+        if (key[nv - 1] - key[0] < (uint32_t)(64 * nv))
+            j->src.prefetch(j->src.impl, key[0], key[nv - 1]);
+        const ptrdiff_t n3 = (ptrdiff_t)nv;
+#pragma omp parallel for schedule(static) num_threads(j->threads) if (n3 > 16384)
+        for (ptrdiff_t v = 0; v < n3; v++) {
+            j->src.position(j->src.impl, gid[v], pos + 3 * v);
+            cut[v] = range_outside(j->range[gid[v]], l, l);
+            if (lock)
+                lock[v] = j->o->vertex_lock[gid[v]] != 0;
+        }
+        j->src.release(j->src.impl);
+        const mr_chunk c = {pos, nv, idx, nt, cut, lock, NULL, NULL, j->diagonal};
+        st = run_chunk(j, i, &c, gid, root, err);
+    }
+    free(idx);
+    free(key);
+    free(pos);
+    free(cut);
+    free(lock);
+    return st;
+}
+
+/* Open-addressing table of input vertex ids to a piece's vertices. */
+static inline size_t slot_of(uint32_t g, size_t mask) { return (size_t)(mr_mix64(g) & mask); }
+
+/* An inner node: its children's pieces joined (A's vertices, then B's
+ * that A does not have; a vertex both have, on both their cuts, once,
+ * with both quadrics), its cut that is left locked. */
+static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *err)
+{
+    const ooc_node *n = &j->tree.nodes[i];
+    piece *a = &j->pieces[n->child[0]], *b = &j->pieces[n->child[1]];
+    const ooc_node *na = &j->tree.nodes[n->child[0]], *nb = &j->tree.nodes[n->child[1]];
+    mr_status st = MR_OK;
+    if (a->nt && (st = piece_load(j, a, err)) != MR_OK)
+        return st;
+    if (b->nt && (st = piece_load(j, b, err)) != MR_OK) {
+        piece_free(a);
+        return st;
+    }
+    const size_t nv_max = a->nv + b->nv, nt = a->nt + b->nt;
+    if (nt == 0) {
+        if (n->parent < 0)
+            return mr_fail_plain(err, MR_ERR_EMPTY, j->in_path,
+                                 "every one of its triangles uses a vertex twice: no surface "
+                                 "to simplify");
+        memset(&j->pieces[i], 0, sizeof j->pieces[i]);
+        j->pieces[i].file.fd = -1;
+        return MR_OK;
+    }
+    size_t cuts = 0;
+    for (size_t v = 0; v < a->nv; v++)
+        cuts += range_outside(j->range[a->gid[v]], na->first_leaf, na->last_leaf);
+    size_t mask = 15;
+    while (mask + 1 < 2 * cuts)
+        mask = 2 * mask + 1;
+    uint32_t *table = mr_alloc_array(mask + 1, sizeof *table);
+    uint32_t *gid = mr_alloc_array(nv_max + 1, sizeof *gid);
+    float *pos = mr_alloc_array(nv_max + 1, 3 * sizeof *pos);
+    mr_quadricf *q = mr_alloc_array(nv_max + 1, sizeof *q);
+    uint8_t *cut = mr_alloc_array(nv_max + 1, 1), *was = mr_alloc_array(nv_max + 1, 1);
+    uint8_t *lock = j->o->vertex_lock ? mr_alloc_array(nv_max + 1, 1) : NULL;
+    uint32_t *idx = mr_alloc_array(nt, 3 * sizeof *idx);
+    uint32_t *bmap = mr_alloc_array(b->nv + 1, sizeof *bmap);
+    if (!table || !gid || !pos || !q || !cut || !was || (j->o->vertex_lock && !lock) || !idx ||
+        !bmap) {
+        st = mr_fail_nomem(err, NULL, nv_max * 70 + nt * 12);
+        goto done;
+    }
+    for (size_t s = 0; s <= mask; s++)
+        table[s] = UINT32_MAX;
+    size_t nv = 0;
+    for (size_t v = 0; v < a->nv; v++, nv++) {
+        gid[nv] = a->gid[v];
+        memcpy(pos + 3 * nv, a->pos + 3 * v, 12);
+        q[nv] = a->q[v];
+        was[nv] = range_outside(j->range[a->gid[v]], na->first_leaf, na->last_leaf);
+        if (was[nv]) {
+            size_t s = slot_of(a->gid[v], mask);
+            while (table[s] != UINT32_MAX)
+                s = (s + 1) & mask;
+            table[s] = (uint32_t)v;
+        }
+    }
+    for (size_t v = 0; v < b->nv; v++) {
+        const uint32_t g = b->gid[v];
+        const bool on_cut = range_outside(j->range[g], nb->first_leaf, nb->last_leaf);
+        if (on_cut) {
+            size_t s = slot_of(g, mask);
+            while (table[s] != UINT32_MAX && a->gid[table[s]] != g)
+                s = (s + 1) & mask;
+            if (table[s] != UINT32_MAX) {
+                /* one vertex of both: A's position (bit for bit B's: a cut
+                 * vertex never moves), both quadrics */
+                const uint32_t at = table[s];
+                mr_quadric qa, qb;
+                mr_quadric_load(&qa, &q[at]);
+                mr_quadric_load(&qb, &b->q[v]);
+                mr_quadric_add(&qa, &qb);
+                mr_quadric_store(&q[at], &qa);
+                bmap[v] = at;
+                continue;
+            }
+        }
+        bmap[v] = (uint32_t)nv;
+        gid[nv] = g;
+        memcpy(pos + 3 * nv, b->pos + 3 * v, 12);
+        q[nv] = b->q[v];
+        was[nv] = on_cut;
+        nv++;
+    }
+    memcpy(idx, a->idx, 12 * a->nt);
+    for (size_t c = 0; c < 3 * b->nt; c++)
+        idx[3 * a->nt + c] = bmap[b->idx[c]];
+    for (size_t v = 0; v < nv; v++) {
+        cut[v] = range_outside(j->range[gid[v]], n->first_leaf, n->last_leaf);
+        if (lock)
+            lock[v] = j->o->vertex_lock[gid[v]] != 0;
+    }
+    piece_free(a);
+    piece_free(b);
+    free(bmap);
+    bmap = NULL;
+    free(table);
+    table = NULL;
+    const mr_chunk c = {pos, nv, idx, nt, cut, lock, q, was, j->diagonal};
+    st = run_chunk(j, i, &c, gid, root, err);
+done:
+    piece_free(a);
+    piece_free(b);
+    free(table);
+    free(gid);
+    free(pos);
+    free(q);
+    free(cut);
+    free(was);
+    free(lock);
+    free(idx);
+    free(bmap);
+    return st;
+}
+
+/* The tree in post-order; the root's result into *root. */
+static mr_status run_tree(job *j, mr_chunk_result *root, mr_error *err)
+{
+    ooc_tree *t = &j->tree;
+    j->pieces = mr_calloc_array(t->nnodes, sizeof *j->pieces);
+    int32_t *stack = mr_alloc_array(2 * t->nnodes + 2, sizeof *stack);
+    if (!j->pieces || !stack) {
+        free(stack);
+        return mr_fail_nomem(err, NULL, t->nnodes * (sizeof *j->pieces + 8));
+    }
+    for (size_t i = 0; i < t->nnodes; i++)
+        j->pieces[i].file.fd = -1;
+    const double t0 = mr_now_seconds();
+    mr_status st = MR_OK;
+    size_t sp = 0;
+    stack[sp++] = 0;
+    stack[sp++] = 0;
+    while (sp && st == MR_OK) {
+        const int32_t state = stack[--sp], i = stack[--sp];
+        const ooc_node *n = &t->nodes[i];
+        if (n->child[0] < 0) {
+            st = run_leaf(j, (uint32_t)i, root, err);
+        } else if (state == 0) {
+            stack[sp++] = i;
+            stack[sp++] = 1;
+            stack[sp++] = n->child[1];
+            stack[sp++] = 0;
+            stack[sp++] = n->child[0];
+            stack[sp++] = 0;
+        } else {
+            st = run_inner(j, (uint32_t)i, root, err);
+        }
+        if (st == MR_OK && j->cancelled)
+            st = mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
+                               "simplify: cancelled by the progress callback");
+    }
+    free(stack);
+    j->st->seconds_simplify = mr_now_seconds() - t0;
+    return st;
+}
+
+/* ---- the job --------------------------------------------------------------------- */
+
+static char *size_text(char *buf, size_t cap, uint64_t n)
+{
+    if (n >= (uint64_t)1 << 30)
+        snprintf(buf, cap, "%.2f GiB", (double)n / (double)((uint64_t)1 << 30));
+    else if (n >= (uint64_t)1 << 20)
+        snprintf(buf, cap, "%.1f MiB", (double)n / (double)((uint64_t)1 << 20));
+    else
+        snprintf(buf, cap, "%llu KiB", (unsigned long long)(n >> 10));
+    return buf;
+}
+
+/* A size rounded up, for "give at least". */
+static char *size_up(char *buf, size_t cap, uint64_t n)
+{
+    const double mib = (double)n / (double)((uint64_t)1 << 20);
+    if (mib >= 1024)
+        snprintf(buf, cap, "%.2f GiB", ceil(mib / 1024 * 100) / 100);
+    else
+        snprintf(buf, cap, "%.1f MiB", ceil(mib * 10) / 10);
+    return buf;
+}
+
+/* The targets on the whole input: the vertex target as mr_simplify's
+ * set-up resolves it (a ratio of the referenced vertices, the first of
+ * ratio and count reached), and all as triangles for the nodes' shares. */
+static mr_status resolve_targets(job *j, mr_error *err)
+{
+    const mr_simplify_options *o = j->o;
+    if (o->target_triangles > j->nt)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target of %zu triangles exceeds the input's %zu",
+                             o->target_triangles, j->nt);
+    if (o->target_vertices > j->referenced)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: target of %zu vertices exceeds the input's %zu "
+                             "referenced vertices",
+                             o->target_vertices, j->referenced);
+    size_t tv = 0;
+    if (o->target_ratio > 0)
+        tv = (size_t)floor(o->target_ratio * (double)j->referenced + 0.5);
+    if (o->target_vertices)
+        tv = tv > o->target_vertices ? tv : o->target_vertices;
+    j->target_vertices = tv;
+    j->target_triangles = o->target_triangles;
+    double share = 0;
+    if (tv)
+        share = (double)tv * (double)j->nt / (double)j->referenced;
+    if (o->target_triangles && (share == 0 || (double)o->target_triangles > share))
+        share = (double)o->target_triangles;
+    j->share_triangles = share;
+    j->max_error =
+        o->max_error > 0 ? (o->error_absolute ? o->max_error : o->max_error * j->diagonal) : 0;
+    return MR_OK;
+}
+
+/* The root holds two halves of a chunk, from which it makes the output:
+ * at most three quarters of a chunk, so that it still chooses among a
+ * third more collapses than it makes. */
+static mr_status output_fits(const job *j, uint64_t memory, mr_error *err)
+{
+    if (4 * j->share_triangles <= 3 * (double)j->capacity)
+        return MR_OK;
+    char a[32], b[32];
+    const uint64_t need =
+        memory +
+        (uint64_t)ceil(4 * j->share_triangles / 3 - (double)j->capacity) * CHUNK_BYTES_PER_TRIANGLE;
+    return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
+                         "the output (about %.0f triangles) does not fit the memory budget "
+                         "of %s: its chunks hold %llu triangles, and the last one makes the "
+                         "output from at most a chunk's worth (3/4 of one at most); give at "
+                         "least %s",
+                         j->share_triangles, size_text(a, sizeof a, memory),
+                         (unsigned long long)j->capacity, size_up(b, sizeof b, need));
+}
+
+static mr_status write_root(job *j, const char *out_path, mr_chunk_result *r,
+                            const mr_write_options *write, mr_error *err)
+{
+    mr_mesh m;
+    mr_mesh_init(&m);
+    m.vertex_count = r->mesh.vertex_count;
+    m.triangle_count = r->mesh.triangle_count;
+    m.positions = r->mesh.positions;
+    m.indices = r->mesh.indices;
+    const double t0 = mr_now_seconds();
+    mr_status st = mr_mesh_write(out_path, &m, write, err);
+    j->st->seconds_write = mr_now_seconds() - t0;
+    return st;
+}
+
+static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
+                             const mr_out_of_core_options *ooc, const mr_write_options *write,
+                             mr_error *err)
+{
+    mr_simplify_file_stats *fs = j->st;
+    char a[32], b[32];
+    mr_status st;
+    if (j->src.attributes)
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
+                             "its vertices have normals, texture coordinates or colors, which "
+                             "the out-of-core path does not carry yet (it needs %s in memory "
+                             "for the in-memory path: give --memory that large, or drop the "
+                             "attributes with `meshreduce convert --no-normals --no-texcoords "
+                             "--no-colors`)",
+                             size_text(a, sizeof a, (uint64_t)j->nt * INCORE_BYTES_PER_TRIANGLE));
+    if (j->nv > UINT32_MAX)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, j->in_path,
+                             "%zu vertices exceed the 32-bit index limit", j->nv);
+    /* the budget: the vertex table, the tree's grid, the spill's buffers,
+     * a face batch; the rest for a chunk */
+    const uint32_t grid_bins = memory >= ((uint64_t)256 << 20) ? 64 : 32;
+    const uint64_t buffers = memory / 16 < ((uint64_t)64 << 20) ? memory / 16 : (uint64_t)64 << 20;
+    const uint64_t batch = memory / 640;
+    j->batch = batch < 4096 ? 4096 : batch > FACE_BATCH ? FACE_BATCH : (size_t)batch;
+    const uint64_t fixed = 4 * (uint64_t)j->nv + (j->o->vertex_lock ? (uint64_t)j->nv : 0) +
+                           4 * (uint64_t)grid_bins * grid_bins * grid_bins + buffers +
+                           (uint64_t)j->batch * 40;
+    const uint64_t capacity = memory > fixed ? (memory - fixed) / CHUNK_BYTES_PER_TRIANGLE : 0;
+    /* a chunk well above its cut: 16 sqrt(T) (a cut of a chunk high in
+     * the tree is about that long, at the input's resolution) */
+    uint64_t least = (uint64_t)ceil(16 * sqrt((double)j->nt));
+    least = least > MIN_CAPACITY ? least : MIN_CAPACITY;
+    if (2 * (uint64_t)j->nt / (MAX_LEAVES / 2) > least)
+        least = 2 * (uint64_t)j->nt / (MAX_LEAVES / 2);
+    if (capacity < least)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
+                             "a memory budget of %s is too small for %zu vertices and %zu "
+                             "triangles out of core: give at least %s",
+                             size_text(a, sizeof a, memory), j->nv, j->nt,
+                             size_up(b, sizeof b, fixed + CHUNK_BYTES_PER_TRIANGLE * least));
+    j->capacity = capacity;
+    fs->chunk_capacity = (size_t)capacity;
+    /* the targets' triangles as far as the counts tell before the passes
+     * (the vertex count's at least), to say early what does not fit */
+    j->referenced = j->nv;
+    if ((st = resolve_targets(j, err)) != MR_OK || (st = output_fits(j, memory, err)) != MR_OK)
+        return st;
+    st = ooc_temp_init(&j->temp, ooc ? ooc->temp_dir : NULL, out_path,
+                       ooc ? ooc->temp_budget : 0, err);
+    if (st != MR_OK)
+        return st;
+    /* the passes: the box, the tree's counts, the spill */
+    const double t0 = mr_now_seconds();
+    j->total = 0.1 * (double)j->nt * 4 + (double)j->nt * 2;
+    st = bounds_pass(j, err);
+    if (st == MR_OK)
+        st = ooc_tree_init(&j->tree, j->lo, j->hi, grid_bins, capacity, err);
+    for (int round = 0; st == MR_OK && ooc_tree_open(&j->tree); round++) {
+        st = face_pass(j, count_batch, NULL, err);
+        if (st == MR_OK)
+            st = ooc_tree_split(&j->tree, round + 1 >= MAX_REFINEMENTS, err);
+    }
+    if (st == MR_OK)
+        st = ooc_tree_number(&j->tree, err);
+    if (st != MR_OK)
+        return st;
+    ooc_tree *t = &j->tree;
+    fs->chunks = t->leaves;
+    fs->oversized_chunks = t->oversized;
+    fs->levels = (unsigned)t->height + 1;
+    if (t->leaves > MAX_LEAVES)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
+                             "%zu chunks: more than %u (give a larger memory budget)",
+                             t->leaves, MAX_LEAVES);
+    /* the spill: each leaf's run at its count's offset */
+    j->leaf_at = mr_alloc_array(t->leaves, sizeof *j->leaf_at);
+    j->leaf_count = mr_calloc_array(t->leaves, sizeof *j->leaf_count);
+    j->range = mr_alloc_array(j->nv + 1, sizeof *j->range);
+    spill_buffers sb = {0};
+    sb.per = (size_t)(buffers / 12 / t->leaves);
+    sb.per = sb.per < 64 ? 64 : sb.per > (1u << 16) ? 1u << 16 : sb.per;
+    sb.buf = mr_alloc_array(t->leaves * sb.per, 12);
+    sb.fill = mr_calloc_array(t->leaves, sizeof *sb.fill);
+    sb.leaf = mr_alloc_array(2 * (j->batch + j->src.max_faces + 1), sizeof *sb.leaf);
+    if (!j->leaf_at || !j->leaf_count || !j->range || !sb.buf || !sb.fill || !sb.leaf)
+        st = mr_fail_nomem(err, NULL, j->nv * 4 + t->leaves * sb.per * 12);
+    if (st == MR_OK) {
+        uint64_t at = 0;
+        for (size_t l = 0; l < t->leaves; l++) {
+            j->leaf_at[l] = at;
+            at += t->nodes[t->leaf_node[l]].triangles;
+        }
+        for (size_t v = 0; v < j->nv; v++)
+            j->range[v] = RANGE_NONE;
+        st = ooc_file_open(&j->temp, &j->spill, err);
+    }
+    if (st == MR_OK)
+        st = face_pass(j, spill_batch, &sb, err);
+    for (size_t l = 0; st == MR_OK && l < t->leaves; l++)
+        st = flush_leaf(j, &sb, l, err);
+    free(sb.buf);
+    free(sb.fill);
+    free(sb.leaf);
+    fs->seconds_read = mr_now_seconds() - t0;
+    if (st != MR_OK)
+        return st;
+    for (size_t l = 0; l < t->leaves; l++)
+        if (j->leaf_count[l] > t->nodes[t->leaf_node[l]].triangles)
+            return mr_fail_plain(err, MR_ERR_IO, j->in_path,
+                                 "the faces changed between two passes over the file");
+    j->referenced = 0;
+    for (size_t v = 0; v < j->nv; v++)
+        j->referenced += j->range[v] != RANGE_NONE;
+    fs->simplify.input_vertices = j->referenced;
+    if ((st = resolve_targets(j, err)) != MR_OK || (st = output_fits(j, memory, err)) != MR_OK)
+        return st;
+
+    /* the tree */
+    mr_chunk_result root;
+    memset(&root, 0, sizeof root);
+    st = run_tree(j, &root, err);
+    ooc_file_close(&j->temp, &j->spill);
+    if (st == MR_OK) {
+        mr_simplify_stats *s = &fs->simplify;
+        s->output_vertices = s->output_points = root.mesh.vertex_count;
+        s->output_triangles = root.mesh.triangle_count;
+        s->stop = root.mesh.stats.stop;
+        s->target_reached = root.mesh.stats.target_reached;
+        s->pruned_parts = root.mesh.stats.pruned_parts;
+        s->locked_vertices = root.mesh.stats.locked_vertices;
+        if (!j->o->error_absolute)
+            s->max_error /= j->diagonal;
+        st = write_root(j, out_path, &root, write, err);
+    }
+    mr_chunk_result_free(&root);
+    fs->temp_bytes_peak = j->temp.peak;
+    return st;
+}
+
+/* The in-memory path: read whole, mr_mesh_simplify, write. */
+static mr_status in_core(const char *in_path, const char *out_path,
+                         const mr_simplify_options *o, const mr_write_options *write,
+                         mr_simplify_file_stats *fs, mr_error *err)
+{
+    mr_mesh in, out;
+    mr_mesh_init(&in);
+    mr_mesh_init(&out);
+    const double t0 = mr_now_seconds();
+    mr_status st = mr_mesh_read(in_path, NULL, &in, err);
+    fs->seconds_read = mr_now_seconds() - t0;
+    if (st == MR_OK && in.triangle_count == 0)
+        st = mr_fail_plain(err, MR_ERR_EMPTY, in_path,
+                           "a point cloud (%zu vertices, no triangles): simplify needs a "
+                           "triangle mesh",
+                           in.vertex_count);
+    if (st == MR_OK)
+        st = mr_mesh_simplify(&in, o, &out, NULL, &fs->simplify, err);
+    mr_mesh_free(&in);
+    const double t1 = mr_now_seconds();
+    fs->seconds_simplify = t1 - t0 - fs->seconds_read;
+    if (st == MR_OK)
+        st = mr_mesh_write(out_path, &out, write, err);
+    fs->seconds_write = mr_now_seconds() - t1;
+    mr_mesh_free(&out);
+    return st;
+}
+
+mr_status mr_simplify_file(const char *in_path, const char *out_path,
+                           const mr_simplify_options *options,
+                           const mr_out_of_core_options *ooc, const mr_write_options *write,
+                           mr_simplify_file_stats *stats, mr_error *err)
+{
+    mr_error_clear(err);
+    mr_simplify_file_stats fs;
+    memset(&fs, 0, sizeof fs);
+    if (stats)
+        *stats = fs;
+    if (!in_path || !out_path)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "no input or output path");
+    mr_status st = mr_simplify_check_options(options, SIZE_MAX, err);
+    if (st != MR_OK)
+        return st;
+    const uint64_t memory = ooc && ooc->memory ? ooc->memory : MR_MEMORY_DEFAULT;
+    fs.memory = memory;
+    const double t0 = mr_now_seconds();
+    job j;
+    memset(&j, 0, sizeof j);
+    j.in_path = in_path;
+    j.o = options;
+    j.st = &fs;
+    j.threads = mr_thread_count(options->threads);
+    j.spill.fd = -1;
+    mr_error quiet;
+    st = ooc_source_open(in_path, j.threads, &j.src, &quiet);
+    if (st != MR_OK && st != MR_ERR_UNSUPPORTED) {
+        if (err)
+            *err = quiet;
+        return st;
+    }
+    if (st == MR_OK) {
+        j.nv = j.src.vertex_count;
+        j.nt = j.src.triangle_count;
+    }
+    if (st != MR_OK || (uint64_t)j.nt * INCORE_BYTES_PER_TRIANGLE <= memory) {
+        ooc_source_close(&j.src);
+        st = in_core(in_path, out_path, options, write, &fs, err);
+    } else {
+        fs.out_of_core = 1;
+        fs.simplify.input_triangles = j.nt;
+        st = out_of_core(&j, out_path, memory, ooc, write, err);
+        ooc_source_close(&j.src);
+        ooc_file_close(&j.temp, &j.spill);
+        if (j.pieces)
+            for (size_t i = 0; i < j.tree.nnodes; i++) {
+                piece_free(&j.pieces[i]);
+                ooc_file_close(&j.temp, &j.pieces[i].file);
+            }
+        free(j.pieces);
+        free(j.range);
+        free(j.leaf_at);
+        free(j.leaf_count);
+        ooc_tree_free(&j.tree);
+    }
+    fs.seconds_total = mr_now_seconds() - t0;
+    if (stats)
+        *stats = fs;
+    return st;
+}
