@@ -60,6 +60,9 @@ bool cli_value(int argc, char **argv, int *i, const char *name, const char **val
 
 /* Parse counts like "1000000", "1e6", "250k", "4M", "1G". */
 bool cli_parse_count(const char *s, uint64_t *out);
+/* Parse a size in bytes: "512M", "4G", "1.5GiB", "64k" (binary units:
+ * K = 1024), or a plain count of bytes. */
+bool cli_parse_size(const char *s, uint64_t *out);
 /* Parse an integer / a floating-point number, the whole string. */
 bool cli_parse_int(const char *s, long long *out);
 bool cli_parse_double(const char *s, double *out);

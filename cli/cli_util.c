@@ -149,6 +149,36 @@ bool cli_parse_count(const char *s, uint64_t *out)
     return true;
 }
 
+bool cli_parse_size(const char *s, uint64_t *out)
+{
+    if (!s || !*s || *s == '-')
+        return false;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || errno == ERANGE || !isfinite(v) || v < 0)
+        return false;
+    double mult = 1;
+    switch (*end) {
+    case 'k': case 'K': mult = 1024.0, end++; break;
+    case 'm': case 'M': mult = 1024.0 * 1024, end++; break;
+    case 'g': case 'G': mult = 1024.0 * 1024 * 1024, end++; break;
+    case 't': case 'T': mult = 1024.0 * 1024 * 1024 * 1024, end++; break;
+    default: break;
+    }
+    if (mult > 1 && *end == 'i')
+        end++;
+    if (*end == 'b' || *end == 'B')
+        end++;
+    if (*end != '\0')
+        return false;
+    v = floor(v * mult);
+    if (v > 1.8e19)
+        return false;
+    *out = (uint64_t)v;
+    return true;
+}
+
 double cli_now(void)
 {
     struct timespec ts;

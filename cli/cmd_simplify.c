@@ -97,6 +97,34 @@ static const char usage[] =
     "                        (default 1, 0 = none)\n"
     "  --max-normal-turn D   refuse collapses that turn a triangle by more than D\n"
     "                        degrees (default 60)\n"
+    "\n"
+    "inputs larger than memory (binary PLY; other formats are read whole):\n"
+    "  --memory SIZE         memory budget (default 4G; K, M, G, T are powers of\n"
+    "                        1024). An input whose simplification in memory needs\n"
+    "                        more (about 160 bytes a triangle) is simplified out of\n"
+    "                        core: cut into chunks that fit, each simplified with\n"
+    "                        the vertices it shares with its neighbours locked,\n"
+    "                        then neighbouring chunks merged up a tree, their\n"
+    "                        shared cut unlocked and reduced, each vertex's quadric\n"
+    "                        carried from below, to the last one, which meets the\n"
+    "                        target. The chunks depend on the input and SIZE only:\n"
+    "                        the same bytes on any machine and thread count. The\n"
+    "                        output must fit too (3/4 of a chunk: about SIZE/270\n"
+    "                        triangles). Geometry only: normals, texture\n"
+    "                        coordinates and colors need the in-memory path\n"
+    "  --temp-dir DIR        temporary files (default: $TMPDIR, else the output's\n"
+    "                        directory); they have no name (O_TMPFILE), so nothing\n"
+    "                        is left behind however the process ends, SIGKILL\n"
+    "                        included. Where the file system lacks O_TMPFILE each is\n"
+    "                        named .meshreduce-scratch-HOST-PID-... for the moment\n"
+    "                        it takes to unlink it, and a later run removes such\n"
+    "                        names of processes that no longer exist\n"
+    "  --temp-budget SIZE    fail with a clear error rather than let the temporary\n"
+    "                        files pass SIZE (default: no limit; about 12 bytes an\n"
+    "                        input triangle at most)\n"
+    "--stats and --json say which path ran, the chunks, the levels of the tree\n"
+    "and their time, and the temporary disk used.\n"
+    "\n"
     "  --stats               print counts, largest error and time per phase\n"
     "  --json                print them as one JSON object on stdout\n"
     "  -q, --quiet           no progress, note or summary on success (--stats and\n"
@@ -159,6 +187,9 @@ typedef struct simplify_job {
     mr_simplify_stats s;
     const char *lock_path; /* --lock FILE */
     uint8_t *lock;         /* its vertices, one byte per input vertex */
+    mr_out_of_core_options ooc;
+    bool ooc_given;        /* --memory, --temp-dir or --temp-budget */
+    const mr_simplify_file_stats *fs; /* the file path's figures, or NULL */
 } simplify_job;
 
 /*
@@ -311,6 +342,24 @@ static int option(int argc, char **argv, int *i, void *user)
         if (!v || !*v)
             return cli_usage_error("simplify", "--lock needs a file of vertex indices");
         ((simplify_job *)user)->lock_path = v;
+    } else if (cli_value(argc, argv, i, "--memory", &v)) {
+        simplify_job *job = user;
+        if (!cli_parse_size(v, &n) || n == 0)
+            return cli_usage_error("simplify", "--memory needs a size such as 512M or 4G");
+        job->ooc.memory = n;
+        job->ooc_given = true;
+    } else if (cli_value(argc, argv, i, "--temp-dir", &v)) {
+        simplify_job *job = user;
+        if (!v || !*v)
+            return cli_usage_error("simplify", "--temp-dir needs a directory");
+        job->ooc.temp_dir = v;
+        job->ooc_given = true;
+    } else if (cli_value(argc, argv, i, "--temp-budget", &v)) {
+        simplify_job *job = user;
+        if (!cli_parse_size(v, &n) || n == 0)
+            return cli_usage_error("simplify", "--temp-budget needs a size such as 10G");
+        job->ooc.temp_budget = n;
+        job->ooc_given = true;
     } else if (cli_value(argc, argv, i, "--boundary-weight", &v)) {
         if (!cli_parse_double(v, &x) || x < 0)
             return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
@@ -324,6 +373,28 @@ static int option(int argc, char **argv, int *i, void *user)
         return CLI_NO_MATCH;
     }
     return CLI_OK;
+}
+
+/* What a run says after it: a missed target (even with -q), locked vertices. */
+static void warn_after(const cli_io *io, const simplify_job *job)
+{
+    if (!job->s.target_reached) {
+        /* A missed target is a result, not an error: said even with -q. */
+        char a[32], b[32];
+        fprintf(stderr, "meshreduce: warning: %s: target not reached, stopped at %s vertices "
+                        "and %s triangles: %s\n",
+                io->in, cli_count(a, sizeof a, job->s.output_points),
+                cli_count(b, sizeof b, job->s.output_triangles),
+                mr_simplify_stop_string(job->s.stop));
+    }
+    if (!io->quiet && job->s.locked_vertices) {
+        char a[32];
+        fprintf(stderr,
+                "note: %s vertices stayed in place: their triangles are not one consistently "
+                "wound fan (`meshreduce info` counts non-manifold and misoriented edges; "
+                "`meshreduce clean` fixes the winding)\n",
+                cli_count(a, sizeof a, job->s.locked_vertices));
+    }
 }
 
 static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
@@ -357,23 +428,7 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         fprintf(stderr, "\r%60s\r", "");
     if (st != MR_OK) /* e.g. a --vertices target above the input's */
         return cli_fail_in(io->in, "simplify", &err);
-    if (!job->s.target_reached) {
-        /* A missed target is a result, not an error: said even with -q. */
-        char a[32], b[32];
-        fprintf(stderr, "meshreduce: warning: %s: target not reached, stopped at %s vertices "
-                        "and %s triangles: %s\n",
-                io->in, cli_count(a, sizeof a, job->s.output_points),
-                cli_count(b, sizeof b, job->s.output_triangles),
-                mr_simplify_stop_string(job->s.stop));
-    }
-    if (!io->quiet && job->s.locked_vertices) {
-        char a[32];
-        fprintf(stderr,
-                "note: %s vertices stayed in place: their triangles are not one consistently "
-                "wound fan (`meshreduce info` counts non-manifold and misoriented edges; "
-                "`meshreduce clean` fixes the winding)\n",
-                cli_count(a, sizeof a, job->s.locked_vertices));
-    }
+    warn_after(io, job);
     return CLI_OK;
 }
 
@@ -399,6 +454,23 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
     fprintf(stderr, "time       read %.3f s, setup %.3f s, collapse %.3f s, output %.3f s, "
                     "write %.3f s\n",
             t->read, s->seconds_setup, s->seconds_collapse, s->seconds_output, t->write);
+    const mr_simplify_file_stats *fs = ((simplify_job *)user)->fs;
+    if (fs && fs->out_of_core) {
+        char e[32], f[32];
+        fprintf(stderr,
+                "out of core  memory budget %s: %s chunks of at most %s triangles, %u levels, "
+                "%u passes over the faces, %s of temporary files at most\n",
+                cli_bytes(a, sizeof a, fs->memory), cli_count(b, sizeof b, fs->chunks),
+                cli_count(c, sizeof c, fs->chunk_capacity), fs->levels, fs->passes,
+                cli_bytes(e, sizeof e, fs->temp_bytes_peak));
+        for (unsigned l = 0; l < fs->levels && l < MR_LEVELS_MAX; l++)
+            fprintf(stderr, "  level %-2u   %s chunks, %s triangles in, %.3f s\n", l,
+                    cli_count(d, sizeof d, fs->level_chunks[l]),
+                    cli_count(f, sizeof f, fs->level_triangles[l]), fs->level_seconds[l]);
+    } else if (fs) {
+        fprintf(stderr, "in memory  the input fits the memory budget of %s\n",
+                cli_bytes(a, sizeof a, fs->memory));
+    }
     if (s->queue_pops) /* the concurrent-queue strategies' profile */
         fprintf(stderr,
                 "profile    summed over threads: %zu pops, %zu locks taken, %zu lock "
@@ -458,6 +530,24 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
                s->boundary_sequential, s->tail_collapses, s->rebalances, s->claim_conflicts,
                s->rebalance_count, s->rebalance_imbalance, s->rebalance_boundary,
                s->rebalance_acceptance);
+    const mr_simplify_file_stats *fs = ((simplify_job *)user)->fs;
+    if (fs) {
+        printf(", \"out_of_core\": %s, \"memory\": %llu", fs->out_of_core ? "true" : "false",
+               (unsigned long long)fs->memory);
+        if (fs->out_of_core) {
+            printf(", \"chunks\": %zu, \"chunk_capacity\": %zu, \"oversized_chunks\": %zu, "
+                   "\"passes\": %u, \"temp_bytes_peak\": %llu, \"levels\": [",
+                   fs->chunks, fs->chunk_capacity, fs->oversized_chunks, fs->passes,
+                   (unsigned long long)fs->temp_bytes_peak);
+            for (unsigned l = 0; l < fs->levels && l < MR_LEVELS_MAX; l++)
+                printf("%s{\"chunks\": %zu, \"triangles\": %zu, \"seconds\": %.6f}",
+                       l ? ", " : "", fs->level_chunks[l], fs->level_triangles[l],
+                       fs->level_seconds[l]);
+            printf("], \"seconds_passes\": %.6f, \"seconds_chunks\": %.6f",
+                   fs->seconds_read, fs->seconds_simplify);
+        }
+        printf(", \"seconds_total\": %.6f", fs->seconds_total);
+    }
     printf("}\n");
 }
 
@@ -465,8 +555,61 @@ static void print_summary(const cli_io *io, const mr_mesh *result, const cli_tim
                           void *user)
 {
     const mr_simplify_stats *s = &((simplify_job *)user)->s;
-    cli_summary(io->out, s->output_vertices, s->output_triangles, "simplified in %.3f s",
-                s->seconds_setup + s->seconds_collapse + s->seconds_output);
+    const mr_simplify_file_stats *fs = ((simplify_job *)user)->fs;
+    if (fs && fs->out_of_core)
+        cli_summary(io->out, s->output_vertices, s->output_triangles,
+                    "simplified out of core in %.3f s: %zu chunks, %u levels",
+                    fs->seconds_total, fs->chunks, fs->levels);
+    else
+        cli_summary(io->out, s->output_vertices, s->output_triangles, "simplified in %.3f s",
+                    s->seconds_setup + s->seconds_collapse + s->seconds_output);
+}
+
+/* PLY inputs this large go through mr_simplify_file, which decides by
+ * the triangle count whether they fit the budget (smaller ones are
+ * simplified in memory either way, with the same bytes). */
+#define FILE_PATH_BYTES ((unsigned long long)256 << 20)
+
+/* The file path: mr_simplify_file reads, simplifies (in memory or out of
+ * core) and writes. */
+static int run_file(const cli_io *io, simplify_job *job)
+{
+    mr_error err;
+    if (job->lock_path) {
+        size_t nv;
+        if (mr_file_counts(io->in, &nv, NULL, &err) != MR_OK)
+            return cli_fail_err(&err);
+        int rc = read_locks(job, nv);
+        if (rc != CLI_OK)
+            return rc;
+    }
+    progress prog = {cli_now(), 0, -1};
+    if (!io->quiet && isatty(STDERR_FILENO)) {
+        job->o.progress = show_progress;
+        job->o.progress_user = &prog;
+    }
+    mr_simplify_file_stats fs;
+    const mr_status st = mr_simplify_file(io->in, io->out, &job->o, &job->ooc, &io->write, &fs,
+                                          &err);
+    free(job->lock);
+    job->lock = NULL;
+    job->o.vertex_lock = NULL;
+    if (prog.shown)
+        fprintf(stderr, "\r%60s\r", "");
+    if (st != MR_OK)
+        return cli_fail_err(&err);
+    job->s = fs.simplify;
+    job->fs = &fs;
+    warn_after(io, job);
+    const cli_times t = {fs.seconds_read, fs.seconds_simplify, fs.seconds_write};
+    if (io->json)
+        print_json(io, NULL, &t, job);
+    if (io->stats)
+        print_stats(io, NULL, &t, job);
+    else if (!io->quiet && !io->json)
+        print_summary(io, NULL, &t, job);
+    job->fs = NULL;
+    return CLI_OK;
 }
 
 static int run(int argc, char **argv)
@@ -475,6 +618,7 @@ static int run(int argc, char **argv)
     cli_io_init(&io, "simplify", CLI_ACCEPT_OUTPUT | CLI_ACCEPT_WRITE | CLI_ACCEPT_REPORT);
     simplify_job job = {.lock_path = NULL, .lock = NULL};
     mr_simplify_options_default(&job.o);
+    mr_out_of_core_options_default(&job.ooc);
     int rc = cli_io_parse(&io, argc, argv, option, &job);
     if (rc != CLI_OK)
         return rc;
@@ -485,6 +629,9 @@ static int run(int argc, char **argv)
     if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
+    if (job.ooc_given || (mr_format_from_path(io.in) == MR_FORMAT_PLY &&
+                          cli_file_size(io.in) > FILE_PATH_BYTES))
+        return run_file(&io, &job);
     return cli_run_job(&io, &steps, &job);
 }
 

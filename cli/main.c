@@ -65,6 +65,9 @@ static void install_signal_handlers(void)
     sigemptyset(&sa.sa_mask);
     for (size_t i = 0; i < sizeof signals / sizeof *signals; i++)
         sigaddset(&sa.sa_mask, signals[i]);
+    /* A file-size limit (ulimit -f) fails the write with EFBIG, which the
+     * writers report, rather than ending the process. */
+    signal(SIGXFSZ, SIG_IGN);
     for (size_t i = 0; i < sizeof signals / sizeof *signals; i++) {
         struct sigaction old;
         /* A signal ignored at start stays ignored: nohup, and the SIGINT of

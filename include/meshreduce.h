@@ -162,6 +162,13 @@ mr_format mr_format_sniff(const void *data, size_t size);
 mr_status mr_mesh_read(const char *path, const mr_read_options *options,
                        mr_mesh *mesh, mr_error *err);
 
+/* The vertex and triangle counts of a binary PLY file (polygons count as
+ * their fans' triangles), from its header and its faces' vertex counts,
+ * checked as mr_mesh_read checks them, without decoding the rest. Other
+ * files: MR_ERR_UNSUPPORTED. */
+mr_status mr_file_counts(const char *path, size_t *vertex_count, size_t *triangle_count,
+                         mr_error *err);
+
 /* Parse from memory. `name` is used in error messages (may be NULL). */
 mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
                               const mr_read_options *options, mr_mesh *mesh,

@@ -254,3 +254,21 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     free(buf);
     return st;
 }
+
+mr_status mr_file_counts(const char *path, size_t *vertex_count, size_t *triangle_count,
+                         mr_error *err)
+{
+    mr_error_clear(err);
+    if (!path)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "no path given");
+    mr_ply_source *s;
+    mr_status st = mr_ply_source_open(path, 1, &s, err);
+    if (st != MR_OK)
+        return st;
+    if (vertex_count)
+        *vertex_count = mr_ply_source_vertex_count(s);
+    if (triangle_count)
+        *triangle_count = mr_ply_source_triangle_count(s);
+    mr_ply_source_close(s);
+    return MR_OK;
+}

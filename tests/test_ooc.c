@@ -1,0 +1,513 @@
+/*
+ * Out-of-core simplification (mr_simplify_file): inputs that fit take the
+ * in-memory bytes; small budgets force chunks, whose output is checked
+ * against the in-memory simplification (quality), for the invariants at
+ * the chunks' borders (a closed mesh stays closed and manifold: every cut
+ * vertex is joined back exactly), for exact targets, both collapse modes,
+ * locks and error bounds, for the same bytes at 1, 2, 3 and 8 threads;
+ * and the failures: budgets too small, a temporary-disk budget, a bad
+ * temporary directory, a FIFO, bad data found late in the passes, a
+ * cancel -- each with no output file and no temporary file left.
+ */
+#include "testutil.h"
+
+#include <dirent.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static void tmp_path(char *dst, const char *name)
+{
+    snprintf(dst, 1024, "%s", tu_tmp_path(name));
+}
+
+static void write_mesh(const mr_mesh *m, const char *path)
+{
+    mr_error err;
+    if (mr_mesh_write(path, m, NULL, &err) != MR_OK) {
+        print_error("write %s: %s\n", path, err.message);
+        fail();
+    }
+}
+
+static void read_mesh(const char *path, mr_mesh *m)
+{
+    mr_error err;
+    if (mr_mesh_read(path, NULL, m, &err) != MR_OK) {
+        print_error("read %s: %s\n", path, err.message);
+        fail();
+    }
+}
+
+/* A temporary directory of its own, empty. */
+static void temp_dir(char *dst, const char *name)
+{
+    tmp_path(dst, name);
+    mkdir(dst, 0755);
+    DIR *d = opendir(dst);
+    assert_non_null(d);
+    struct dirent *e;
+    char path[2048];
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) {
+            snprintf(path, sizeof path, "%s/%s", dst, e->d_name);
+            unlink(path);
+        }
+    closedir(d);
+}
+
+static size_t entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    size_t n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return n;
+}
+
+/* Simplify in to out with a budget of `kib` KiB (temporary files in tmp);
+ * the status, with the stats. */
+static mr_status run(const char *in, const char *out, const mr_simplify_options *o,
+                     uint64_t kib, const char *tmp, mr_simplify_file_stats *st, mr_error *err)
+{
+    mr_out_of_core_options c;
+    mr_out_of_core_options_default(&c);
+    c.memory = kib << 10;
+    c.temp_dir = tmp;
+    return mr_simplify_file(in, out, o, &c, NULL, st, err);
+}
+
+static void run_ok(const char *in, const char *out, const mr_simplify_options *o, uint64_t kib,
+                   const char *tmp, mr_simplify_file_stats *st)
+{
+    mr_error err;
+    if (run(in, out, o, kib, tmp, st, &err) != MR_OK) {
+        print_error("mr_simplify_file %s: %s\n", in, err.message);
+        fail();
+    }
+}
+
+static mr_compare_result distance(const mr_mesh *ref, const mr_mesh *test)
+{
+    mr_compare_options co;
+    mr_compare_options_default(&co);
+    co.samples = 200000;
+    mr_compare_result r;
+    mr_error err;
+    assert_int_equal(mr_compare(ref->positions, ref->vertex_count, ref->indices,
+                                ref->triangle_count, test->positions, test->vertex_count,
+                                test->indices, test->triangle_count, &co, &r, &err),
+                     MR_OK);
+    return r;
+}
+
+static void stats_of(const mr_mesh *m, mr_stats *s)
+{
+    mr_error err;
+    assert_int_equal(mr_stats_compute(m->positions, 0, m->vertex_count, m->indices,
+                                      m->triangle_count, s, &err),
+                     MR_OK);
+}
+
+/* A generated scan of about n triangles as binary PLY at path. */
+static void make_scan(const char *path, size_t n, mr_mesh *m)
+{
+    mr_error err;
+    assert_int_equal(mr_generate(MR_GEN_SCAN, n, 3, m, &err), MR_OK);
+    write_mesh(m, path);
+}
+
+/* ---- the in-memory path ------------------------------------------------------ */
+
+/* An input that fits the budget: mr_mesh_simplify's bytes, through a
+ * file; an OBJ input (not read in pieces) too. */
+static void test_fits_in_memory(void **state)
+{
+    (void)state;
+    char in[1024], obj[1024], a[1024], b[1024], tmp[1024];
+    tmp_path(in, "ooc-fit.ply");
+    tmp_path(obj, "ooc-fit.obj");
+    tmp_path(a, "ooc-fit-a.ply");
+    tmp_path(b, "ooc-fit-b.ply");
+    temp_dir(tmp, "ooc-fit-tmp");
+    mr_mesh m, out;
+    make_scan(in, 60000, &m);
+    write_mesh(&m, obj);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.05;
+    mr_error err;
+    mr_mesh_init(&out);
+    assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, NULL, &err), MR_OK);
+    write_mesh(&out, a);
+    mr_simplify_file_stats st;
+    const char *inputs[2] = {in, obj};
+    for (int i = 0; i < 2; i++) {
+        run_ok(inputs[i], b, &o, 0 /* the default */, tmp, &st);
+        assert_int_equal(st.out_of_core, 0);
+        size_t na, nb;
+        char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
+        assert_true(na == nb && memcmp(da, db, na) == 0);
+        free(da);
+        free(db);
+        assert_int_equal(st.simplify.output_triangles, out.triangle_count);
+    }
+    assert_int_equal(entries(tmp), 0);
+    mr_mesh_free(&m);
+    mr_mesh_free(&out);
+}
+
+/* ---- chunks ------------------------------------------------------------------- */
+
+/* Forced into 8 or more chunks, the output is about as close to the
+ * input as the in-memory one at the same size (RMS within 8 %, Hausdorff
+ * within 35 %: a maximum over a few points), reaches the vertex target
+ * exactly, and a closed manifold input stays closed and manifold. */
+static void check_quality(const char *in, const mr_mesh *m, uint64_t kib, size_t min_chunks,
+                          const char *tag)
+{
+    char out[1024], tmp[1024];
+    tmp_path(out, "ooc-q-out.ply");
+    temp_dir(tmp, "ooc-q-tmp");
+    mr_stats sin;
+    stats_of(m, &sin);
+    const double ratios[2] = {0.1, 0.01};
+    for (int r = 0; r < 2; r++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = ratios[r];
+        mr_simplified ref;
+        mr_error err;
+        assert_int_equal(mr_simplify(m->positions, 0, m->vertex_count, m->indices,
+                                     m->triangle_count, &o, &ref, &err),
+                         MR_OK);
+        mr_mesh rm = {ref.vertex_count, ref.triangle_count, ref.positions, NULL, NULL, NULL,
+                      ref.indices};
+        mr_simplify_file_stats st;
+        run_ok(in, out, &o, kib, tmp, &st);
+        assert_int_equal(st.out_of_core, 1);
+        if (st.chunks < min_chunks)
+            fail_msg("%s: %zu chunks, wanted %zu or more", tag, st.chunks, min_chunks);
+        assert_int_equal(entries(tmp), 0);
+        mr_mesh got;
+        read_mesh(out, &got);
+        assert_int_equal(got.vertex_count, ref.vertex_count); /* the ratio's count exactly */
+        assert_int_equal(st.simplify.output_vertices, got.vertex_count);
+        assert_int_equal(st.simplify.output_triangles, got.triangle_count);
+        assert_true(st.simplify.target_reached);
+        const mr_compare_result a = distance(m, &rm), b = distance(m, &got);
+        print_message("%s at %g: %zu chunks, %u levels; RMS %.4g%% (in memory %.4g%%), "
+                      "Hausdorff %.4g%% (%.4g%%)\n",
+                      tag, ratios[r], st.chunks, st.levels, 100 * b.rms_rel, 100 * a.rms_rel,
+                      100 * b.hausdorff_rel, 100 * a.hausdorff_rel);
+        if (b.rms_rel > 1.08 * a.rms_rel || b.hausdorff_rel > 1.35 * a.hausdorff_rel)
+            fail_msg("%s at %g: RMS %g vs %g in memory, Hausdorff %g vs %g", tag, ratios[r],
+                     b.rms_rel, a.rms_rel, b.hausdorff_rel, a.hausdorff_rel);
+        mr_stats s;
+        stats_of(&got, &s);
+        assert_int_equal(s.nonmanifold_edges, 0);
+        assert_int_equal(s.nonmanifold_vertices, 0);
+        if (sin.closed && (!s.closed || s.boundary_edges))
+            fail_msg("%s at %g: a closed input gave %zu boundary edges", tag, ratios[r],
+                     s.boundary_edges);
+        if (!sin.closed && s.boundary_loops > sin.boundary_loops)
+            fail_msg("%s at %g: %zu boundary loops from %zu", tag, ratios[r], s.boundary_loops,
+                     sin.boundary_loops);
+        mr_mesh_free(&got);
+        mr_simplified_free(&ref);
+    }
+}
+
+static void test_chunks_quality(void **state)
+{
+    (void)state;
+    char in[1024];
+    tmp_path(in, "ooc-q-scan.ply");
+    mr_mesh m;
+    make_scan(in, 120000, &m);
+    /* 120k triangles: chunks of at most 17k at 4 MB, the output 12k */
+    check_quality(in, &m, 4000, 8, "scan");
+    mr_mesh_free(&m);
+    if (getenv("MR_TEST_QUICK"))
+        return; /* the sanitizers' runs: the scan alone */
+    /* the data's meshes with open boundaries and thin parts, where present */
+    const char *names[2] = {"stanford-bunny.obj", "armadillo.obj"};
+    const uint64_t kib[2] = {3000, 3000};
+    for (int i = 0; i < 2; i++) {
+        const char *src = tu_shared_data(names[i]);
+        if (!src)
+            continue;
+        mr_mesh d;
+        read_mesh(src, &d);
+        tmp_path(in, "ooc-q-data.ply");
+        write_mesh(&d, in);
+        check_quality(in, &d, kib[i], 8, names[i]);
+        mr_mesh_free(&d);
+    }
+}
+
+/* The same bytes at 1, 2, 3 and 8 threads; and with the half-edge
+ * collapse, every output position is an input position. */
+static void test_threads_and_modes(void **state)
+{
+    (void)state;
+    char in[1024], out[1024], tmp[1024];
+    tmp_path(in, "ooc-t-scan.ply");
+    tmp_path(out, "ooc-t-out.ply");
+    temp_dir(tmp, "ooc-t-tmp");
+    mr_mesh m;
+    make_scan(in, 80000, &m);
+    for (int mode = 0; mode < 2; mode++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = 0.05;
+        o.collapse = mode ? MR_COLLAPSE_HALF : MR_COLLAPSE_FULL;
+        char *first = NULL;
+        size_t nfirst = 0;
+        const int threads[4] = {1, 2, 3, 8};
+        for (int t = 0; t < 4; t++) {
+            o.threads = threads[t];
+            mr_simplify_file_stats st;
+            run_ok(in, out, &o, 2048, tmp, &st);
+            assert_true(st.out_of_core && st.chunks >= 4);
+            size_t n;
+            char *d = tu_read_file(out, &n);
+            if (!first) {
+                first = d;
+                nfirst = n;
+                continue;
+            }
+            if (n != nfirst || memcmp(d, first, n) != 0)
+                fail_msg("mode %d: %d threads gave other bytes than 1", mode, threads[t]);
+            free(d);
+        }
+        free(first);
+        if (mode == 1) {
+            mr_mesh got;
+            read_mesh(out, &got);
+            /* each output position is the position of some input vertex:
+             * sorted lists, each output one found among the input's */
+            for (size_t v = 0; v < got.vertex_count; v += 97) {
+                bool found = false;
+                for (size_t u = 0; u < m.vertex_count && !found; u++)
+                    found = !memcmp(got.positions + 3 * v, m.positions + 3 * u, 12);
+                assert_true(found);
+            }
+            mr_mesh_free(&got);
+        }
+    }
+    mr_mesh_free(&m);
+}
+
+/* Targets: vertices and triangles exactly, an error bound alone, locked
+ * vertices kept in place. */
+static void test_targets_and_locks(void **state)
+{
+    (void)state;
+    char in[1024], out[1024], tmp[1024];
+    tmp_path(in, "ooc-tg-scan.ply");
+    tmp_path(out, "ooc-tg-out.ply");
+    temp_dir(tmp, "ooc-tg-tmp");
+    mr_mesh m;
+    make_scan(in, 80000, &m);
+    mr_simplify_options o;
+    mr_simplify_file_stats st;
+    mr_mesh got;
+
+    mr_simplify_options_default(&o);
+    o.target_vertices = 1234;
+    run_ok(in, out, &o, 2048, tmp, &st);
+    read_mesh(out, &got);
+    assert_int_equal(got.vertex_count, 1234);
+    mr_mesh_free(&got);
+
+    mr_simplify_options_default(&o);
+    o.target_triangles = 3000;
+    run_ok(in, out, &o, 2048, tmp, &st);
+    read_mesh(out, &got);
+    assert_true(got.triangle_count <= 3000 && got.triangle_count >= 2990);
+    mr_mesh_free(&got);
+
+    /* an error bound alone: no collapse above it anywhere */
+    mr_simplify_options_default(&o);
+    o.until_error = 1;
+    o.max_error = 0.002;
+    run_ok(in, out, &o, 2048, tmp, &st);
+    assert_true(st.out_of_core);
+    assert_true(st.simplify.max_error <= 0.002);
+    assert_true(st.simplify.output_triangles < m.triangle_count / 4);
+
+    /* locks: every 50th vertex stays where it is */
+    uint8_t *lock = calloc(m.vertex_count, 1);
+    assert_non_null(lock);
+    for (size_t v = 0; v < m.vertex_count; v += 50)
+        lock[v] = 1;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.05;
+    o.vertex_lock = lock;
+    run_ok(in, out, &o, 2048, tmp, &st);
+    read_mesh(out, &got);
+    size_t locked = 0, kept = 0;
+    for (size_t v = 0; v < m.vertex_count; v += 50, locked++)
+        for (size_t u = 0; u < got.vertex_count; u++)
+            if (!memcmp(got.positions + 3 * u, m.positions + 3 * v, 12)) {
+                kept++;
+                break;
+            }
+    assert_int_equal(kept, locked);
+    mr_mesh_free(&got);
+    free(lock);
+    assert_int_equal(entries(tmp), 0);
+    mr_mesh_free(&m);
+}
+
+/* ---- failures ---------------------------------------------------------------- */
+
+static void expect_failure(const char *in, const char *out, const mr_simplify_options *o,
+                           uint64_t kib, const char *tmp, uint64_t temp_budget, mr_status want,
+                           const char *says)
+{
+    mr_out_of_core_options c;
+    mr_out_of_core_options_default(&c);
+    c.memory = kib << 10;
+    c.temp_dir = tmp;
+    c.temp_budget = temp_budget;
+    mr_error err;
+    unlink(out);
+    const mr_status st = mr_simplify_file(in, out, o, &c, NULL, NULL, &err);
+    if (st != want) {
+        print_error("status %d, wanted %d: %s\n", (int)st, (int)want,
+                    st == MR_OK ? "(ok)" : err.message);
+        fail();
+    }
+    tu_assert_contains(err.message, says);
+    assert_false(tu_file_exists(out));
+}
+
+static void test_failures(void **state)
+{
+    (void)state;
+    char in[1024], out[1024], tmp[1024], bad[1024], fifo[1024];
+    tmp_path(in, "ooc-f-scan.ply");
+    tmp_path(out, "ooc-f-out.ply");
+    tmp_path(bad, "ooc-f-bad.ply");
+    tmp_path(fifo, "ooc-f-fifo.ply");
+    temp_dir(tmp, "ooc-f-tmp");
+    mr_mesh m;
+    make_scan(in, 80000, &m);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.02;
+
+    /* budgets too small for the input, and for the output */
+    expect_failure(in, out, &o, 64, tmp, 0, MR_ERR_INVALID_ARGUMENT, "too small");
+    mr_simplify_options big = o;
+    big.target_ratio = 0.9;
+    expect_failure(in, out, &big, 2048, tmp, 0, MR_ERR_INVALID_ARGUMENT,
+                   "does not fit the memory budget");
+    /* the temporary-disk budget */
+    expect_failure(in, out, &o, 2048, tmp, 100000, MR_ERR_IO, "temporary-disk budget");
+    /* a temporary directory that is none */
+    expect_failure(in, out, &o, 2048, in, 0, MR_ERR_IO, "not a directory");
+    char missing[1100];
+    snprintf(missing, sizeof missing, "%s/no/such/dir", tmp);
+    expect_failure(in, out, &o, 2048, missing, 0, MR_ERR_IO, "temporary directory");
+    /* a FIFO cannot be read twice */
+    unlink(fifo);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    expect_failure(fifo, out, &o, 2048, tmp, 0, MR_ERR_IO, "FIFO");
+    unlink(fifo);
+    /* bad data late in the file: an index past the vertices in the last
+     * face, then a NaN in the last vertex */
+    size_t n;
+    char *data = tu_read_file(in, &n);
+    assert_non_null(data);
+    uint32_t big_index = 0x7fffffff;
+    memcpy(data + n - 4, &big_index, 4);
+    tu_write_file(bad, data, n);
+    expect_failure(bad, out, &o, 2048, tmp, 0, MR_ERR_PARSE, "vertex");
+    free(data);
+    data = tu_read_file(in, &n);
+    const char *end = strstr(data, "end_header\n");
+    assert_non_null(end);
+    const size_t vend = (size_t)(end - data) + 11 + 12 * m.vertex_count;
+    const float nan = NAN;
+    memcpy(data + vend - 4, &nan, 4);
+    tu_write_file(bad, data, n);
+    expect_failure(bad, out, &o, 2048, tmp, 0, MR_ERR_PARSE, "finite");
+    free(data);
+    assert_int_equal(entries(tmp), 0);
+    mr_mesh_free(&m);
+}
+
+static int cancel_at_half(double fraction, void *user)
+{
+    (void)user;
+    return fraction > 0.5;
+}
+
+static void test_cancel(void **state)
+{
+    (void)state;
+    char in[1024], out[1024], tmp[1024];
+    tmp_path(in, "ooc-c-scan.ply");
+    tmp_path(out, "ooc-c-out.ply");
+    temp_dir(tmp, "ooc-c-tmp");
+    mr_mesh m;
+    make_scan(in, 80000, &m);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.02;
+    o.progress = cancel_at_half;
+    expect_failure(in, out, &o, 2048, tmp, 0, MR_ERR_CANCELLED, "cancelled");
+    assert_int_equal(entries(tmp), 0);
+    mr_mesh_free(&m);
+}
+
+/* The command line: --memory, --json's out-of-core figures. */
+static void test_cli(void **state)
+{
+    (void)state;
+    char in[1024], out[1024];
+    tmp_path(in, "ooc-cli-scan.ply");
+    tmp_path(out, "ooc-cli-out.ply");
+    mr_mesh m;
+    make_scan(in, 80000, &m);
+    mr_mesh_free(&m);
+    char *text = NULL;
+    assert_int_equal(tu_run_cli(tu_fmt("simplify %s -o %s --ratio 2%% --memory 2M --json", in,
+                                       out),
+                                &text),
+                     0);
+    tu_assert_contains(text, "\"out_of_core\": true");
+    tu_assert_contains(text, "\"levels\": [");
+    free(text);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify %s -o %s --ratio 2%% --memory 3x", in, out),
+                                &text),
+                     2);
+    tu_assert_contains(text, "--memory needs a size");
+    free(text);
+    assert_int_equal(tu_run_cli(tu_fmt("simplify %s -o %s --ratio 2%% --memory 64k", in, out),
+                                &text),
+                     1);
+    tu_assert_contains(text, "too small");
+    free(text);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_fits_in_memory),  cmocka_unit_test(test_chunks_quality),
+        cmocka_unit_test(test_threads_and_modes), cmocka_unit_test(test_targets_and_locks),
+        cmocka_unit_test(test_failures),        cmocka_unit_test(test_cancel),
+        cmocka_unit_test(test_cli),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
