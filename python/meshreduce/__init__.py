@@ -69,13 +69,14 @@ from ._core import (  # noqa: F401  (re-exported)
     read,
     render,
     simplify,
+    simplify_file,
     weld,
     write,
     write_png,
 )
 
 __all__ = [
-    "Mesh", "Result", "simplify", "read", "write", "compare", "info", "generate",
+    "Mesh", "Result", "simplify", "simplify_file", "read", "write", "compare", "info", "generate",
     "weld", "cluster", "cluster_file", "render", "write_png",
     "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
     "EmptyMeshError", "TooLargeError", "NoMemoryError", "CancelledError", "features", "__version__", "library_version",

@@ -105,6 +105,41 @@ def simplify(
     quality: Literal["default", "best"] = ...,
     partitions: int = ...,
 ) -> Result: ...
+def simplify_file(
+    input: _Path,
+    output: _Path,
+    *,
+    ratio: Optional[float] = ...,
+    vertex_count: Optional[int] = ...,
+    triangle_count: Optional[int] = ...,
+    max_error: Optional[float] = ...,
+    absolute: bool = ...,
+    collapse: Literal["full", "half"] = ...,
+    strategy: Optional[
+        Literal[
+            "greedy",
+            "batched",
+            "ppq",
+            "rppq",
+            "fppq",
+            "multiqueue",
+            "partitioned",
+            "partitioned-boundary",
+        ]
+    ] = ...,
+    lock_border: bool = ...,
+    boundary_weight: float = ...,
+    max_normal_turn: float = ...,
+    locked: Optional[npt.ArrayLike] = ...,
+    prune: bool = ...,
+    threads: int = ...,
+    progress: Optional[Callable[[float], Any]] = ...,
+    quality: Literal["default", "best"] = ...,
+    partitions: int = ...,
+    memory: Optional[int] = ...,
+    temp_dir: Optional[_Path] = ...,
+    temp_budget: Optional[int] = ...,
+) -> dict[str, Any]: ...
 def read(path: _Path, *, format: Optional[str] = ..., threads: int = ...) -> Mesh: ...
 def write(
     path: _Path,

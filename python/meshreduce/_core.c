@@ -653,6 +653,94 @@ fail:
     return NULL;
 }
 
+/* PyErr_Format for a function that returns -1. */
+#define format_error(...) (PyErr_Format(__VA_ARGS__), -1)
+
+/* The options of simplify() and simplify_file() from their arguments;
+ * -1 with the exception set. */
+static int simplify_options_from(mr_simplify_options *o, PyObject *ratio, PyObject *vcount,
+                                 PyObject *tcount, PyObject *max_error, int absolute,
+                                 const char *collapse, const char *strategy, int lock_border,
+                                 double boundary_weight, double max_normal_turn, int prune,
+                                 int threads, unsigned filter_levels,
+                                 unsigned multiqueue_factor, const char *quality,
+                                 unsigned partitions, PyObject *progress)
+{
+    mr_simplify_options_default(o);
+    if (ratio != Py_None) {
+        if (to_double(ratio, "ratio", &o->target_ratio) < 0)
+            return -1;
+        if (!(o->target_ratio > 0.0 && o->target_ratio <= 1.0))
+            return format_error(PyExc_ValueError, "ratio must be in (0, 1], got %R", ratio);
+    }
+    if (vcount != Py_None) {
+        if (to_size(vcount, "vertex_count", &o->target_vertices) < 0)
+            return -1;
+        if (o->target_vertices == 0)
+            return format_error(PyExc_ValueError, "vertex_count must be positive");
+    }
+    if (tcount != Py_None) {
+        if (to_size(tcount, "triangle_count", &o->target_triangles) < 0)
+            return -1;
+        o->until_error = o->target_triangles == 0; /* as the CLI's --triangles 0 */
+    }
+    if (max_error != Py_None) {
+        if (to_double(max_error, "max_error", &o->max_error) < 0)
+            return -1;
+        if (!(o->max_error > 0))
+            return format_error(PyExc_ValueError, "max_error must be positive, got %R",
+                                max_error);
+    }
+    if (o->target_ratio == 0 && o->target_vertices == 0 && o->target_triangles == 0 &&
+        o->max_error == 0 && !o->until_error)
+        return format_error(PyExc_ValueError, "simplify: no target given (ratio, vertex_count, "
+                                              "triangle_count or max_error)");
+    o->error_absolute = absolute;
+    int k = choose("collapse", collapse, collapse_names);
+    if (k < 0)
+        return -1;
+    o->collapse = k == 0 ? MR_COLLAPSE_FULL : MR_COLLAPSE_HALF;
+    if ((k = choose("quality", quality, quality_names)) < 0)
+        return -1;
+    o->quality = k == 0 ? MR_QUALITY_DEFAULT : MR_QUALITY_BEST;
+    if (partitions > MR_PARTITIONS_MAX)
+        return format_error(PyExc_ValueError, "partitions must be in 0..%d, got %u",
+                            MR_PARTITIONS_MAX, partitions);
+    o->partitions = partitions;
+    if (strategy) {
+        if ((k = choose("strategy", strategy, strategy_names)) < 0)
+            return -1;
+        static const mr_strategy strategies[] = {MR_STRATEGY_GREEDY, MR_STRATEGY_BATCHED,
+                                                 MR_STRATEGY_PPQ,    MR_STRATEGY_RPPQ,
+                                                 MR_STRATEGY_FPPQ,   MR_STRATEGY_MULTIQUEUE,
+                                                 MR_STRATEGY_PARTITIONED,
+                                                 MR_STRATEGY_PARTITIONED_BOUNDARY};
+        o->strategy = strategies[k];
+    }
+    if (!(boundary_weight >= 0) || !isfinite(boundary_weight))
+        return format_error(PyExc_ValueError, "boundary_weight must be a finite number >= 0");
+    o->boundary_weight = boundary_weight;
+    if (!(max_normal_turn > 0 && max_normal_turn <= 180))
+        return format_error(PyExc_ValueError, "max_normal_turn must be degrees in (0, 180]");
+    if (max_normal_turn != 60.0) /* the default stays the library's own value */
+        o->max_normal_turn = max_normal_turn * 3.14159265358979323846 / 180.0;
+    o->lock_border = lock_border;
+    o->prune = prune;
+    if (check_threads(&threads) < 0)
+        return -1;
+    o->threads = threads;
+    if (filter_levels > 12)
+        return format_error(PyExc_ValueError, "filter_levels must be in 1..12 (0 = default)");
+    o->filter_levels = filter_levels;
+    if (multiqueue_factor > 1024)
+        return format_error(PyExc_ValueError, "multiqueue_factor must be in 1..1024 (0 = 2)");
+    o->multiqueue_factor = multiqueue_factor;
+    if (progress != Py_None && !PyCallable_Check(progress))
+        return format_error(PyExc_TypeError, "progress must be callable, got %.80s",
+                            Py_TYPE(progress)->tp_name);
+    return 0;
+}
+
 PyDoc_STRVAR(simplify_doc,
 "simplify($module, /, vertices, triangles, *, ratio=None, vertex_count=None, triangle_count=None,\n"
 "         max_error=None, absolute=False, collapse='full', strategy=None,\n"
@@ -731,78 +819,11 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
         return NULL;
 
     mr_simplify_options o;
-    mr_simplify_options_default(&o);
-    if (ratio != Py_None) {
-        if (to_double(ratio, "ratio", &o.target_ratio) < 0)
-            return NULL;
-        if (!(o.target_ratio > 0.0 && o.target_ratio <= 1.0))
-            return PyErr_Format(PyExc_ValueError, "ratio must be in (0, 1], got %R", ratio);
-    }
-    if (vcount != Py_None) {
-        if (to_size(vcount, "vertex_count", &o.target_vertices) < 0)
-            return NULL;
-        if (o.target_vertices == 0)
-            return PyErr_Format(PyExc_ValueError, "vertex_count must be positive");
-    }
-    if (tcount != Py_None) {
-        if (to_size(tcount, "triangle_count", &o.target_triangles) < 0)
-            return NULL;
-        o.until_error = o.target_triangles == 0; /* as the CLI's --triangles 0 */
-    }
-    if (max_error != Py_None) {
-        if (to_double(max_error, "max_error", &o.max_error) < 0)
-            return NULL;
-        if (!(o.max_error > 0))
-            return PyErr_Format(PyExc_ValueError, "max_error must be positive, got %R",
-                                max_error);
-    }
-    if (o.target_ratio == 0 && o.target_vertices == 0 && o.target_triangles == 0 &&
-        o.max_error == 0 && !o.until_error)
-        return PyErr_Format(PyExc_ValueError, "simplify: no target given (ratio, vertex_count, "
-                                              "triangle_count or max_error)");
-    o.error_absolute = absolute;
-    int k = choose("collapse", collapse, collapse_names);
-    if (k < 0)
+    if (simplify_options_from(&o, ratio, vcount, tcount, max_error, absolute, collapse, strategy,
+                              lock_border, boundary_weight, max_normal_turn, prune, threads,
+                              filter_levels, multiqueue_factor, quality, partitions,
+                              progress) < 0)
         return NULL;
-    o.collapse = k == 0 ? MR_COLLAPSE_FULL : MR_COLLAPSE_HALF;
-    if ((k = choose("quality", quality, quality_names)) < 0)
-        return NULL;
-    o.quality = k == 0 ? MR_QUALITY_DEFAULT : MR_QUALITY_BEST;
-    if (partitions > MR_PARTITIONS_MAX)
-        return PyErr_Format(PyExc_ValueError, "partitions must be in 0..%d, got %u",
-                            MR_PARTITIONS_MAX, partitions);
-    o.partitions = partitions;
-    if (strategy) {
-        if ((k = choose("strategy", strategy, strategy_names)) < 0)
-            return NULL;
-        static const mr_strategy strategies[] = {MR_STRATEGY_GREEDY, MR_STRATEGY_BATCHED,
-                                                 MR_STRATEGY_PPQ,    MR_STRATEGY_RPPQ,
-                                                 MR_STRATEGY_FPPQ,   MR_STRATEGY_MULTIQUEUE,
-                                                 MR_STRATEGY_PARTITIONED,
-                                                 MR_STRATEGY_PARTITIONED_BOUNDARY};
-        o.strategy = strategies[k];
-    }
-    if (!(boundary_weight >= 0) || !isfinite(boundary_weight))
-        return PyErr_Format(PyExc_ValueError, "boundary_weight must be a finite number >= 0");
-    o.boundary_weight = boundary_weight;
-    if (!(max_normal_turn > 0 && max_normal_turn <= 180))
-        return PyErr_Format(PyExc_ValueError, "max_normal_turn must be degrees in (0, 180]");
-    if (max_normal_turn != 60.0) /* the default stays the library's own value */
-        o.max_normal_turn = max_normal_turn * 3.14159265358979323846 / 180.0;
-    o.lock_border = lock_border;
-    o.prune = prune;
-    if (check_threads(&threads) < 0)
-        return NULL;
-    o.threads = threads;
-    if (filter_levels > 12)
-        return PyErr_Format(PyExc_ValueError, "filter_levels must be in 1..12 (0 = default)");
-    o.filter_levels = filter_levels;
-    if (multiqueue_factor > 1024)
-        return PyErr_Format(PyExc_ValueError, "multiqueue_factor must be in 1..1024 (0 = 2)");
-    o.multiqueue_factor = multiqueue_factor;
-    if (progress != Py_None && !PyCallable_Check(progress))
-        return PyErr_Format(PyExc_TypeError, "progress must be callable, got %.80s",
-                            Py_TYPE(progress)->tp_name);
 
     py_mesh in;
     if (py_mesh_from(&in, vertices, triangles, normals, texcoords, colors, 1, "vertices",
@@ -894,6 +915,146 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
         return NULL;
     }
     return make(result_class, d);
+}
+
+static int path_arg(PyObject *o, PyObject **bytes);
+
+PyDoc_STRVAR(simplify_file_doc,
+"simplify_file($module, /, input, output, *, ratio=None, vertex_count=None,\n"
+"              triangle_count=None, max_error=None, absolute=False, collapse='full',\n"
+"              strategy=None, lock_border=False, boundary_weight=1.0,\n"
+"              max_normal_turn=60.0, locked=None, prune=False, threads=0,\n"
+"              progress=None, quality='default', partitions=0, memory=None,\n"
+"              temp_dir=None, temp_budget=None)\n"
+"--\n"
+"\n"
+"Simplify a mesh file into a file, as `meshreduce simplify IN -o OUT --memory M`\n"
+"(mr_simplify_file): an input whose simplification fits the memory budget\n"
+"(memory, bytes: default 4 GiB; about 160 bytes a triangle) is read whole and\n"
+"simplified as simplify() does (the same bytes); a larger binary PLY is\n"
+"simplified out of core, in chunks that fit, merged up a tree to the target\n"
+"(geometry only). temp_dir: where the temporary files go (they have no name);\n"
+"temp_budget: bytes of them at most. The targets and options as simplify()'s;\n"
+"locked: a boolean mask of the input's vertices or their indices. Returns the\n"
+"statistics: those of simplify(), and out_of_core, chunks, chunk_capacity,\n"
+"levels (each with its chunks, triangles and seconds), passes, temp_bytes_peak,\n"
+"memory and seconds.");
+
+static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
+{
+    static char *kwlist[] = {"input",     "output",        "ratio",           "vertex_count",
+                             "triangle_count", "max_error", "absolute",       "collapse",
+                             "strategy",  "lock_border",   "boundary_weight", "max_normal_turn",
+                             "locked",    "prune",         "threads",         "progress",
+                             "quality",   "partitions",    "memory",          "temp_dir",
+                             "temp_budget", NULL};
+    PyObject *input = NULL, *output = NULL, *ratio = Py_None, *vcount = Py_None,
+             *tcount = Py_None, *max_error = Py_None, *locked = Py_None, *progress = Py_None,
+             *memory = Py_None, *temp_dir = Py_None, *temp_budget = Py_None;
+    int absolute = 0, lock_border = 0, prune = 0, threads = 0;
+    const char *collapse = "full", *strategy = NULL, *quality = "default";
+    double boundary_weight = 1.0, max_normal_turn = 60.0;
+    unsigned int partitions = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOOpszpddOpiOsIOOO", kwlist, path_arg,
+                                     &input, path_arg, &output, &ratio, &vcount, &tcount,
+                                     &max_error, &absolute, &collapse, &strategy, &lock_border,
+                                     &boundary_weight, &max_normal_turn, &locked, &prune,
+                                     &threads, &progress, &quality, &partitions, &memory,
+                                     &temp_dir, &temp_budget))
+        return NULL;
+    PyObject *result = NULL, *dir = NULL;
+    uint8_t *lock = NULL;
+    mr_simplify_options o;
+    mr_out_of_core_options c;
+    mr_out_of_core_options_default(&c);
+    if (simplify_options_from(&o, ratio, vcount, tcount, max_error, absolute, collapse, strategy,
+                              lock_border, boundary_weight, max_normal_turn, prune, threads, 0,
+                              0, quality, partitions, progress) < 0)
+        goto done;
+    size_t n;
+    if (memory != Py_None) {
+        if (to_size(memory, "memory", &n) < 0)
+            goto done;
+        if (n == 0) {
+            PyErr_SetString(PyExc_ValueError, "memory must be positive (bytes)");
+            goto done;
+        }
+        c.memory = n;
+    }
+    if (temp_budget != Py_None) {
+        if (to_size(temp_budget, "temp_budget", &n) < 0)
+            goto done;
+        c.temp_budget = n;
+    }
+    if (temp_dir != Py_None) {
+        if (!path_arg(temp_dir, &dir))
+            goto done;
+        c.temp_dir = PyBytes_AS_STRING(dir);
+    }
+    const char *in_path = PyBytes_AS_STRING(input), *out_path = PyBytes_AS_STRING(output);
+    mr_error err;
+    mr_status st;
+    if (locked != Py_None) {
+        size_t nv;
+        if (mr_file_counts(in_path, &nv, NULL, &err) != MR_OK) {
+            raise_mr_error(&err);
+            goto done;
+        }
+        if (!(lock = lock_array(locked, nv)))
+            goto done;
+        o.vertex_lock = lock;
+    }
+    py_progress prog = {progress != Py_None ? progress : NULL, NULL, NULL, NULL};
+    o.progress = on_progress;
+    o.progress_user = &prog;
+    mr_simplify_file_stats fs;
+    memset(&fs, 0, sizeof fs);
+    Py_BEGIN_ALLOW_THREADS
+    st = mr_simplify_file(in_path, out_path, &o, &c, NULL, &fs, &err);
+    Py_END_ALLOW_THREADS
+    if (progress_finish(&prog) < 0)
+        goto done;
+    if (st != MR_OK) {
+        raise_mr_error(&err);
+        goto done;
+    }
+    const mr_simplify_stats *s = &fs.simplify;
+    PyObject *levels = PyList_New(0);
+    for (unsigned l = 0; levels && l < fs.levels && l < MR_LEVELS_MAX; l++) {
+        PyObject *e = Py_BuildValue("{s:n,s:n,s:d}", "chunks", (Py_ssize_t)fs.level_chunks[l],
+                                    "triangles", (Py_ssize_t)fs.level_triangles[l], "seconds",
+                                    fs.level_seconds[l]);
+        if (!e || PyList_Append(levels, e) < 0) {
+            Py_XDECREF(e);
+            Py_CLEAR(levels);
+            break;
+        }
+        Py_DECREF(e);
+    }
+    if (!levels)
+        goto done;
+    result = Py_BuildValue(
+        "{s:O,s:s,s:s,s:n,s:n,s:n,s:n,s:n,s:n,s:d,s:n,s:n,s:O,s:K,s:n,s:n,s:n,s:I,s:K,s:N,"
+        "s:{s:d,s:d,s:d,s:d}}",
+        "target_reached", s->target_reached ? Py_True : Py_False, "stop_reason",
+        stop_names[s->stop], "stop", mr_simplify_stop_string(s->stop), "input_vertices",
+        (Py_ssize_t)s->input_vertices, "output_points", (Py_ssize_t)s->output_points,
+        "input_triangles", (Py_ssize_t)s->input_triangles, "output_vertices",
+        (Py_ssize_t)s->output_vertices, "output_triangles", (Py_ssize_t)s->output_triangles,
+        "collapses", (Py_ssize_t)s->collapses, "max_error", s->max_error, "locked_vertices",
+        (Py_ssize_t)s->locked_vertices, "pruned_parts", (Py_ssize_t)s->pruned_parts,
+        "out_of_core", fs.out_of_core ? Py_True : Py_False, "memory",
+        (unsigned long long)fs.memory, "chunks", (Py_ssize_t)fs.chunks, "chunk_capacity",
+        (Py_ssize_t)fs.chunk_capacity, "oversized_chunks", (Py_ssize_t)fs.oversized_chunks,
+        "passes", fs.passes, "temp_bytes_peak", (unsigned long long)fs.temp_bytes_peak,
+        "levels", levels, "seconds", "read", fs.seconds_read, "simplify", fs.seconds_simplify,
+        "write", fs.seconds_write, "total", fs.seconds_total);
+done:
+    free(lock);
+    Py_XDECREF(dir);
+    Py_XDECREF(input);
+    Py_XDECREF(output);
+    return result;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1805,6 +1966,8 @@ static PyObject *py_register(PyObject *self, PyObject *args)
 static PyMethodDef methods[] = {
     {"simplify", (PyCFunction)(void (*)(void))py_simplify, METH_VARARGS | METH_KEYWORDS,
      simplify_doc},
+    {"simplify_file", (PyCFunction)(void (*)(void))py_simplify_file,
+     METH_VARARGS | METH_KEYWORDS, simplify_file_doc},
     {"read", (PyCFunction)(void (*)(void))py_read, METH_VARARGS | METH_KEYWORDS, read_doc},
     {"write", (PyCFunction)(void (*)(void))py_write, METH_VARARGS | METH_KEYWORDS, write_doc},
     {"generate", (PyCFunction)(void (*)(void))py_generate, METH_VARARGS | METH_KEYWORDS,

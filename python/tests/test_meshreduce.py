@@ -705,6 +705,38 @@ def test_cluster_file_matches_cli(tmp_path):
 
 
 @needs_cli
+def test_simplify_file_matches_cli(tmp_path):
+    src = tmp_path / "scan.ply"
+    cli("generate", "scan", "--triangles", 60000, "-o", src, "-q")
+    # out of core (a 2 MiB budget) and in memory (the default): the CLI's bytes
+    for memory, cli_memory in ((2 << 20, "2M"), (None, "4G")):
+        out = json.loads(cli("simplify", src, "-o", tmp_path / "cli.ply", "--ratio", "2%",
+                             "--memory", cli_memory, "--json", "-q"))
+        kwargs = {"memory": memory} if memory else {}
+        st = meshreduce.simplify_file(src, tmp_path / "py.ply", ratio=0.02, temp_dir=tmp_path,
+                                      **kwargs)
+        assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
+        assert st["out_of_core"] == out["out_of_core"] == (memory is not None)
+        assert st["output_triangles"] == out["output_triangles"]
+        if memory:
+            assert st["chunks"] == out["chunks"] >= 2
+            assert len(st["levels"]) == len(out["levels"])
+    # the locked vertices stay; a budget too small is an error, no output left
+    m = meshreduce.read(src)
+    st = meshreduce.simplify_file(src, tmp_path / "lk.ply", ratio=0.02, memory=2 << 20,
+                                  locked=[0, 10, 20])
+    got = meshreduce.read(tmp_path / "lk.ply")
+    for v in (0, 10, 20):
+        assert (got.vertices == m.vertices[v]).all(axis=1).any()
+    with pytest.raises(meshreduce.InvalidArgumentError, match="too small"):
+        meshreduce.simplify_file(src, tmp_path / "x.ply", ratio=0.02, memory=65536)
+    with pytest.raises(ValueError, match="no target"):
+        meshreduce.simplify_file(src, tmp_path / "x.ply")
+    assert not (tmp_path / "x.ply").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".meshreduce")]
+
+
+@needs_cli
 @pytest.mark.skipif(not meshreduce.features["png"], reason="built without libpng")
 def test_render_matches_cli(tmp_path, torus):
     meshreduce.write(tmp_path / "t.ply", torus)
