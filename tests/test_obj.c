@@ -841,6 +841,131 @@ static void test_thread_independence_errors(void **state)
 }
 
 /* ------------------------------------------------------------------------ */
+/* The reader in windows                                                    */
+/* ------------------------------------------------------------------------ */
+
+static size_t size_of_file(const char *path)
+{
+    size_t n = 0;
+    free(tu_read_file(path, &n));
+    return n;
+}
+
+/* Read path through mr_obj_stream in windows of `window` bytes into one
+ * mesh (positions of the v lines, the triangles). */
+static mr_status read_windows(const char *path, size_t window, int threads, mr_mesh *m,
+                              unsigned *attributes, mr_error *err)
+{
+    mr_obj_stream *s;
+    mr_status st = mr_obj_stream_open(path, threads, window, &s, err);
+    if (st != MR_OK)
+        return st;
+    mr_mesh_init(m);
+    assert_int_equal(mr_mesh_alloc(m, mr_obj_stream_vertex_count(s),
+                                   mr_obj_stream_triangle_count(s), 0, err),
+                     MR_OK);
+    size_t nv = 0, nt = 0, windows = 0;
+    for (;;) {
+        mr_obj_window w;
+        if ((st = mr_obj_stream_next(s, &w, err)) != MR_OK)
+            break;
+        if (!w.positions)
+            break;
+        windows++;
+        assert_int_equal(w.first_vertex, nv);
+        assert_int_equal(w.first_triangle, nt);
+        memcpy(m->positions + 3 * nv, w.positions, 12 * w.vertex_count);
+        memcpy(m->indices + 3 * nt, w.indices, 12 * w.triangle_count);
+        nv += w.vertex_count;
+        nt += w.triangle_count;
+    }
+    *attributes = mr_obj_stream_attributes(s);
+    mr_obj_stream_close(s);
+    if (st != MR_OK) {
+        mr_mesh_free(m);
+        return st;
+    }
+    assert_int_equal(nv, m->vertex_count);
+    assert_int_equal(nt, m->triangle_count);
+    assert_true(window >= size_of_file(path) || windows > 1);
+    return MR_OK;
+}
+
+/* The windows give mr_read_obj's mesh, for every window size (cuts in
+ * every kind of line, relative indices across windows) and thread count,
+ * and its errors; on a file with vt / vn, the v lines' positions and the
+ * attributes noted. */
+static void test_stream_windows(void **state)
+{
+    (void)state;
+    size_t size, lines;
+    char *data = generate_obj(&size, &lines);
+    /* the same file without its vt / vn: the v lines are its vertices */
+    textbuf g = {0};
+    for (const char *p = data; p < data + size;) {
+        const char *e = memchr(p, '\n', (size_t)(data + size - p));
+        e = e ? e + 1 : data + size;
+        if (!(p[0] == 'v' && (p[1] == 't' || p[1] == 'n'))) {
+            for (const char *c = p; c < e; c++) {
+                if (*c == '/') {
+                    while (c + 1 < e && c[1] != ' ' && c[1] != '\n' && c[1] != '\r')
+                        c++;
+                    continue;
+                }
+                add(&g, "%c", *c);
+            }
+        }
+        p = e;
+    }
+    char plain[1024], full[1024];
+    snprintf(plain, sizeof plain, "%s", tu_tmp_path("stream-plain.obj"));
+    snprintf(full, sizeof full, "%s", tu_tmp_path("stream-full.obj"));
+    tu_write_file(plain, g.s, g.len);
+    tu_write_file(full, data, size);
+    mr_mesh ref, withseams, m;
+    mr_error err;
+    assert_int_equal(read_threads(g.s, g.len, 2, &ref, &err), MR_OK);
+    assert_int_equal(read_threads(data, size, 2, &withseams, &err), MR_OK);
+    const size_t windows[] = {4096, 5000, 65536, 1u << 20};
+    const int threads[] = {1, 3};
+    unsigned attrs;
+    for (size_t w = 0; w < sizeof windows / sizeof *windows; w++)
+        for (size_t t = 0; t < 2; t++) {
+            assert_int_equal(read_windows(plain, windows[w], threads[t], &m, &attrs, &err),
+                             MR_OK);
+            tu_assert_mesh_equal(&ref, &m);
+            assert_int_equal(attrs, 0);
+            mr_mesh_free(&m);
+            assert_int_equal(read_windows(full, windows[w], threads[t], &m, &attrs, &err),
+                             MR_OK);
+            assert_int_equal(attrs, MR_ATTR_TEXCOORDS | MR_ATTR_NORMALS);
+            assert_int_equal(m.triangle_count, withseams.triangle_count);
+            assert_memory_equal(m.positions, withseams.positions, 12 * m.vertex_count);
+            mr_mesh_free(&m);
+        }
+    /* errors late in the file: the in-memory reader's message */
+    size_t s1, s2;
+    char *bad1 = replace_line(g.s, g.len, 30000, "f 1 2 0", &s1);
+    char *bad2 = replace_line(g.s, g.len, 29000, "f 1 2 99999999", &s2);
+    const char *bads[2] = {bad1, bad2};
+    const size_t sizes[2] = {s1, s2};
+    for (int b = 0; b < 2; b++) {
+        tu_write_file(plain, bads[b], sizes[b]);
+        mr_error want;
+        assert_int_equal(read_threads(bads[b], sizes[b], 1, &m, &want), MR_ERR_PARSE);
+        assert_int_equal(read_windows(plain, 5000, 2, &m, &attrs, &err), MR_ERR_PARSE);
+        /* the same words after the file's name */
+        tu_assert_contains(err.message, strchr(want.message, ':'));
+    }
+    free(bad1);
+    free(bad2);
+    mr_mesh_free(&ref);
+    mr_mesh_free(&withseams);
+    free(g.s);
+    free(data);
+}
+
+/* ------------------------------------------------------------------------ */
 /* Shared test meshes                                                       */
 /* ------------------------------------------------------------------------ */
 
@@ -968,6 +1093,7 @@ int main(void)
         cmocka_unit_test(test_thread_independence),
         cmocka_unit_test(test_thread_independence_cloud_colors),
         cmocka_unit_test(test_thread_independence_errors),
+        cmocka_unit_test(test_stream_windows),
         cmocka_unit_test(test_beast),
         cmocka_unit_test(test_spot),
         cmocka_unit_test(test_bunny),

@@ -368,6 +368,79 @@ static void test_targets_and_locks(void **state)
     mr_mesh_free(&m);
 }
 
+static void expect_failure_write(const char *in, const char *out, const mr_simplify_options *o,
+                                 uint64_t kib, const char *tmp, const mr_write_options *w,
+                                 mr_status want, const char *says)
+{
+    mr_out_of_core_options c;
+    mr_out_of_core_options_default(&c);
+    c.memory = kib << 10;
+    c.temp_dir = tmp;
+    mr_error err;
+    unlink(out);
+    const mr_status st = mr_simplify_file(in, out, o, &c, w, NULL, &err);
+    if (st != want) {
+        print_error("status %d, wanted %d: %s\n", (int)st, (int)want,
+                    st == MR_OK ? "(ok)" : err.message);
+        fail();
+    }
+    tu_assert_contains(err.message, says);
+    assert_false(tu_file_exists(out));
+}
+
+/* An OBJ input, parsed in windows into temporary files: the bytes of the
+ * same mesh as binary PLY; with texture coordinates, an error unless the
+ * output drops them. */
+static void test_obj_input(void **state)
+{
+    (void)state;
+    char ply[1024], obj[1024], uv[1024], a[1024], b[1024], tmp[1024];
+    tmp_path(ply, "ooc-o-scan.ply");
+    tmp_path(obj, "ooc-o-scan.obj");
+    tmp_path(uv, "ooc-o-uv.obj");
+    tmp_path(a, "ooc-o-a.ply");
+    tmp_path(b, "ooc-o-b.ply");
+    temp_dir(tmp, "ooc-o-tmp");
+    mr_mesh m;
+    make_scan(ply, 80000, &m);
+    write_mesh(&m, obj);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.03;
+    mr_simplify_file_stats st;
+    run_ok(ply, a, &o, 2048, tmp, &st);
+    run_ok(obj, b, &o, 2048, tmp, &st);
+    assert_true(st.out_of_core && st.chunks >= 4);
+    size_t na, nb;
+    char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
+    assert_true(na == nb && memcmp(da, db, na) == 0);
+    free(db);
+    /* texture coordinates */
+    m.texcoords = malloc(8 * m.vertex_count);
+    assert_non_null(m.texcoords);
+    for (size_t v = 0; v < m.vertex_count; v++) {
+        m.texcoords[2 * v] = m.positions[3 * v] * 0.01f;
+        m.texcoords[2 * v + 1] = m.positions[3 * v + 1] * 0.01f;
+    }
+    write_mesh(&m, uv);
+    expect_failure_write(uv, b, &o, 2048, tmp, NULL, MR_ERR_UNSUPPORTED, "texture coordinates");
+    mr_write_options w;
+    mr_write_options_default(&w);
+    w.write_texcoords = 0;
+    mr_out_of_core_options c;
+    mr_out_of_core_options_default(&c);
+    c.memory = 2048 << 10;
+    c.temp_dir = tmp;
+    mr_error err;
+    assert_int_equal(mr_simplify_file(uv, b, &o, &c, &w, &st, &err), MR_OK);
+    db = tu_read_file(b, &nb);
+    assert_true(na == nb && memcmp(da, db, na) == 0); /* the geometry's bytes */
+    free(da);
+    free(db);
+    assert_int_equal(entries(tmp), 0);
+    mr_mesh_free(&m);
+}
+
 /* ---- failures ---------------------------------------------------------------- */
 
 static void expect_failure(const char *in, const char *out, const mr_simplify_options *o,
@@ -506,6 +579,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fits_in_memory),  cmocka_unit_test(test_chunks_quality),
         cmocka_unit_test(test_threads_and_modes), cmocka_unit_test(test_targets_and_locks),
+        cmocka_unit_test(test_obj_input),
         cmocka_unit_test(test_failures),        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_cli),
     };

@@ -117,6 +117,36 @@ void mr_ply_source_release(mr_ply_source *s);
  * positions at random). */
 void mr_ply_source_prefetch(const mr_ply_source *s, uint32_t first, uint32_t last);
 
+/*
+ * An OBJ file read in windows of about `window` bytes (at line starts),
+ * for the out-of-core paths: mr_obj_stream_open maps it and counts every
+ * window (the in-memory reader's first pass); each mr_obj_stream_next then
+ * parses the next window (its second pass) into its v lines' positions
+ * and its faces' triangles (polygons as fans), with their global vertex
+ * indices (relative ones resolved), until a window of no lines. The
+ * values and the errors are mr_read_obj's, but for what its seams would
+ * split: the vertices are the v lines (texture coordinate and normal
+ * indices are noted, not kept; mr_obj_stream_attributes says which the
+ * faces used, and whether a v line had a color, after the last window).
+ * Each window's pages are given back once read.
+ */
+typedef struct mr_obj_stream mr_obj_stream;
+typedef struct mr_obj_window {
+    size_t first_vertex, vertex_count;     /* 0 at the end */
+    const float *positions;                /* 3 * vertex_count */
+    size_t first_triangle, triangle_count;
+    const uint32_t *indices;               /* 3 * triangle_count */
+} mr_obj_window;
+mr_status mr_obj_stream_open(const char *path, int threads, size_t window,
+                             mr_obj_stream **out, mr_error *err);
+void mr_obj_stream_close(mr_obj_stream *s);
+size_t mr_obj_stream_vertex_count(const mr_obj_stream *s);
+size_t mr_obj_stream_triangle_count(const mr_obj_stream *s);
+size_t mr_obj_stream_max_vertices(const mr_obj_stream *s);  /* a window's most */
+size_t mr_obj_stream_max_triangles(const mr_obj_stream *s);
+unsigned mr_obj_stream_attributes(const mr_obj_stream *s);
+mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err);
+
 /* Check that every coordinate of the mesh's positions is finite and every
  * index is below vertex_count; on failure report the first bad element.
  * Readers that cannot check while parsing call this at the end. */

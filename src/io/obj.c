@@ -18,6 +18,7 @@
  * a point cloud whose vt / vn lines match its v lines one to one.
  */
 #include "io_internal.h"
+#include "mapped.h"
 #include "text.h"
 
 #include <errno.h>
@@ -134,6 +135,8 @@ typedef struct obj_dest {
     float *vt, *vn;            /* 2 per vt, 3 per vn line, or NULL */
     uint32_t *idx;             /* 3 per triangle: v index */
     uint32_t *cvt, *cvn;       /* 3 per triangle: vt / vn index, or NULL */
+    size_t base_v, base_tri;   /* pos, col and idx start at these (a window
+                                  of the file: mr_obj_stream; else 0) */
 } obj_dest;
 
 static bool chunk_fail(obj_chunk *c, const char *pos, mr_status st, const char *fmt, ...)
@@ -322,7 +325,7 @@ static bool parse_v(const char **p, const char *end, obj_chunk *c, const obj_des
     if (n < 3)
         return chunk_fail(c, line, MR_ERR_PARSE,
                           "vertex has too few coordinates (expected x y z)");
-    float *out = d->pos + 3 * v;
+    float *out = d->pos + 3 * (v - d->base_v);
     for (int i = 0; i < 3; i++) {
         out[i] = (float)x[i];
         if (!isfinite(out[i]))
@@ -337,7 +340,7 @@ static bool parse_v(const char **p, const char *end, obj_chunk *c, const obj_des
         c->saw_color = true;
     }
     if (d->col) {
-        float *col = d->col + 4 * v;
+        float *col = d->col + 4 * (v - d->base_v);
         /* a vertex without a color among colored ones is white */
         col[0] = n == 6 ? (float)x[3] : 1.0f;
         col[1] = n == 6 ? (float)x[4] : 1.0f;
@@ -473,7 +476,7 @@ static inline bool parse_corner(const char **p, const char *end, obj_chunk *c,
 
 static inline void put_corner(const obj_dest *d, size_t at, const obj_corner *k)
 {
-    d->idx[at] = k->v;
+    d->idx[at - 3 * d->base_tri] = k->v;
     if (d->cvt)
         d->cvt[at] = k->vt;
     if (d->cvn)
@@ -1038,4 +1041,181 @@ mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
     for (int i = 0; i < nbuf; i++)
         free(bufs[i]);
     return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The reader in windows (mr_obj_stream)                                    */
+/* ------------------------------------------------------------------------ */
+
+typedef struct obj_window {
+    size_t off, end;       /* bytes of the body */
+    size_t v0, vt0, vn0, tri0, nv, ntri;
+} obj_window;
+
+struct mr_obj_stream {
+    mr_mapped_file file;
+    const char *data, *begin; /* the map; the body (after a byte order mark) */
+    size_t body;
+    const char *name;
+    int threads;
+    obj_window *win;
+    size_t nwin, next, most_v, most_tri;
+    obj_dest counts;
+    obj_chunk *chunks;
+    float *pos;
+    uint32_t *idx;
+    bool used_vt, used_vn, saw_color;
+};
+
+/* Count a window's chunks and give them their starting counts. */
+static size_t window_chunks(mr_obj_stream *s, const obj_window *w)
+{
+    const size_t n = split_chunks(s->begin + w->off, w->end - w->off, s->threads, s->chunks);
+    for (size_t i = 0; i < n; i++) {
+        obj_chunk *c = &s->chunks[i];
+        const char *b = c->begin, *e = c->end;
+        memset(c, 0, sizeof *c);
+        c->begin = b;
+        c->end = e;
+    }
+    run_chunks(s->chunks, n, count_chunk, NULL);
+    size_t v = w->v0, vt = w->vt0, vn = w->vn0, t = w->tri0;
+    for (size_t i = 0; i < n; i++) {
+        obj_chunk *c = &s->chunks[i];
+        c->v0 = v, c->vt0 = vt, c->vn0 = vn, c->tri0 = t;
+        v += c->nv, vt += c->nvt, vn += c->nvn, t += c->ntri;
+    }
+    return n;
+}
+
+mr_status mr_obj_stream_open(const char *path, int threads, size_t window,
+                             mr_obj_stream **out, mr_error *err)
+{
+    *out = NULL;
+    mr_obj_stream *s = mr_calloc_array(1, sizeof *s);
+    if (!s)
+        return mr_fail_nomem(err, path, sizeof *s);
+    mr_status st = mr_map_file(path, &s->file, err);
+    if (st != MR_OK) {
+        free(s);
+        return st;
+    }
+    s->data = s->file.data;
+    s->begin = s->data;
+    if (s->file.size >= 3 && memcmp(s->data, "\xEF\xBB\xBF", 3) == 0)
+        s->begin += 3;
+    s->body = s->file.size - (size_t)(s->begin - s->data);
+    s->name = path;
+    s->threads = threads < 1 ? 1 : threads;
+    window = window < 4096 ? 4096 : window;
+    const size_t nwin_max = s->body / window + 2;
+    s->win = mr_calloc_array(nwin_max, sizeof *s->win);
+    s->chunks = mr_calloc_array((size_t)s->threads, sizeof *s->chunks);
+    if (!s->win || !s->chunks) {
+        mr_obj_stream_close(s);
+        return mr_fail_nomem(err, path, nwin_max * sizeof *s->win);
+    }
+    /* the windows at line starts, each counted (pass 1) */
+    const char *end = s->begin + s->body;
+    size_t at = 0;
+    bool slash = false;
+    while (at < s->body) {
+        obj_window *w = &s->win[s->nwin++];
+        w->off = at;
+        const char *e = s->begin + (s->body - at > window ? at + window : s->body);
+        if (e < end && e[-1] != '\n')
+            mr_skip_line(&e, end);
+        w->end = (size_t)(e - s->begin);
+        w->v0 = s->counts.nv, w->vt0 = s->counts.nvt, w->vn0 = s->counts.nvn;
+        w->tri0 = s->counts.ntri;
+        const size_t n = window_chunks(s, w);
+        for (size_t i = 0; i < n; i++) {
+            const obj_chunk *c = &s->chunks[i];
+            s->counts.nv += c->nv, s->counts.nvt += c->nvt, s->counts.nvn += c->nvn;
+            s->counts.ntri += c->ntri;
+            slash |= c->slash;
+        }
+        w->nv = s->counts.nv - w->v0;
+        w->ntri = s->counts.ntri - w->tri0;
+        s->most_v = w->nv > s->most_v ? w->nv : s->most_v;
+        s->most_tri = w->ntri > s->most_tri ? w->ntri : s->most_tri;
+        mr_release_mapped(&s->file, (size_t)(s->begin - s->data) + w->off,
+                          (size_t)(s->begin - s->data) + w->end);
+        at = w->end;
+    }
+    (void)slash;
+    if ((st = check_counts(&s->counts, path, err)) != MR_OK) {
+        mr_obj_stream_close(s);
+        return st;
+    }
+    if (s->counts.nv == 0) {
+        mr_obj_stream_close(s);
+        return mr_fail_plain(err, MR_ERR_EMPTY, path, "contains no vertices");
+    }
+    s->pos = mr_alloc_array(s->most_v + 1, 3 * sizeof *s->pos);
+    s->idx = mr_alloc_array(s->most_tri + 1, 3 * sizeof *s->idx);
+    if (!s->pos || !s->idx) {
+        mr_obj_stream_close(s);
+        return mr_fail_nomem(err, path, s->most_v * 12 + s->most_tri * 12);
+    }
+    *out = s;
+    return MR_OK;
+}
+
+void mr_obj_stream_close(mr_obj_stream *s)
+{
+    if (!s)
+        return;
+    mr_unmap_file(&s->file);
+    free(s->win);
+    free(s->chunks);
+    free(s->pos);
+    free(s->idx);
+    free(s);
+}
+
+size_t mr_obj_stream_vertex_count(const mr_obj_stream *s) { return s->counts.nv; }
+size_t mr_obj_stream_triangle_count(const mr_obj_stream *s) { return s->counts.ntri; }
+size_t mr_obj_stream_max_vertices(const mr_obj_stream *s) { return s->most_v; }
+size_t mr_obj_stream_max_triangles(const mr_obj_stream *s) { return s->most_tri; }
+
+unsigned mr_obj_stream_attributes(const mr_obj_stream *s)
+{
+    return (s->saw_color ? MR_ATTR_COLORS : 0) | (s->used_vt ? MR_ATTR_TEXCOORDS : 0) |
+           (s->used_vn ? MR_ATTR_NORMALS : 0);
+}
+
+mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err)
+{
+    memset(w, 0, sizeof *w);
+    if (s->next >= s->nwin)
+        return MR_OK;
+    const obj_window *win = &s->win[s->next++];
+    const size_t n = window_chunks(s, win);
+    obj_dest d = s->counts;
+    d.pos = s->pos;
+    d.col = NULL;
+    d.vt = d.vn = NULL;
+    d.idx = s->idx;
+    d.cvt = d.cvn = NULL;
+    d.base_v = win->v0;
+    d.base_tri = win->tri0;
+    run_chunks(s->chunks, n, parse_chunk, &d);
+    mr_status st = first_error(s->chunks, n, s->data, s->name, err);
+    for (size_t i = 0; i < n; i++) {
+        s->used_vt |= s->chunks[i].used_vt;
+        s->used_vn |= s->chunks[i].used_vn;
+        s->saw_color |= s->chunks[i].saw_color;
+    }
+    mr_release_mapped(&s->file, (size_t)(s->begin - s->data) + win->off,
+                      (size_t)(s->begin - s->data) + win->end);
+    if (st != MR_OK)
+        return st;
+    w->first_vertex = win->v0;
+    w->vertex_count = win->nv;
+    w->positions = s->pos;
+    w->first_triangle = win->tri0;
+    w->triangle_count = win->ntri;
+    w->indices = s->idx;
+    return MR_OK;
 }

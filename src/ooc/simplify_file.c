@@ -43,6 +43,7 @@
 #include "../core/omp_compat.h"
 
 #include <math.h>
+#include <sys/stat.h>
 
 /* What a whole-mesh simplification takes, a triangle, at most (the
  * process's peak over the input's triangles: about 122 measured); what a
@@ -774,21 +775,41 @@ static mr_status write_root(job *j, const char *out_path, mr_chunk_result *r,
     return st;
 }
 
+/* The input's attributes that the output would keep: the out-of-core path
+ * carries none (the write options may drop them: then it goes on). */
+static mr_status check_attributes(const job *j, const mr_write_options *write, mr_error *err)
+{
+    unsigned dropped = 0;
+    if (write) {
+        dropped |= write->write_normals ? 0 : MR_ATTR_NORMALS;
+        dropped |= write->write_texcoords ? 0 : MR_ATTR_TEXCOORDS;
+        dropped |= write->write_colors ? 0 : MR_ATTR_COLORS;
+    }
+    const unsigned kept = j->src.attributes & ~dropped;
+    if (!kept)
+        return MR_OK;
+    char a[32], what[64] = "";
+    const char *names[3] = {"normals", "texture coordinates", "colors"};
+    const unsigned bits[3] = {MR_ATTR_NORMALS, MR_ATTR_TEXCOORDS, MR_ATTR_COLORS};
+    for (int i = 0; i < 3; i++)
+        if (kept & bits[i])
+            snprintf(what + strlen(what), sizeof what - strlen(what), "%s%s",
+                     what[0] ? " and " : "", names[i]);
+    return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
+                         "its vertices have %s, which the out-of-core path does not carry: "
+                         "drop them from the output (--no-normals, --no-texcoords, "
+                         "--no-colors) for a simplification of the geometry, or give a "
+                         "memory budget of %s for the in-memory path",
+                         what, size_up(a, sizeof a, (uint64_t)j->nt * INCORE_BYTES_PER_TRIANGLE));
+}
+
 static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                              const mr_out_of_core_options *ooc, const mr_write_options *write,
-                             mr_error *err)
+                             mr_obj_stream *os, mr_error *err)
 {
     mr_simplify_file_stats *fs = j->st;
     char a[32], b[32];
     mr_status st;
-    if (j->src.attributes)
-        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
-                             "its vertices have normals, texture coordinates or colors, which "
-                             "the out-of-core path does not carry yet (it needs %s in memory "
-                             "for the in-memory path: give --memory that large, or drop the "
-                             "attributes with `meshreduce convert --no-normals --no-texcoords "
-                             "--no-colors`)",
-                             size_text(a, sizeof a, (uint64_t)j->nt * INCORE_BYTES_PER_TRIANGLE));
     if (j->nv > UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, j->in_path,
                              "%zu vertices exceed the 32-bit index limit", j->nv);
@@ -808,27 +829,34 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     least = least > MIN_CAPACITY ? least : MIN_CAPACITY;
     if (2 * (uint64_t)j->nt / (MAX_LEAVES / 2) > least)
         least = 2 * (uint64_t)j->nt / (MAX_LEAVES / 2);
-    if (capacity < least)
+    if (capacity < least) {
+        mr_obj_stream_close(os);
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
                              "a memory budget of %s is too small for %zu vertices and %zu "
                              "triangles out of core: give at least %s",
                              size_text(a, sizeof a, memory), j->nv, j->nt,
                              size_up(b, sizeof b, fixed + CHUNK_BYTES_PER_TRIANGLE * least));
+    }
     j->capacity = capacity;
     fs->chunk_capacity = (size_t)capacity;
     /* the targets' triangles as far as the counts tell before the passes
      * (the vertex count's at least), to say early what does not fit */
     j->referenced = j->nv;
-    if ((st = resolve_targets(j, err)) != MR_OK || (st = output_fits(j, memory, err)) != MR_OK)
-        return st;
-    st = ooc_temp_init(&j->temp, ooc ? ooc->temp_dir : NULL, out_path,
-                       ooc ? ooc->temp_budget : 0, err);
-    if (st != MR_OK)
-        return st;
-    /* the passes: the box, the tree's counts, the spill */
+    if ((st = resolve_targets(j, err)) == MR_OK && (st = output_fits(j, memory, err)) == MR_OK)
+        st = ooc_temp_init(&j->temp, ooc ? ooc->temp_dir : NULL, out_path,
+                           ooc ? ooc->temp_budget : 0, err);
+    /* the passes: an OBJ file's parse into temporary files, the box, the
+     * tree's counts, the spill */
     const double t0 = mr_now_seconds();
     j->total = 0.1 * (double)j->nt * 4 + (double)j->nt * 2;
-    st = bounds_pass(j, err);
+    if (os && st == MR_OK)
+        st = ooc_source_from_obj(os, j->in_path, &j->temp, &j->src, err);
+    else
+        mr_obj_stream_close(os);
+    if (st == MR_OK)
+        st = check_attributes(j, write, err);
+    if (st == MR_OK)
+        st = bounds_pass(j, err);
     if (st == MR_OK)
         st = ooc_tree_init(&j->tree, j->lo, j->hi, grid_bins, capacity, err);
     for (int round = 0; st == MR_OK && ooc_tree_open(&j->tree); round++) {
@@ -966,24 +994,47 @@ mr_status mr_simplify_file(const char *in_path, const char *out_path,
     j.st = &fs;
     j.threads = mr_thread_count(options->threads);
     j.spill.fd = -1;
+    /* the counts: a binary PLY's header; an OBJ file's count of its lines,
+     * unless its size says it fits (a face line takes 8 bytes at least) */
     mr_error quiet;
-    st = ooc_source_open(in_path, j.threads, &j.src, &quiet);
+    mr_obj_stream *os = NULL;
+    const mr_format format = mr_format_from_path(in_path);
+    st = MR_ERR_UNSUPPORTED;
+    if (format == MR_FORMAT_PLY) {
+        st = ooc_source_open(in_path, j.threads, &j.src, &quiet);
+        if (st == MR_OK) {
+            j.nv = j.src.vertex_count;
+            j.nt = j.src.triangle_count;
+        }
+    } else if (format == MR_FORMAT_OBJ) {
+        struct stat sb;
+        const bool small = stat(in_path, &sb) == 0 && S_ISREG(sb.st_mode) &&
+                           (uint64_t)sb.st_size / 8 * INCORE_BYTES_PER_TRIANGLE <= memory;
+        if (!small) {
+            uint64_t window = memory / 8;
+            window = window < ((uint64_t)1 << 20)   ? (uint64_t)1 << 20
+                     : window > ((uint64_t)64 << 20) ? (uint64_t)64 << 20
+                                                     : window;
+            st = mr_obj_stream_open(in_path, j.threads, (size_t)window, &os, &quiet);
+            if (st == MR_OK) {
+                j.nv = mr_obj_stream_vertex_count(os);
+                j.nt = mr_obj_stream_triangle_count(os);
+            }
+        }
+    }
     if (st != MR_OK && st != MR_ERR_UNSUPPORTED) {
         if (err)
             *err = quiet;
         return st;
     }
-    if (st == MR_OK) {
-        j.nv = j.src.vertex_count;
-        j.nt = j.src.triangle_count;
-    }
     if (st != MR_OK || (uint64_t)j.nt * INCORE_BYTES_PER_TRIANGLE <= memory) {
         ooc_source_close(&j.src);
+        mr_obj_stream_close(os);
         st = in_core(in_path, out_path, options, write, &fs, err);
     } else {
         fs.out_of_core = 1;
         fs.simplify.input_triangles = j.nt;
-        st = out_of_core(&j, out_path, memory, ooc, write, err);
+        st = out_of_core(&j, out_path, memory, ooc, write, os, err);
         ooc_source_close(&j.src);
         ooc_file_close(&j.temp, &j.spill);
         if (j.pieces)

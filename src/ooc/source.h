@@ -2,12 +2,16 @@
  * An input mesh read in passes (source.c), for the out-of-core paths: its
  * counts, its vertices in blocks, a vertex's position at random, its faces
  * chunk by chunk (again from the first after a rewind), and its pages
- * given back. A binary PLY file is read in place (mr_ply_source). Internal.
+ * given back. A binary PLY file is read in place (mr_ply_source); an OBJ
+ * file is parsed once in windows (mr_obj_stream) into two temporary
+ * files, its positions (12 bytes a vertex, mapped for the reads at
+ * random) and its triangles (12 bytes each, read in order), which the
+ * passes then read. Internal.
  */
 #ifndef MR_OOC_SOURCE_H
 #define MR_OOC_SOURCE_H
 
-#include "../core/internal.h"
+#include "temp.h"
 
 typedef struct ooc_source {
     size_t vertex_count, triangle_count;
@@ -24,9 +28,15 @@ typedef struct ooc_source {
     void (*close)(void *impl);
 } ooc_source;
 
-/* Open path as a source: MR_ERR_UNSUPPORTED (err set, saying why) for a
- * file that is not read in pieces. */
+/* A binary PLY file as a source: MR_ERR_UNSUPPORTED (err set, saying
+ * why) for one that is not read in place (ascii, lists in the vertex
+ * element, strips; another format). */
 mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error *err);
+/* An OBJ file as a source, from its opened stream (which this closes):
+ * its windows parsed into temporary files in t. */
+typedef struct mr_obj_stream mr_obj_stream;
+mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, ooc_source *s,
+                              mr_error *err);
 void ooc_source_close(ooc_source *s);
 
 #endif
