@@ -23,6 +23,11 @@ extern const cli_command cli_cmd_info, cli_cmd_convert, cli_cmd_generate, cli_cm
 extern const cli_command cli_cmd_compare, cli_cmd_simplify;
 extern const cli_command cli_cmd_weld, cli_cmd_cluster, cli_cmd_render;
 
+/* The ranks of meshreduce-mpi's job, or NULL (meshreduce): simplify's
+ * out-of-core path runs on them (src/ooc/comm.h). */
+struct ooc_comm;
+extern struct ooc_comm *cli_comm;
+
 /* Print "meshreduce: <message>" to stderr and return CLI_FAIL. */
 int cli_fail(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Print the library error and return CLI_FAIL. */

@@ -149,6 +149,8 @@ bool cli_parse_count(const char *s, uint64_t *out)
     return true;
 }
 
+struct ooc_comm *cli_comm;
+
 bool cli_parse_size(const char *s, uint64_t *out)
 {
     if (!s || !*s || *s == '-')

@@ -1,5 +1,6 @@
 /* meshreduce cluster IN -o OUT: grid vertex clustering. */
 #include "cli.h"
+#include "../src/ooc/comm.h"
 
 #include <math.h>
 #include <string.h>
@@ -161,6 +162,9 @@ static int run(int argc, char **argv)
     if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
+    /* meshreduce-mpi: the clustering is one streaming pass, on rank 0 */
+    if (cli_comm && cli_comm->rank != 0)
+        return CLI_OK;
     if (mr_format_from_path(io.in) == MR_FORMAT_PLY) {
         /* read in passes (binary PLY: memory that grows with the output),
          * the same bytes as the mesh read whole */

@@ -1,5 +1,6 @@
 /* meshreduce simplify IN -o OUT: greedy quadric-error edge collapse. */
 #include "cli.h"
+#include "../src/ooc/comm.h"
 
 #include <errno.h>
 #include <math.h>
@@ -584,13 +585,13 @@ static int run_file(const cli_io *io, simplify_job *job)
             return rc;
     }
     progress prog = {cli_now(), 0, -1};
-    if (!io->quiet && isatty(STDERR_FILENO)) {
+    if (!io->quiet && isatty(STDERR_FILENO) && (!cli_comm || cli_comm->rank == 0)) {
         job->o.progress = show_progress;
         job->o.progress_user = &prog;
     }
     mr_simplify_file_stats fs;
-    const mr_status st = mr_simplify_file(io->in, io->out, &job->o, &job->ooc, &io->write, &fs,
-                                          &err);
+    const mr_status st = ooc_simplify_file(io->in, io->out, &job->o, &job->ooc, &io->write,
+                                           cli_comm, &fs, &err);
     free(job->lock);
     job->lock = NULL;
     job->o.vertex_lock = NULL;
@@ -629,8 +630,8 @@ static int run(int argc, char **argv)
     if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
-    if (job.ooc_given || (mr_format_from_path(io.in) == MR_FORMAT_PLY &&
-                          cli_file_size(io.in) > FILE_PATH_BYTES))
+    if (cli_comm || job.ooc_given ||
+        (mr_format_from_path(io.in) == MR_FORMAT_PLY && cli_file_size(io.in) > FILE_PATH_BYTES))
         return run_file(&io, &job);
     return cli_run_job(&io, &steps, &job);
 }

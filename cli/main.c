@@ -105,6 +105,56 @@ static int take_threads(int *argc, char **argv)
     return 0;
 }
 
+static int dispatch(int argc, char **argv);
+
+#ifdef MR_MPI
+/*
+ * meshreduce-mpi: the same commands' code on the ranks of an MPI job
+ * (mpirun -np N meshreduce-mpi simplify ...): simplify runs out of core
+ * with its chunks spread over the ranks (cli_comm), cluster on rank 0.
+ * Only rank 0 writes the output and speaks (the others' stdout and
+ * stderr go to /dev/null unless MR_MPI_VERBOSE is set): an error any
+ * rank meets is agreed on and said once.
+ */
+#include "../src/ooc/comm.h"
+
+#include <mpi.h>
+#include <stdio.h>
+
+static ooc_comm ranks;
+
+int main(int argc, char **argv)
+{
+    if (!getenv("GOMP_SPINCOUNT") && !getenv("OMP_WAIT_POLICY") &&
+        setenv("GOMP_SPINCOUNT", "10000", 0) == 0)
+        execv("/proc/self/exe", argv); /* returns only on failure: go on */
+    int provided;
+    if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+        fprintf(stderr, "meshreduce-mpi: MPI_Init failed\n");
+        return CLI_FAIL;
+    }
+    ooc_mpi_comm(&ranks);
+    cli_comm = &ranks;
+    if (ranks.rank != 0 && !getenv("MR_MPI_VERBOSE")) {
+        (void)!freopen("/dev/null", "w", stdout);
+        (void)!freopen("/dev/null", "w", stderr);
+    }
+    int rc;
+    if (argc >= 2 && strcmp(argv[1], "simplify") && strcmp(argv[1], "cluster") &&
+        argv[1][0] != '-') {
+        fprintf(stderr, "meshreduce-mpi: runs simplify and cluster on the ranks of an MPI job "
+                        "(mpirun -np N meshreduce-mpi simplify IN -o OUT ...); '%s' is "
+                        "meshreduce's\n",
+                argv[1]);
+        rc = CLI_USAGE;
+    } else {
+        rc = dispatch(argc, argv);
+    }
+    ooc_mpi_free(&ranks);
+    MPI_Finalize();
+    return rc;
+}
+#else
 int main(int argc, char **argv)
 {
     /* The parallel simplifier meets at a barrier a few thousand times a
@@ -118,6 +168,12 @@ int main(int argc, char **argv)
     if (!getenv("GOMP_SPINCOUNT") && !getenv("OMP_WAIT_POLICY") &&
         setenv("GOMP_SPINCOUNT", "10000", 0) == 0)
         execv("/proc/self/exe", argv); /* returns only on failure: go on */
+    return dispatch(argc, argv);
+}
+#endif
+
+static int dispatch(int argc, char **argv)
+{
     install_signal_handlers();
     if (take_threads(&argc, argv) != 0)
         return CLI_USAGE;

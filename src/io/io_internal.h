@@ -111,6 +111,10 @@ mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *coun
                                    mr_error *err);
 /* Start the faces again from the first (another pass). */
 void mr_ply_source_rewind(mr_ply_source *s);
+/* The face chunks (next_faces calls) of the file; start the faces at the
+ * k-th (k past the last: none left). */
+size_t mr_ply_source_face_chunks(const mr_ply_source *s);
+void mr_ply_source_seek(mr_ply_source *s, size_t k);
 /* Give back every page of the map read so far (after random reads). */
 void mr_ply_source_release(mr_ply_source *s);
 /* Map ahead the rows of vertices first..last (before reading their

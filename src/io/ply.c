@@ -1730,6 +1730,35 @@ void mr_ply_source_rewind(mr_ply_source *s)
     s->released = 0;
 }
 
+size_t mr_ply_source_face_chunks(const mr_ply_source *s)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < s->r.elem_count; i++)
+        if (s->r.elems[i].kind == EK_FACE)
+            n += s->r.elems[i].chunk_count;
+    return n;
+}
+
+void mr_ply_source_seek(mr_ply_source *s, size_t k)
+{
+    s->elem = 0;
+    s->chunk = 0;
+    s->released = 0;
+    for (size_t i = 0; i < s->r.elem_count; i++) {
+        const ply_elem *e = &s->r.elems[i];
+        if (e->kind != EK_FACE)
+            continue;
+        if (k < e->chunk_count) {
+            s->elem = i;
+            s->chunk = k;
+            s->released = e->chunks[k].off;
+            return;
+        }
+        k -= e->chunk_count;
+    }
+    s->elem = s->r.elem_count; /* past the last: no faces */
+}
+
 void mr_ply_source_prefetch(const mr_ply_source *s, uint32_t first, uint32_t last)
 {
     const ply_elem *e = s->r.vertex;

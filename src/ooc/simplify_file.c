@@ -32,6 +32,7 @@
  * The counts, splits, orders and sums depend on the file and the options
  * only: the same bytes on any number of threads.
  */
+#include "comm.h"
 #include "source.h"
 #include "temp.h"
 #include "tree.h"
@@ -128,7 +129,31 @@ typedef struct job {
     /* progress over the whole job, in triangles worked */
     double done, total;
     bool cancelled;
+    /* the ranks (comm NULL: one) */
+    ooc_comm *comm;
+    int rank, ranks;
+    int *owner;              /* per node: the rank that simplifies it */
 } job;
+
+/* ---- the ranks ------------------------------------------------------------------ */
+
+/* Every rank's outcome (one rank: its own). */
+static mr_status agree(job *j, mr_status st, mr_error *err)
+{
+    return j->ranks > 1 ? j->comm->agree(j->comm, st, err) : st;
+}
+
+static mr_status reduce(job *j, void *data, size_t n, ooc_type type, ooc_op op, mr_error *err)
+{
+    return j->ranks > 1 && n ? j->comm->reduce(j->comm, data, n, type, op, err) : MR_OK;
+}
+
+/* This rank's share [*first, *last) of n things. */
+static void share(const job *j, size_t n, size_t *first, size_t *last)
+{
+    *first = (size_t)((unsigned __int128)n * (unsigned)j->rank / (unsigned)j->ranks);
+    *last = (size_t)((unsigned __int128)n * (unsigned)(j->rank + 1) / (unsigned)j->ranks);
+}
 
 /* ---- progress -------------------------------------------------------------- */
 
@@ -174,8 +199,10 @@ static mr_status bounds_pass(job *j, mr_error *err)
         j->lo[k] = INFINITY;
         j->hi[k] = -INFINITY;
     }
-    for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += VERTEX_BLOCK) {
-        const size_t m = j->nv - v0 < VERTEX_BLOCK ? j->nv - v0 : VERTEX_BLOCK;
+    size_t first, last;
+    share(j, j->nv, &first, &last);
+    for (size_t v0 = first; v0 < last && st == MR_OK; v0 += VERTEX_BLOCK) {
+        const size_t m = last - v0 < VERTEX_BLOCK ? last - v0 : VERTEX_BLOCK;
         b.vertex_count = m;
         if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
             break;
@@ -189,6 +216,10 @@ static mr_status bounds_pass(job *j, mr_error *err)
     b.vertex_count = VERTEX_BLOCK;
     mr_mesh_free(&b);
     j->src.release(j->src.impl);
+    /* min and max: exact, in any order */
+    if ((st = agree(j, st, err)) != MR_OK || (st = reduce(j, j->lo, 3, OOC_F64, OOC_MIN, err)) ||
+        (st = reduce(j, j->hi, 3, OOC_F64, OOC_MAX, err)))
+        return st;
     const double dx = j->hi[0] - j->lo[0], dy = j->hi[1] - j->lo[1], dz = j->hi[2] - j->lo[2];
     j->diagonal = sqrt(dx * dx + dy * dy + dz * dz);
     if (!(j->diagonal > 0))
@@ -212,18 +243,21 @@ static mr_status face_pass(job *j, batch_fn fn, void *user, mr_error *err)
         free(c);
         return mr_fail_nomem(err, j->in_path, (cap + per) * 36);
     }
-    j->src.rewind(j->src.impl);
+    /* this rank's run of the face chunks */
+    size_t first, last;
+    share(j, j->src.face_chunks, &first, &last);
+    j->src.seek(j->src.impl, first);
     mr_status st = MR_OK;
     for (size_t chunk = 0, done = 0; st == MR_OK && !done;) {
         size_t got = 0;
         while (got < cap && st == MR_OK) {
-            size_t n3;
-            if ((st = j->src.next_faces(j->src.impl, idx + 3 * got, &n3, err)) != MR_OK)
-                break;
-            if (n3 == 0) {
+            if (first + chunk >= last) {
                 done = 1;
                 break;
             }
+            size_t n3 = 0;
+            if ((st = j->src.next_faces(j->src.impl, idx + 3 * got, &n3, err)) != MR_OK)
+                break;
             got += n3;
             if (++chunk % RELEASE_EVERY == 0)
                 j->src.release(j->src.impl);
@@ -260,22 +294,183 @@ static mr_status count_batch(job *j, const uint32_t *idx, const double *c, size_
 }
 
 /* The spill's buffers: a run of triangles per leaf, written when full. */
+/* A run of one leaf's triangles in a rank's own spill (several ranks). */
+typedef struct spill_block {
+    uint32_t leaf;
+    uint32_t count;
+    uint64_t at;       /* byte offset */
+} spill_block;
+
 typedef struct spill_buffers {
     uint32_t *buf;     /* leaves x per x 3 */
     size_t per;        /* triangles a leaf's buffer holds */
     size_t *fill;
     uint32_t *leaf;    /* a batch's leaves */
+    /* several ranks: this rank's triangles, block by block */
+    ooc_file local;
+    spill_block *blocks;
+    size_t nblocks, cap;
 } spill_buffers;
 
 static mr_status flush_leaf(job *j, spill_buffers *b, size_t l, mr_error *err)
 {
     if (b->fill[l] == 0)
         return MR_OK;
-    const uint64_t at = (j->leaf_at[l] + j->leaf_count[l]) * 12;
-    mr_status st = ooc_file_write(&j->temp, &j->spill, at, b->buf + 3 * b->per * l,
-                                  12 * b->fill[l], err);
+    const uint32_t *data = b->buf + 3 * b->per * l;
+    mr_status st;
+    if (j->ranks > 1) {
+        if (b->nblocks == b->cap) {
+            const size_t ncap = b->cap ? 2 * b->cap : 1024;
+            spill_block *nb = mr_realloc_array(b->blocks, ncap, sizeof *nb);
+            if (!nb)
+                return mr_fail_nomem(err, NULL, ncap * sizeof *nb);
+            b->blocks = nb;
+            b->cap = ncap;
+        }
+        spill_block *k = &b->blocks[b->nblocks++];
+        k->leaf = (uint32_t)l;
+        k->count = (uint32_t)b->fill[l];
+        k->at = b->local.size;
+        st = ooc_file_write(&j->temp, &b->local, k->at, data, 12 * b->fill[l], err);
+    } else {
+        const uint64_t at = (j->leaf_at[l] + j->leaf_count[l]) * 12;
+        st = ooc_file_write(&j->temp, &j->spill, at, data, 12 * b->fill[l], err);
+    }
     j->leaf_count[l] += b->fill[l];
     b->fill[l] = 0;
+    return st;
+}
+
+/* Bytes a message carries at most. */
+#define MESSAGE_BYTES ((size_t)8 << 20)
+
+/* Several ranks: the ranks' blocks of each leaf into its owner's spill,
+ * the ranks in order (each rank's faces are a run of the file's, so the
+ * leaf's triangles come in the file's order, as one rank spills them).
+ * Every rank goes through the leaves in order: a leaf's owner receives
+ * from each other rank that has some of it, the others send theirs. A
+ * rank that fails goes on with the exchange (writing nothing, or sending
+ * zeros) so that no other waits on it; agree() says at the end. */
+static int block_order(const void *a, const void *b)
+{
+    const spill_block *x = a, *y = b;
+    if (x->leaf != y->leaf)
+        return x->leaf < y->leaf ? -1 : 1;
+    return x->at < y->at ? -1 : x->at > y->at;
+}
+
+static mr_status assemble_spill(job *j, spill_buffers *b, mr_error *err)
+{
+    ooc_tree *t = &j->tree;
+    const size_t nl = t->leaves, nr = (size_t)j->ranks;
+    uint64_t *all = mr_alloc_array(nl * nr, sizeof *all);
+    char *buf = mr_alloc_array(MESSAGE_BYTES, 1);
+    if (!all || !buf) {
+        free(all);
+        free(buf);
+        return mr_fail_nomem(err, NULL, nl * nr * 8 + MESSAGE_BYTES);
+    }
+    mr_status st = j->comm->gather(j->comm, j->leaf_count, nl, all, err);
+    if (st != MR_OK) {
+        free(all);
+        free(buf);
+        return st;
+    }
+    qsort(b->blocks, b->nblocks, sizeof *b->blocks, block_order);
+    mr_status local = ooc_file_open(&j->temp, &j->spill, err);
+    mr_error local_err = err ? *err : (mr_error){0};
+    size_t k = 0; /* this rank's next block */
+    for (size_t l = 0; l < nl && st == MR_OK; l++) {
+        const int owner = j->owner[t->leaf_node[l]];
+        const uint64_t mine = all[(size_t)j->rank * nl + l];
+        if (owner == j->rank) {
+            uint64_t at = j->leaf_at[l] * 12;
+            for (size_t r = 0; r < nr && st == MR_OK; r++) {
+                uint64_t left = 12 * all[r * nl + l];
+                if ((int)r == j->rank) {
+                    for (; k < b->nblocks && b->blocks[k].leaf == l; k++) {
+                        const size_t n = 12 * (size_t)b->blocks[k].count;
+                        for (size_t off = 0; off < n && local == MR_OK;) {
+                            const size_t m = n - off < MESSAGE_BYTES ? n - off : MESSAGE_BYTES;
+                            local = ooc_file_read(&j->temp, &b->local, b->blocks[k].at + off,
+                                                  buf, m, &local_err);
+                            if (local == MR_OK)
+                                local = ooc_file_write(&j->temp, &j->spill, at, buf, m,
+                                                       &local_err);
+                            off += m;
+                            at += m;
+                        }
+                    }
+                    continue;
+                }
+                while (left > 0 && st == MR_OK) {
+                    const size_t m = left < MESSAGE_BYTES ? (size_t)left : MESSAGE_BYTES;
+                    st = j->comm->recv(j->comm, (int)r, buf, m, err);
+                    if (st == MR_OK && local == MR_OK)
+                        local = ooc_file_write(&j->temp, &j->spill, at, buf, m, &local_err);
+                    at += m;
+                    left -= m;
+                }
+            }
+            j->leaf_count[l] = 0;
+            for (size_t r = 0; r < nr; r++)
+                j->leaf_count[l] += all[r * nl + l];
+        } else if (mine) {
+            /* this rank's blocks of the leaf, as one stream in messages */
+            size_t fill = 0;
+            for (; k < b->nblocks && b->blocks[k].leaf == l && st == MR_OK; k++) {
+                const size_t n = 12 * (size_t)b->blocks[k].count;
+                for (size_t off = 0; off < n && st == MR_OK;) {
+                    const size_t m = n - off < MESSAGE_BYTES - fill ? n - off : MESSAGE_BYTES - fill;
+                    if (local == MR_OK)
+                        local = ooc_file_read(&j->temp, &b->local, b->blocks[k].at + off,
+                                              buf + fill, m, &local_err);
+                    if (local != MR_OK)
+                        memset(buf + fill, 0, m);
+                    fill += m;
+                    off += m;
+                    if (fill == MESSAGE_BYTES) {
+                        st = j->comm->send(j->comm, owner, buf, fill, err);
+                        fill = 0;
+                    }
+                }
+            }
+            if (fill && st == MR_OK)
+                st = j->comm->send(j->comm, owner, buf, fill, err);
+        } else {
+            while (k < b->nblocks && b->blocks[k].leaf == l)
+                k++;
+        }
+    }
+    free(all);
+    free(buf);
+    if (st == MR_OK && local != MR_OK) {
+        if (err)
+            *err = local_err;
+        st = local;
+    }
+    return st;
+}
+
+/* Several ranks: every vertex's first and last leaf over all of them. */
+static mr_status reduce_ranges(job *j, mr_error *err)
+{
+    enum { BLOCK = 1 << 20 };
+    uint16_t *lo = mr_alloc_array(BLOCK, sizeof *lo), *hi = mr_alloc_array(BLOCK, sizeof *hi);
+    mr_status st = lo && hi ? MR_OK : mr_fail_nomem(err, NULL, 4 * BLOCK);
+    for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += BLOCK) {
+        const size_t n = j->nv - v0 < BLOCK ? j->nv - v0 : BLOCK;
+        for (size_t i = 0; i < n; i++) {
+            lo[i] = (uint16_t)range_first(j->range[v0 + i]);
+            hi[i] = (uint16_t)range_last(j->range[v0 + i]);
+        }
+        if ((st = reduce(j, lo, n, OOC_U16, OOC_MIN, err)) == MR_OK &&
+            (st = reduce(j, hi, n, OOC_U16, OOC_MAX, err)) == MR_OK)
+            for (size_t i = 0; i < n; i++)
+                j->range[v0 + i] = (uint32_t)lo[i] | (uint32_t)hi[i] << 16;
+    }
+    free(lo);
+    free(hi);
     return st;
 }
 
@@ -683,6 +878,176 @@ static mr_status run_tree(job *j, mr_chunk_result *root, mr_error *err)
     return st;
 }
 
+/* ---- the tree over several ranks ------------------------------------------------ */
+
+/* Who simplifies each node: the leaves in runs of about equal triangles,
+ * a rank a run (a leaf goes to the rank its middle triangle falls to);
+ * an inner node to the rank of its first child. */
+static mr_status assign_owners(job *j, mr_error *err)
+{
+    ooc_tree *t = &j->tree;
+    j->owner = mr_calloc_array(t->nnodes, sizeof *j->owner);
+    if (!j->owner)
+        return mr_fail_nomem(err, NULL, t->nnodes * sizeof *j->owner);
+    if (j->ranks == 1)
+        return MR_OK;
+    uint64_t total = 0;
+    for (size_t l = 0; l < t->leaves; l++)
+        total += t->nodes[t->leaf_node[l]].triangles;
+    uint64_t at = 0;
+    for (size_t l = 0; l < t->leaves; l++) {
+        const uint64_t n = t->nodes[t->leaf_node[l]].triangles;
+        const double mid = total ? ((double)at + 0.5 * (double)n) / (double)total : 0;
+        int r = (int)(mid * j->ranks);
+        j->owner[t->leaf_node[l]] = r < j->ranks ? r : j->ranks - 1;
+        at += n;
+    }
+    /* children come after their parent in the node array */
+    for (size_t i = t->nnodes; i-- > 0;)
+        if (t->nodes[i].child[0] >= 0)
+            j->owner[i] = j->owner[t->nodes[i].child[0]];
+    return MR_OK;
+}
+
+/* Node i's piece from its owner to `to`: its counts, then its file's
+ * bytes in messages. */
+static mr_status send_piece(job *j, uint32_t i, int to, mr_error *err)
+{
+    piece *p = &j->pieces[i];
+    uint64_t head[2] = {p->nv, p->nt};
+    mr_status st = j->comm->send(j->comm, to, head, sizeof head, err);
+    const uint64_t bytes = p->nt ? p->file.size : 0;
+    char *buf = bytes ? mr_alloc_array(MESSAGE_BYTES, 1) : NULL;
+    mr_status local = bytes && !buf ? mr_fail_nomem(err, NULL, MESSAGE_BYTES) : MR_OK;
+    char zeros[4096] = {0};
+    for (uint64_t off = 0; off < bytes && st == MR_OK;) {
+        const size_t m = bytes - off < (buf ? MESSAGE_BYTES : sizeof zeros)
+                             ? (size_t)(bytes - off)
+                             : (buf ? MESSAGE_BYTES : sizeof zeros);
+        if (local == MR_OK)
+            local = ooc_file_read(&j->temp, &p->file, off, buf, m, err);
+        st = j->comm->send(j->comm, to, local == MR_OK ? buf : (buf ? memset(buf, 0, m) : zeros),
+                           m, err);
+        off += m;
+    }
+    free(buf);
+    ooc_file_close(&j->temp, &p->file);
+    return st != MR_OK ? st : local;
+}
+
+static mr_status recv_piece(job *j, uint32_t i, int from, mr_error *err)
+{
+    piece *p = &j->pieces[i];
+    uint64_t head[2];
+    mr_status st = j->comm->recv(j->comm, from, head, sizeof head, err);
+    if (st != MR_OK)
+        return st;
+    p->nv = (size_t)head[0];
+    p->nt = (size_t)head[1];
+    const uint64_t bytes = p->nt ? (uint64_t)p->nv * (16 + sizeof(mr_quadricf)) + 12 * (uint64_t)p->nt : 0;
+    char *buf = bytes ? mr_alloc_array(MESSAGE_BYTES, 1) : NULL;
+    mr_status local = bytes && !buf ? mr_fail_nomem(err, NULL, MESSAGE_BYTES) : MR_OK;
+    if (bytes && local == MR_OK)
+        local = ooc_file_open(&j->temp, &p->file, err);
+    char sink[4096];
+    for (uint64_t off = 0; off < bytes && st == MR_OK;) {
+        const size_t cap = buf ? MESSAGE_BYTES : sizeof sink;
+        const size_t m = bytes - off < cap ? (size_t)(bytes - off) : cap;
+        st = j->comm->recv(j->comm, from, buf ? buf : sink, m, err);
+        if (st == MR_OK && local == MR_OK)
+            local = ooc_file_write(&j->temp, &p->file, off, buf, m, err);
+        off += m;
+    }
+    free(buf);
+    return st != MR_OK ? st : local;
+}
+
+/* Several ranks: the tree's levels as supersteps -- each rank simplifies
+ * its nodes of the level, then the results whose parent another rank owns
+ * go to it; the root's result (rank 0's: it owns the first leaf) into
+ * *root. */
+static mr_status run_levels(job *j, mr_chunk_result *root, mr_error *err)
+{
+    ooc_tree *t = &j->tree;
+    j->pieces = mr_calloc_array(t->nnodes, sizeof *j->pieces);
+    mr_status st = j->pieces ? MR_OK : mr_fail_nomem(err, NULL, t->nnodes * sizeof *j->pieces);
+    for (size_t i = 0; st == MR_OK && i < t->nnodes; i++)
+        j->pieces[i].file.fd = -1;
+    st = agree(j, st, err);
+    const double t0 = mr_now_seconds();
+    for (int h = 0; h <= t->height && st == MR_OK; h++) {
+        mr_status local = MR_OK;
+        for (size_t i = 0; i < t->nnodes && local == MR_OK; i++) {
+            const ooc_node *n = &t->nodes[i];
+            if (n->height != h || j->owner[i] != j->rank)
+                continue;
+            local = n->child[0] < 0 ? run_leaf(j, (uint32_t)i, root, err)
+                                    : run_inner(j, (uint32_t)i, root, err);
+            if (local == MR_OK && j->cancelled)
+                local = mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
+                                      "simplify: cancelled by the progress callback");
+        }
+        st = agree(j, local, err);
+        /* in node order on every rank: each pair's messages in one order */
+        for (size_t i = 0; i < t->nnodes && st == MR_OK; i++) {
+            const ooc_node *n = &t->nodes[i];
+            if (n->height != h || n->parent < 0)
+                continue;
+            const int from = j->owner[i], to = j->owner[n->parent];
+            if (from == to)
+                continue;
+            if (j->rank == from)
+                local = send_piece(j, (uint32_t)i, to, err);
+            else if (j->rank == to)
+                local = recv_piece(j, (uint32_t)i, from, err);
+        }
+        st = agree(j, st == MR_OK ? local : st, err);
+    }
+    j->st->seconds_simplify = mr_now_seconds() - t0;
+    return st;
+}
+
+/* Several ranks: the figures summed (counts, times of work) or the most
+ * (a level's time, the largest error, temporary disk) over them. */
+static mr_status gather_stats(job *j, mr_error *err)
+{
+    if (j->ranks == 1)
+        return MR_OK;
+    mr_simplify_file_stats *fs = j->st;
+    fs->temp_bytes_peak = j->temp.peak;
+    uint64_t u[2 * MR_LEVELS_MAX + 1];
+    double sum[3], most[MR_LEVELS_MAX + 1];
+    for (int l = 0; l < MR_LEVELS_MAX; l++) {
+        u[l] = fs->level_chunks[l];
+        u[MR_LEVELS_MAX + l] = fs->level_triangles[l];
+        most[l] = fs->level_seconds[l];
+    }
+    u[2 * MR_LEVELS_MAX] = fs->simplify.collapses;
+    most[MR_LEVELS_MAX] = fs->simplify.max_error;
+    sum[0] = fs->simplify.seconds_setup;
+    sum[1] = fs->simplify.seconds_collapse;
+    sum[2] = fs->simplify.seconds_output;
+    uint64_t peak = fs->temp_bytes_peak;
+    mr_status st;
+    if ((st = reduce(j, u, 2 * MR_LEVELS_MAX + 1, OOC_U64, OOC_SUM, err)) != MR_OK ||
+        (st = reduce(j, most, MR_LEVELS_MAX + 1, OOC_F64, OOC_MAX, err)) != MR_OK ||
+        (st = reduce(j, sum, 3, OOC_F64, OOC_SUM, err)) != MR_OK ||
+        (st = reduce(j, &peak, 1, OOC_U64, OOC_MAX, err)) != MR_OK)
+        return st;
+    for (int l = 0; l < MR_LEVELS_MAX; l++) {
+        fs->level_chunks[l] = (size_t)u[l];
+        fs->level_triangles[l] = (size_t)u[MR_LEVELS_MAX + l];
+        fs->level_seconds[l] = most[l];
+    }
+    fs->simplify.collapses = (size_t)u[2 * MR_LEVELS_MAX];
+    fs->simplify.max_error = most[MR_LEVELS_MAX];
+    fs->simplify.seconds_setup = sum[0];
+    fs->simplify.seconds_collapse = sum[1];
+    fs->simplify.seconds_output = sum[2];
+    fs->temp_bytes_peak = peak;
+    return MR_OK;
+}
+
 /* ---- the job --------------------------------------------------------------------- */
 
 static char *size_text(char *buf, size_t cap, uint64_t n)
@@ -855,17 +1220,23 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         mr_obj_stream_close(os);
     if (st == MR_OK)
         st = check_attributes(j, write, err);
-    if (st == MR_OK)
+    if ((st = agree(j, st, err)) == MR_OK)
         st = bounds_pass(j, err);
     if (st == MR_OK)
         st = ooc_tree_init(&j->tree, j->lo, j->hi, grid_bins, capacity, err);
     for (int round = 0; st == MR_OK && ooc_tree_open(&j->tree); round++) {
-        st = face_pass(j, count_batch, NULL, err);
+        st = agree(j, face_pass(j, count_batch, NULL, err), err);
+        /* every rank's counts: sums of integers, exact */
+        for (size_t i = 0; st == MR_OK && i < j->tree.nnodes; i++)
+            if (j->tree.nodes[i].open) {
+                const ooc_grid *g = &j->tree.grids[j->tree.nodes[i].grid];
+                st = reduce(j, g->count, (size_t)g->n * g->n * g->n, OOC_U32, OOC_SUM, err);
+            }
         if (st == MR_OK)
-            st = ooc_tree_split(&j->tree, round + 1 >= MAX_REFINEMENTS, err);
+            st = agree(j, ooc_tree_split(&j->tree, round + 1 >= MAX_REFINEMENTS, err), err);
     }
     if (st == MR_OK)
-        st = ooc_tree_number(&j->tree, err);
+        st = agree(j, ooc_tree_number(&j->tree, err), err);
     if (st != MR_OK)
         return st;
     ooc_tree *t = &j->tree;
@@ -876,17 +1247,22 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
                              "%zu chunks: more than %u (give a larger memory budget)",
                              t->leaves, MAX_LEAVES);
-    /* the spill: each leaf's run at its count's offset */
-    j->leaf_at = mr_alloc_array(t->leaves, sizeof *j->leaf_at);
-    j->leaf_count = mr_calloc_array(t->leaves, sizeof *j->leaf_count);
-    j->range = mr_alloc_array(j->nv + 1, sizeof *j->range);
+    /* the spill: each leaf's run at its count's offset (several ranks:
+     * each rank's triangles spilled in blocks, then every leaf's sent to
+     * the rank that owns it, in rank order: the file's order) */
+    st = assign_owners(j, err);
+    j->leaf_at = st == MR_OK ? mr_alloc_array(t->leaves, sizeof *j->leaf_at) : NULL;
+    j->leaf_count = st == MR_OK ? mr_calloc_array(t->leaves, sizeof *j->leaf_count) : NULL;
+    j->range = st == MR_OK ? mr_alloc_array(j->nv + 1, sizeof *j->range) : NULL;
     spill_buffers sb = {0};
+    sb.local.fd = -1;
     sb.per = (size_t)(buffers / 12 / t->leaves);
     sb.per = sb.per < 64 ? 64 : sb.per > (1u << 16) ? 1u << 16 : sb.per;
     sb.buf = mr_alloc_array(t->leaves * sb.per, 12);
     sb.fill = mr_calloc_array(t->leaves, sizeof *sb.fill);
     sb.leaf = mr_alloc_array(2 * (j->batch + j->src.max_faces + 1), sizeof *sb.leaf);
-    if (!j->leaf_at || !j->leaf_count || !j->range || !sb.buf || !sb.fill || !sb.leaf)
+    if (st == MR_OK &&
+        (!j->leaf_at || !j->leaf_count || !j->range || !sb.buf || !sb.fill || !sb.leaf))
         st = mr_fail_nomem(err, NULL, j->nv * 4 + t->leaves * sb.per * 12);
     if (st == MR_OK) {
         uint64_t at = 0;
@@ -896,7 +1272,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         }
         for (size_t v = 0; v < j->nv; v++)
             j->range[v] = RANGE_NONE;
-        st = ooc_file_open(&j->temp, &j->spill, err);
+        st = ooc_file_open(&j->temp, j->ranks > 1 ? &sb.local : &j->spill, err);
     }
     if (st == MR_OK)
         st = face_pass(j, spill_batch, &sb, err);
@@ -905,13 +1281,24 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     free(sb.buf);
     free(sb.fill);
     free(sb.leaf);
+    st = agree(j, st, err);
+    if (st == MR_OK && j->ranks > 1)
+        st = agree(j, assemble_spill(j, &sb, err), err);
+    ooc_file_close(&j->temp, &sb.local);
+    free(sb.blocks);
+    /* every vertex's leaves over all ranks */
+    if (st == MR_OK && j->ranks > 1)
+        st = reduce_ranges(j, err);
     fs->seconds_read = mr_now_seconds() - t0;
     if (st != MR_OK)
         return st;
     for (size_t l = 0; l < t->leaves; l++)
-        if (j->leaf_count[l] > t->nodes[t->leaf_node[l]].triangles)
-            return mr_fail_plain(err, MR_ERR_IO, j->in_path,
-                                 "the faces changed between two passes over the file");
+        if (j->owner[t->leaf_node[l]] == j->rank &&
+            j->leaf_count[l] > t->nodes[t->leaf_node[l]].triangles)
+            st = mr_fail_plain(err, MR_ERR_IO, j->in_path,
+                               "the faces changed between two passes over the file");
+    if ((st = agree(j, st, err)) != MR_OK)
+        return st;
     j->referenced = 0;
     for (size_t v = 0; v < j->nv; v++)
         j->referenced += j->range[v] != RANGE_NONE;
@@ -922,9 +1309,11 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     /* the tree */
     mr_chunk_result root;
     memset(&root, 0, sizeof root);
-    st = run_tree(j, &root, err);
+    st = j->ranks > 1 ? run_levels(j, &root, err) : run_tree(j, &root, err);
     ooc_file_close(&j->temp, &j->spill);
-    if (st == MR_OK) {
+    if (st == MR_OK)
+        st = gather_stats(j, err);
+    if (st == MR_OK && j->rank == 0) {
         mr_simplify_stats *s = &fs->simplify;
         s->output_vertices = s->output_points = root.mesh.vertex_count;
         s->output_triangles = root.mesh.triangle_count;
@@ -937,8 +1326,9 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         st = write_root(j, out_path, &root, write, err);
     }
     mr_chunk_result_free(&root);
-    fs->temp_bytes_peak = j->temp.peak;
-    return st;
+    if (fs->temp_bytes_peak < j->temp.peak)
+        fs->temp_bytes_peak = j->temp.peak;
+    return agree(j, st, err);
 }
 
 /* The in-memory path: read whole, mr_mesh_simplify, write. */
@@ -974,6 +1364,14 @@ mr_status mr_simplify_file(const char *in_path, const char *out_path,
                            const mr_out_of_core_options *ooc, const mr_write_options *write,
                            mr_simplify_file_stats *stats, mr_error *err)
 {
+    return ooc_simplify_file(in_path, out_path, options, ooc, write, NULL, stats, err);
+}
+
+mr_status ooc_simplify_file(const char *in_path, const char *out_path,
+                            const mr_simplify_options *options,
+                            const mr_out_of_core_options *ooc, const mr_write_options *write,
+                            ooc_comm *comm, mr_simplify_file_stats *stats, mr_error *err)
+{
     mr_error_clear(err);
     mr_simplify_file_stats fs;
     memset(&fs, 0, sizeof fs);
@@ -994,6 +1392,10 @@ mr_status mr_simplify_file(const char *in_path, const char *out_path,
     j.st = &fs;
     j.threads = mr_thread_count(options->threads);
     j.spill.fd = -1;
+    j.temp.dir[0] = '\0';
+    j.comm = comm && comm->size > 1 ? comm : NULL;
+    j.rank = j.comm ? comm->rank : 0;
+    j.ranks = j.comm ? comm->size : 1;
     /* the counts: a binary PLY's header; an OBJ file's count of its lines,
      * unless its size says it fits (a face line takes 8 bytes at least) */
     mr_error quiet;
@@ -1025,12 +1427,13 @@ mr_status mr_simplify_file(const char *in_path, const char *out_path,
     if (st != MR_OK && st != MR_ERR_UNSUPPORTED) {
         if (err)
             *err = quiet;
-        return st;
+        return agree(&j, st, err);
     }
     if (st != MR_OK || (uint64_t)j.nt * INCORE_BYTES_PER_TRIANGLE <= memory) {
         ooc_source_close(&j.src);
         mr_obj_stream_close(os);
-        st = in_core(in_path, out_path, options, write, &fs, err);
+        st = j.rank == 0 ? in_core(in_path, out_path, options, write, &fs, err) : MR_OK;
+        st = agree(&j, st, err);
     } else {
         fs.out_of_core = 1;
         fs.simplify.input_triangles = j.nt;
@@ -1043,6 +1446,7 @@ mr_status mr_simplify_file(const char *in_path, const char *out_path,
                 ooc_file_close(&j.temp, &j.pieces[i].file);
             }
         free(j.pieces);
+        free(j.owner);
         free(j.range);
         free(j.leaf_at);
         free(j.leaf_count);

@@ -24,6 +24,8 @@ static void ply_prefetch(const void *impl, uint32_t first, uint32_t last)
 
 static void ply_rewind(void *impl) { mr_ply_source_rewind(impl); }
 
+static void ply_seek(void *impl, size_t chunk) { mr_ply_source_seek(impl, chunk); }
+
 static mr_status ply_next_faces(void *impl, uint32_t *idx, size_t *count, mr_error *err)
 {
     return mr_ply_source_next_faces(impl, idx, count, err);
@@ -69,6 +71,13 @@ static void raw_prefetch(const void *impl, uint32_t first, uint32_t last)
 }
 
 static void raw_rewind(void *impl) { ((raw_source *)impl)->next = 0; }
+
+static void raw_seek(void *impl, size_t chunk)
+{
+    raw_source *r = impl;
+    const uint64_t t = (uint64_t)chunk * RAW_FACES;
+    r->next = t < r->nt ? (size_t)t : r->nt;
+}
 
 static mr_status raw_next_faces(void *impl, uint32_t *idx, size_t *count, mr_error *err)
 {
@@ -160,10 +169,12 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
     s->vertex_count = nv;
     s->triangle_count = r->nt;
     s->max_faces = RAW_FACES;
+    s->face_chunks = (r->nt + RAW_FACES - 1) / RAW_FACES;
     s->vertices = raw_vertices;
     s->position = raw_position;
     s->prefetch = raw_prefetch;
     s->rewind = raw_rewind;
+    s->seek = raw_seek;
     s->next_faces = raw_next_faces;
     s->release = raw_release;
     s->close = raw_close;
@@ -185,10 +196,12 @@ mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error
     s->triangle_count = mr_ply_source_triangle_count(p);
     s->max_faces = mr_ply_source_max_faces(p);
     s->attributes = mr_ply_source_attributes(p);
+    s->face_chunks = mr_ply_source_face_chunks(p);
     s->vertices = ply_vertices;
     s->position = ply_position;
     s->prefetch = ply_prefetch;
     s->rewind = ply_rewind;
+    s->seek = ply_seek;
     s->next_faces = ply_next_faces;
     s->release = ply_release;
     s->close = ply_close;

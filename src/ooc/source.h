@@ -22,7 +22,9 @@ typedef struct ooc_source {
                           mr_error *err);
     void (*position)(const void *impl, uint32_t v, float p[3]);
     void (*prefetch)(const void *impl, uint32_t first, uint32_t last);
+    size_t face_chunks;   /* next_faces calls from the first to the last */
     void (*rewind)(void *impl);
+    void (*seek)(void *impl, size_t chunk); /* faces from that call on */
     mr_status (*next_faces)(void *impl, uint32_t *idx, size_t *count, mr_error *err);
     void (*release)(void *impl);
     void (*close)(void *impl);
