@@ -9,7 +9,7 @@ FUZZ_SECONDS ?= 60
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
 BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest \
-             python3-matplotlib
+             python3-matplotlib libopenmpi-dev openmpi-bin
 # The report's plots (bench/plots.py): Debian's matplotlib, run by Debian's
 # /usr/bin/python3 (the tests' report check draws them too).
 REPORT_PKGS = python3-matplotlib

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# meshreduce-mpi against meshreduce: the out-of-core simplification on
+# 1, 2, 3 and 4 ranks gives the single process's bytes (binary PLY and OBJ
+# inputs, full and half-edge collapse); an error is said once and leaves
+# no output; a rank killed mid-run ends the job with a non-zero status,
+# no output file and no temporary file.
+# usage: mpi_check.sh MESHREDUCE MESHREDUCE_MPI MPIEXEC WORKDIR
+set -u
+MR=$1 MPI=$2 MPIEXEC=$3 W=$4
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+run() { "$MPIEXEC" --oversubscribe --bind-to none -np "$@"; }
+fail() { echo "FAIL: $*"; exit 1; }
+rm -rf "$W" && mkdir -p "$W/tmp" || exit 1
+"$MR" generate scan --triangles 300k -o "$W/scan.ply" -q || fail "generate"
+"$MR" convert "$W/scan.ply" "$W/scan.obj" -q || fail "convert"
+for input in scan.ply scan.obj; do
+  for mode in full half; do
+    args=(--ratio 2% --memory 6M --collapse "$mode" --temp-dir "$W/tmp")
+    "$MR" --threads 2 simplify "$W/$input" -o "$W/one.ply" "${args[@]}" -q || fail "single $input $mode"
+    for np in 1 2 3 4; do
+      t=$(( np % 2 + 1 ))
+      run "$np" "$MPI" --threads "$t" simplify "$W/$input" -o "$W/np$np.ply" "${args[@]}" -q \
+        || fail "$np ranks, $input, $mode"
+      cmp -s "$W/one.ply" "$W/np$np.ply" || fail "$np ranks ($t threads), $input, $mode: other bytes"
+    done
+    echo "ok: $input $mode at 1-4 ranks: the single process's bytes"
+  done
+done
+# --json on rank 0 only: one object
+out=$(run 3 "$MPI" simplify "$W/scan.ply" -o "$W/j.ply" --ratio 2% --memory 6M --json -q) \
+  || fail "json run"
+[ "$(printf '%s\n' "$out" | grep -c '"out_of_core": true')" = 1 ] || fail "json: $out"
+# an error (a budget too small) said once, no output
+rm -f "$W/bad.ply"
+err=$(run 2 "$MPI" simplify "$W/scan.ply" -o "$W/bad.ply" --ratio 2% --memory 64k 2>&1 >/dev/null)
+[ $? -ne 0 ] || fail "a budget too small went through"
+[ "$(printf '%s\n' "$err" | grep -c 'too small')" = 1 ] || fail "the error, once: $err"
+[ ! -e "$W/bad.ply" ] || fail "an output after an error"
+# a rank killed mid-run (a run of some seconds: many small chunks)
+"$MR" generate scan --triangles 2M -o "$W/big.ply" -q || fail "generate 2M"
+rm -f "$W/killed.ply"
+run 2 "$MPI" --threads 1 simplify "$W/big.ply" -o "$W/killed.ply" --ratio 1% --memory 24M \
+  --temp-dir "$W/tmp" -q >/dev/null 2>&1 &
+job=$!
+victim=""
+for i in $(seq 1 100); do
+  victim=$(pgrep -f "meshreduce-mpi --threads 1 simplify $W/big.ply" | sort -n | tail -1)
+  [ -n "$victim" ] && [ "$(pgrep -f "meshreduce-mpi --threads 1 simplify $W/big.ply" | wc -l)" -ge 2 ] && break
+  sleep 0.05
+done
+[ -n "$victim" ] || fail "no rank to kill"
+sleep 1
+kill -KILL "$victim" 2>/dev/null
+wait $job
+rc=$?
+[ $rc -ne 0 ] || fail "the job with a killed rank exited 0"
+[ ! -e "$W/killed.ply" ] || fail "an output after a rank was killed"
+left=$(ls -A "$W/tmp" | wc -l)
+[ "$left" = 0 ] || fail "$left temporary files left: $(ls -A "$W/tmp")"
+echo "ok: a killed rank ends the job (status $rc), no output, no temporary file"
+echo "PASS"
