@@ -17,7 +17,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 static void tmp_path(char *dst, const char *name)
@@ -574,6 +577,75 @@ static void test_cli(void **state)
     free(text);
 }
 
+/* Files named .meshreduce* in dir (an output's temporary file). */
+static size_t hidden_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    size_t n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        n += strncmp(e->d_name, ".meshreduce", 11) == 0;
+    closedir(d);
+    return n;
+}
+
+/* Faults of the command line: a file-size limit (a full disk, as the
+ * temporary files meet it: ulimit -f), and SIGINT, SIGTERM and SIGHUP in
+ * the middle of the chunks: each ends the run with no output file and
+ * no temporary file. */
+static void test_faults(void **state)
+{
+    (void)state;
+    char dir[1024], in[1100], out[1100], tmp[1024], cmd[4096];
+    temp_dir(dir, "ooc-fault");
+    snprintf(in, sizeof in, "%s/scan.ply", dir);
+    snprintf(out, sizeof out, "%s/out.ply", dir);
+    temp_dir(tmp, "ooc-fault-tmp");
+    mr_mesh m;
+    make_scan(in, 1000000, &m);
+    mr_mesh_free(&m);
+    /* a file-size limit of 2 MB: the spill (12 MB) meets it */
+    snprintf(cmd, sizeof cmd,
+             "ulimit -f 2048; '%s' simplify '%s' -o '%s' --ratio 1%% --memory 40M "
+             "--temp-dir '%s' 2>&1",
+             MR_CLI_PATH, in, out, tmp);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char text[4096] = "";
+    size_t n = fread(text, 1, sizeof text - 1, p);
+    text[n] = '\0';
+    const int status = pclose(p);
+    assert_true(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+    tu_assert_contains(text, "File too large");
+    assert_false(tu_file_exists(out));
+    assert_int_equal(entries(tmp), 0);
+    /* signals, some way into the run */
+    const int sigs[3] = {SIGINT, SIGTERM, SIGHUP};
+    for (int i = 0; i < 3; i++) {
+        const pid_t pid = fork();
+        assert_true(pid >= 0);
+        if (pid == 0) {
+            freopen("/dev/null", "w", stderr);
+            execl(MR_CLI_PATH, MR_CLI_PATH, "--threads", "1", "simplify", in, "-o", out,
+                  "--ratio", "1%", "--memory", "40M", "--temp-dir", tmp, (char *)NULL);
+            _exit(127);
+        }
+        const struct timespec wait = {0, 400000000};
+        nanosleep(&wait, NULL);
+        kill(pid, sigs[i]);
+        int st;
+        assert_int_equal(waitpid(pid, &st, 0), pid);
+        if (!(WIFSIGNALED(st) && WTERMSIG(st) == sigs[i]))
+            fail_msg("signal %d: the run ended %s %d", sigs[i],
+                     WIFSIGNALED(st) ? "by signal" : "with status",
+                     WIFSIGNALED(st) ? WTERMSIG(st) : WEXITSTATUS(st));
+        assert_false(tu_file_exists(out));
+        assert_int_equal(entries(tmp), 0);
+        assert_int_equal(hidden_entries(dir), 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -581,7 +653,7 @@ int main(void)
         cmocka_unit_test(test_threads_and_modes), cmocka_unit_test(test_targets_and_locks),
         cmocka_unit_test(test_obj_input),
         cmocka_unit_test(test_failures),        cmocka_unit_test(test_cancel),
-        cmocka_unit_test(test_cli),
+        cmocka_unit_test(test_cli),             cmocka_unit_test(test_faults),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
