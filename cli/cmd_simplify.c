@@ -544,6 +544,9 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
                 printf("%s{\"chunks\": %zu, \"triangles\": %zu, \"seconds\": %.6f}",
                        l ? ", " : "", fs->level_chunks[l], fs->level_triangles[l],
                        fs->level_seconds[l]);
+            printf("], \"splits\": [");
+            for (unsigned k = 0; k < fs->splits; k++)
+                printf("%s[%d, %.9g]", k ? ", " : "", fs->split_axis[k], fs->split_at[k]);
             printf("], \"seconds_passes\": %.6f, \"seconds_chunks\": %.6f",
                    fs->seconds_read, fs->seconds_simplify);
         }

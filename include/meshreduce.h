@@ -646,6 +646,7 @@ typedef struct mr_out_of_core_options {
 void mr_out_of_core_options_default(mr_out_of_core_options *options);
 
 #define MR_LEVELS_MAX 48
+#define MR_SPLITS_MAX 63
 
 typedef struct mr_simplify_file_stats {
     mr_simplify_stats simplify;  /* the whole job's: counts, stop, largest
@@ -661,6 +662,11 @@ typedef struct mr_simplify_file_stats {
     double level_seconds[MR_LEVELS_MAX];   /* their time */
     size_t level_triangles[MR_LEVELS_MAX]; /* their input triangles */
     unsigned passes;             /* passes over the input's faces */
+    unsigned splits;             /* the tree's first inner nodes, breadth
+                                    first (at most MR_SPLITS_MAX): where they
+                                    cut, for measuring near the cuts */
+    int split_axis[MR_SPLITS_MAX];   /* 0 x, 1 y, 2 z */
+    double split_at[MR_SPLITS_MAX];  /* the plane's coordinate */
     uint64_t memory;             /* the budget */
     uint64_t temp_bytes_peak;    /* temporary disk at most */
     double seconds_read;         /* the passes over the input */

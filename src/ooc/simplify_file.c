@@ -878,6 +878,29 @@ static mr_status run_tree(job *j, mr_chunk_result *root, mr_error *err)
     return st;
 }
 
+/* The tree's first inner nodes, breadth first, into the stats: each one's
+ * axis and plane (its grid's bin boundary, in model units). */
+static void record_splits(const ooc_tree *t, mr_simplify_file_stats *fs)
+{
+    uint32_t queue[2 * MR_SPLITS_MAX + 2];
+    size_t head = 0, tail = 0;
+    queue[tail++] = 0;
+    fs->splits = 0;
+    while (head < tail && fs->splits < MR_SPLITS_MAX) {
+        const ooc_node *n = &t->nodes[queue[head++]];
+        if (n->child[0] < 0)
+            continue;
+        const ooc_grid *g = &t->grids[n->grid];
+        fs->split_axis[fs->splits] = n->axis;
+        fs->split_at[fs->splits] = g->lo[n->axis] + (double)n->split / g->scale[n->axis];
+        fs->splits++;
+        if (tail + 2 <= sizeof queue / sizeof *queue) {
+            queue[tail++] = (uint32_t)n->child[0];
+            queue[tail++] = (uint32_t)n->child[1];
+        }
+    }
+}
+
 /* ---- the tree over several ranks ------------------------------------------------ */
 
 /* Who simplifies each node: the leaves in runs of about equal triangles,
@@ -1243,6 +1266,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     fs->chunks = t->leaves;
     fs->oversized_chunks = t->oversized;
     fs->levels = (unsigned)t->height + 1;
+    record_splits(t, fs);
     if (t->leaves > MAX_LEAVES)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
                              "%zu chunks: more than %u (give a larger memory budget)",
