@@ -36,23 +36,34 @@ err=$(run 2 "$MPI" simplify "$W/scan.ply" -o "$W/bad.ply" --ratio 2% --memory 64
 [ $? -ne 0 ] || fail "a budget too small went through"
 [ "$(printf '%s\n' "$err" | grep -c 'too small')" = 1 ] || fail "the error, once: $err"
 [ ! -e "$W/bad.ply" ] || fail "an output after an error"
-# a rank killed mid-run (a run of some seconds: many small chunks)
-"$MR" generate scan --triangles 2M -o "$W/big.ply" -q || fail "generate 2M"
-rm -f "$W/killed.ply"
-run 2 "$MPI" --threads 1 simplify "$W/big.ply" -o "$W/killed.ply" --ratio 1% --memory 24M \
-  --temp-dir "$W/tmp" -q >/dev/null 2>&1 &
-job=$!
-victim=""
-for i in $(seq 1 100); do
-  victim=$(pgrep -f "meshreduce-mpi --threads 1 simplify $W/big.ply" | sort -n | tail -1)
-  [ -n "$victim" ] && [ "$(pgrep -f "meshreduce-mpi --threads 1 simplify $W/big.ply" | wc -l)" -ge 2 ] && break
-  sleep 0.05
+# a rank killed mid-run: the victim is a rank (a child of mpirun) that holds
+# a temporary file of the job open, so the job is past its start; a job that
+# ends before the kill is retried on a larger input
+killed_run() {
+  "$MR" generate scan --triangles "$1" -o "$W/big.ply" -q || fail "generate $1"
+  rm -f "$W/killed.ply"
+  "$MPIEXEC" --oversubscribe --bind-to none -np 2 "$MPI" --threads 1 simplify "$W/big.ply" \
+    -o "$W/killed.ply" --ratio 1% --memory 24M --temp-dir "$W/tmp" -q >/dev/null 2>&1 &
+  job=$!
+  victim=""
+  while kill -0 "$job" 2>/dev/null; do
+    for p in $(pgrep -P "$job"); do
+      if ls -l "/proc/$p/fd" 2>/dev/null | grep -q -- "$W/tmp/"; then victim=$p; break; fi
+    done
+    [ -n "$victim" ] && break
+    sleep 0.01
+  done
+  killed=0
+  [ -n "$victim" ] && kill -KILL "$victim" 2>/dev/null && killed=1
+  wait "$job"
+  rc=$?
+}
+for size in 2M 8M 24M; do
+  killed_run "$size"
+  [ "$killed" = 1 ] && break
+  echo "note: the $size job ended before a rank could be killed; a larger one"
 done
-[ -n "$victim" ] || fail "no rank to kill"
-sleep 1
-kill -KILL "$victim" 2>/dev/null
-wait $job
-rc=$?
+[ "$killed" = 1 ] || fail "no rank could be killed mid-run"
 [ $rc -ne 0 ] || fail "the job with a killed rank exited 0"
 [ ! -e "$W/killed.ply" ] || fail "an output after a rank was killed"
 left=$(ls -A "$W/tmp" | wc -l)
