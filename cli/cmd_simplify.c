@@ -569,9 +569,9 @@ static void print_summary(const cli_io *io, const mr_mesh *result, const cli_tim
                     s->seconds_setup + s->seconds_collapse + s->seconds_output);
 }
 
-/* PLY inputs this large go through mr_simplify_file, which decides by
- * the triangle count whether they fit the budget (smaller ones are
- * simplified in memory either way, with the same bytes). */
+/* PLY, STL and OBJ inputs this large go through mr_simplify_file, which
+ * decides by the triangle count whether they fit the budget (smaller ones
+ * are simplified in memory either way, with the same bytes). */
 #define FILE_PATH_BYTES ((unsigned long long)256 << 20)
 
 /* The file path: mr_simplify_file reads, simplifies (in memory or out of
@@ -634,7 +634,9 @@ static int run(int argc, char **argv)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
     if (cli_comm || job.ooc_given ||
-        (mr_format_from_path(io.in) == MR_FORMAT_PLY && cli_file_size(io.in) > FILE_PATH_BYTES))
+        ((mr_format_from_path(io.in) == MR_FORMAT_PLY || mr_format_from_path(io.in) == MR_FORMAT_STL ||
+          mr_format_from_path(io.in) == MR_FORMAT_OBJ) &&
+         cli_file_size(io.in) > FILE_PATH_BYTES))
         return run_file(&io, &job);
     return cli_run_job(&io, &steps, &job);
 }

@@ -467,6 +467,75 @@ static void expect_failure(const char *in, const char *out, const mr_simplify_op
     assert_false(tu_file_exists(out));
 }
 
+/* A binary STL input: welded out of core through external sorts (runs
+ * that do not fit the budget, merged), it gives the bytes of the PLY file
+ * of the in-memory reader's weld, out of core and in memory; a non-finite
+ * coordinate and a truncated file say what the in-memory reader says. */
+static void test_stl_input(void **state)
+{
+    (void)state;
+    char ply[1024], stl[1024], ref[1024], a[1024], b[1024], bad[1024], tmp[1024];
+    tmp_path(ply, "ooc-s-scan.ply");
+    tmp_path(stl, "ooc-s-scan.stl");
+    tmp_path(ref, "ooc-s-ref.ply");
+    tmp_path(a, "ooc-s-a.ply");
+    tmp_path(b, "ooc-s-b.ply");
+    tmp_path(bad, "ooc-s-bad.stl");
+    temp_dir(tmp, "ooc-s-tmp");
+    mr_mesh m, w;
+    make_scan(ply, 80000, &m);
+    write_mesh(&m, stl);
+    read_mesh(stl, &w);
+    write_mesh(&w, ref);
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.03;
+    for (int pass = 0; pass < 2; pass++) {
+        const uint64_t kib = pass ? 1 << 20 : 2048; /* out of core, then in memory */
+        mr_simplify_file_stats st;
+        run_ok(ref, a, &o, kib, tmp, &st);
+        run_ok(stl, b, &o, kib, tmp, &st);
+        assert_int_equal(st.out_of_core, !pass);
+        if (!pass)
+            assert_true(st.chunks >= 4);
+        size_t na, nb;
+        char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
+        assert_true(na == nb && memcmp(da, db, na) == 0);
+        free(da);
+        free(db);
+        assert_int_equal(entries(tmp), 0);
+    }
+    /* the budget of the sorts' runs: a tighter one merges more runs */
+    mr_simplify_file_stats st;
+    run_ok(ref, a, &o, 1536, tmp, &st);
+    run_ok(stl, b, &o, 1536, tmp, &st);
+    assert_true(st.out_of_core);
+    size_t na, nb;
+    char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
+    assert_true(na == nb && memcmp(da, db, na) == 0);
+    free(da);
+    free(db);
+    /* a NaN at triangle 5000, corner 2 */
+    size_t n;
+    unsigned char *d = (unsigned char *)tu_read_file(stl, &n);
+    const float nan = NAN;
+    memcpy(d + 84 + 50 * 5000 + 12 + 12 * 1 + 4, &nan, 4);
+    tu_write_file(bad, d, n);
+    mr_mesh x;
+    mr_error err;
+    assert_int_equal(mr_mesh_read(bad, NULL, &x, &err), MR_ERR_PARSE);
+    tu_assert_contains(err.message, "triangle 5000, vertex 2 of 3 has a non-finite coordinate");
+    expect_failure(bad, a, &o, 2048, tmp, 0, MR_ERR_PARSE,
+                   "triangle 5000, vertex 2 of 3 has a non-finite coordinate");
+    assert_int_equal(entries(tmp), 0);
+    /* truncated: read whole, the in-memory reader's error */
+    tu_write_file(bad, d, n - 20);
+    expect_failure(bad, a, &o, 2048, tmp, 0, MR_ERR_PARSE, "truncated binary STL");
+    free(d);
+    mr_mesh_free(&m);
+    mr_mesh_free(&w);
+}
+
 static void test_failures(void **state)
 {
     (void)state;
@@ -651,7 +720,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fits_in_memory),  cmocka_unit_test(test_chunks_quality),
         cmocka_unit_test(test_threads_and_modes), cmocka_unit_test(test_targets_and_locks),
-        cmocka_unit_test(test_obj_input),
+        cmocka_unit_test(test_obj_input),  cmocka_unit_test(test_stl_input),
         cmocka_unit_test(test_failures),        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_cli),             cmocka_unit_test(test_faults),
     };

@@ -39,6 +39,7 @@
 #include "../qem/chunk.h"
 #include "../qem/core/simplifier.h"
 #include "../io/io_internal.h"
+#include "../io/mapped.h"
 #include "../mesh/adjacency.h"
 
 #include "../core/omp_compat.h"
@@ -1193,11 +1194,23 @@ static mr_status check_attributes(const job *j, const mr_write_options *write, m
 
 static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                              const mr_out_of_core_options *ooc, const mr_write_options *write,
-                             mr_obj_stream *os, mr_error *err)
+                             mr_obj_stream *os, bool stl, mr_error *err)
 {
     mr_simplify_file_stats *fs = j->st;
     char a[32], b[32];
     mr_status st;
+    const double t_weld = mr_now_seconds();
+    if (stl) {
+        /* a binary STL's vertices come from its weld: that first */
+        st = ooc_temp_init(&j->temp, ooc ? ooc->temp_dir : NULL, out_path,
+                           ooc ? ooc->temp_budget : 0, err);
+        if ((st = agree(j, st, err)) != MR_OK)
+            return st;
+        st = agree(j, ooc_source_from_stl(j->in_path, &j->temp, memory, &j->src, err), err);
+        if (st != MR_OK)
+            return st;
+        j->nv = j->src.vertex_count;
+    }
     if (j->nv > UINT32_MAX)
         return mr_fail_plain(err, MR_ERR_TOO_LARGE, j->in_path,
                              "%zu vertices exceed the 32-bit index limit", j->nv);
@@ -1230,12 +1243,13 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     /* the targets' triangles as far as the counts tell before the passes
      * (the vertex count's at least), to say early what does not fit */
     j->referenced = j->nv;
-    if ((st = resolve_targets(j, err)) == MR_OK && (st = output_fits(j, memory, err)) == MR_OK)
+    if ((st = resolve_targets(j, err)) == MR_OK && (st = output_fits(j, memory, err)) == MR_OK &&
+        !stl)
         st = ooc_temp_init(&j->temp, ooc ? ooc->temp_dir : NULL, out_path,
                            ooc ? ooc->temp_budget : 0, err);
-    /* the passes: an OBJ file's parse into temporary files, the box, the
-     * tree's counts, the spill */
-    const double t0 = mr_now_seconds();
+    /* the passes: an OBJ file's parse into temporary files (a binary STL's
+     * weld came first), the box, the tree's counts, the spill */
+    const double t0 = stl ? t_weld : mr_now_seconds();
     j->total = 0.1 * (double)j->nt * 4 + (double)j->nt * 2;
     if (os && st == MR_OK)
         st = ooc_source_from_obj(os, j->in_path, &j->temp, &j->src, err);
@@ -1424,6 +1438,7 @@ mr_status ooc_simplify_file(const char *in_path, const char *out_path,
      * unless its size says it fits (a face line takes 8 bytes at least) */
     mr_error quiet;
     mr_obj_stream *os = NULL;
+    bool stl = false;
     const mr_format format = mr_format_from_path(in_path);
     st = MR_ERR_UNSUPPORTED;
     if (format == MR_FORMAT_PLY) {
@@ -1431,6 +1446,21 @@ mr_status ooc_simplify_file(const char *in_path, const char *out_path,
         if (st == MR_OK) {
             j.nv = j.src.vertex_count;
             j.nt = j.src.triangle_count;
+        }
+    } else if (format == MR_FORMAT_STL) {
+        /* the header's count: the weld waits for the out-of-core path */
+        mr_mapped_file f;
+        if (mr_map_file(in_path, &f, &quiet) == MR_OK) {
+            const unsigned char *d = (const unsigned char *)f.data;
+            const uint64_t n = f.size >= 84 ? (uint64_t)d[80] | (uint64_t)d[81] << 8 |
+                                                  (uint64_t)d[82] << 16 | (uint64_t)d[83] << 24
+                                            : 0;
+            if (n && f.size == 84 + 50 * n) {
+                j.nt = (size_t)n;
+                stl = true;
+                st = MR_OK;
+            }
+            mr_unmap_file(&f);
         }
     } else if (format == MR_FORMAT_OBJ) {
         struct stat sb;
@@ -1461,7 +1491,7 @@ mr_status ooc_simplify_file(const char *in_path, const char *out_path,
     } else {
         fs.out_of_core = 1;
         fs.simplify.input_triangles = j.nt;
-        st = out_of_core(&j, out_path, memory, ooc, write, os, err);
+        st = out_of_core(&j, out_path, memory, ooc, write, os, stl, err);
         ooc_source_close(&j.src);
         ooc_file_close(&j.temp, &j.spill);
         if (j.pieces)

@@ -3,7 +3,11 @@
 #include "source.h"
 #include "../io/io_internal.h"
 
+#include "extsort.h"
+#include "../io/mapped.h"
+
 #include <errno.h>
+#include <math.h>
 #include <sys/mman.h>
 
 static mr_status ply_vertices(void *impl, size_t first, size_t count, const mr_mesh *block,
@@ -111,6 +115,8 @@ static void raw_close(void *impl)
     free(r);
 }
 
+static mr_status raw_finish(raw_source *r, size_t nv, ooc_source *s, mr_error *err);
+
 mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, ooc_source *s,
                               mr_error *err)
 {
@@ -143,14 +149,29 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
             st = ooc_file_write(t, &r->tri, 12 * (uint64_t)w.first_triangle, w.indices,
                                 12 * w.triangle_count, err);
     }
-    s->attributes = st == MR_OK ? mr_obj_stream_attributes(os) : 0;
+    const unsigned attributes = st == MR_OK ? mr_obj_stream_attributes(os) : 0;
     mr_obj_stream_close(os);
     if (st == MR_OK && r->nt == 0)
         st = mr_fail_plain(err, MR_ERR_EMPTY, path,
                            "a point cloud (%zu vertices, no faces): simplify needs a triangle "
                            "mesh",
                            nv);
-    if (st == MR_OK) {
+    if (st != MR_OK) {
+        raw_close(r);
+        return st;
+    }
+    st = raw_finish(r, nv, s, err);
+    s->attributes = attributes;
+    return st;
+}
+
+/* The source over r's two files, the positions mapped (nv vertices); on
+ * failure r is closed. */
+static mr_status raw_finish(raw_source *r, size_t nv, ooc_source *s, mr_error *err)
+{
+    ooc_temp *t = r->temp;
+    mr_status st = MR_OK;
+    {
         r->map_bytes = 12 * nv;
         void *m = mmap(NULL, r->map_bytes, PROT_READ, MAP_SHARED, r->pos.fd, 0);
         if (m == MAP_FAILED) {
@@ -179,6 +200,203 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
     s->release = raw_release;
     s->close = raw_close;
     return MR_OK;
+}
+
+/* ---- a binary STL file, welded through external sorts ------------------------------ */
+
+/* A corner: its coordinates' bits and its number (3 t + k). */
+typedef struct stl_corner {
+    uint32_t bits[3];
+    uint32_t lo, hi; /* the corner's number, in two halves (no padding) */
+} stl_corner;
+
+/* A corner with the first corner at its position (its vertex's key). */
+typedef struct stl_member {
+    uint32_t first_lo, first_hi, lo, hi;
+    uint32_t bits[3];
+} stl_member;
+
+/* A corner's vertex. */
+typedef struct stl_vertex_of {
+    uint32_t lo, hi, v;
+} stl_vertex_of;
+
+static inline uint64_t join64(uint32_t lo, uint32_t hi) { return (uint64_t)hi << 32 | lo; }
+
+static int cmp_u64(uint64_t a, uint64_t b) { return a < b ? -1 : a > b; }
+
+static int corner_cmp(const void *a, const void *b)
+{
+    const stl_corner *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x->bits[k] != y->bits[k])
+            return x->bits[k] < y->bits[k] ? -1 : 1;
+    return cmp_u64(join64(x->lo, x->hi), join64(y->lo, y->hi));
+}
+
+static int member_cmp(const void *a, const void *b)
+{
+    const stl_member *x = a, *y = b;
+    const int c = cmp_u64(join64(x->first_lo, x->first_hi), join64(y->first_lo, y->first_hi));
+    return c ? c : cmp_u64(join64(x->lo, x->hi), join64(y->lo, y->hi));
+}
+
+static int vertex_of_cmp(const void *a, const void *b)
+{
+    const stl_vertex_of *x = a, *y = b;
+    return cmp_u64(join64(x->lo, x->hi), join64(y->lo, y->hi));
+}
+
+static uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/*
+ * The weld of mr_read_stl -- corners whose coordinates are bitwise equal
+ * are one vertex, numbered in the order of their first corner -- in three
+ * external sorts: the corners by position (each group's first corner is
+ * its vertex's key), the corners by that key (the keys in order number
+ * the vertices, whose positions go to the first file), the corners' vertex
+ * ids back by corner (the triangles, in order, to the second).
+ */
+mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, ooc_source *s,
+                              mr_error *err)
+{
+    memset(s, 0, sizeof *s);
+    mr_mapped_file f;
+    mr_status st = mr_map_file(path, &f, err);
+    if (st != MR_OK)
+        return st;
+    const unsigned char *d = (const unsigned char *)f.data;
+    const uint64_t count = f.size >= 84 ? le32(d + 80) : 0;
+    if (f.size < 84 || f.size != 84 + 50 * count || count == 0) {
+        mr_unmap_file(&f);
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
+                             "not a binary STL of the size its header says (read whole)");
+    }
+    raw_source *r = mr_calloc_array(1, sizeof *r);
+    if (!r) {
+        mr_unmap_file(&f);
+        return mr_fail_nomem(err, path, sizeof *r);
+    }
+    r->temp = t;
+    r->pos.fd = r->tri.fd = -1;
+    r->nt = (size_t)count;
+    const uint64_t corners = 3 * count;
+    /* the runs and the merges in about half the budget */
+    const size_t run = (size_t)(memory / 2 / sizeof(stl_member));
+    ooc_extsort a, b, c;
+    memset(&a, 0, sizeof a), memset(&b, 0, sizeof b), memset(&c, 0, sizeof c);
+    a.file.fd = b.file.fd = c.file.fd = -1;
+    if ((st = ooc_file_open(t, &r->pos, err)) == MR_OK &&
+        (st = ooc_file_open(t, &r->tri, err)) == MR_OK)
+        st = ooc_extsort_init(&a, t, sizeof(stl_corner), run, corner_cmp, err);
+    /* 1: the corners by position, in runs */
+    for (uint64_t k = 0; k < corners && st == MR_OK; k++) {
+        const unsigned char *p = d + 84 + 50 * (k / 3) + 12 + 12 * (k % 3);
+        stl_corner e;
+        for (int j = 0; j < 3; j++) {
+            e.bits[j] = le32(p + 4 * j);
+            float x;
+            memcpy(&x, &e.bits[j], 4);
+            if (!isfinite(x))
+                st = mr_fail(err, MR_ERR_PARSE, path, MR_NO_POSITION, (uint64_t)(p - d),
+                             "triangle %llu, vertex %d of 3 has a non-finite coordinate",
+                             (unsigned long long)(k / 3), (int)(k % 3) + 1);
+        }
+        e.lo = (uint32_t)k;
+        e.hi = (uint32_t)(k >> 32);
+        if (st == MR_OK)
+            st = ooc_extsort_add(&a, &e, err);
+        if ((k + 1) % (3u << 20) == 0)
+            mr_release_mapped(&f, 0, (size_t)(p - d));
+    }
+    mr_unmap_file(&f);
+    if (st == MR_OK)
+        st = ooc_extsort_finish(&a, (size_t)(memory / 4), err);
+    /* 2: each corner with its group's first, by that */
+    if (st == MR_OK)
+        st = ooc_extsort_init(&b, t, sizeof(stl_member), run, member_cmp, err);
+    stl_member m = {0};
+    uint32_t prev[3] = {0, 0, 0};
+    bool any = false;
+    for (;;) {
+        const void *rec;
+        if (st != MR_OK || (st = ooc_extsort_next(&a, &rec, err)) != MR_OK || !rec)
+            break;
+        const stl_corner *e = rec;
+        if (!any || memcmp(prev, e->bits, 12) != 0) {
+            m.first_lo = e->lo;
+            m.first_hi = e->hi;
+            memcpy(prev, e->bits, 12);
+            memcpy(m.bits, e->bits, 12);
+            any = true;
+        }
+        m.lo = e->lo;
+        m.hi = e->hi;
+        st = ooc_extsort_add(&b, &m, err);
+    }
+    ooc_extsort_free(&a);
+    if (st == MR_OK)
+        st = ooc_extsort_finish(&b, (size_t)(memory / 4), err);
+    /* 3: the vertices in order of their first corner, each corner's id */
+    if (st == MR_OK)
+        st = ooc_extsort_init(&c, t, sizeof(stl_vertex_of), run, vertex_of_cmp, err);
+    uint64_t nv = 0, key = UINT64_MAX;
+    float block[3 * 4096];
+    size_t fill = 0;
+    for (;;) {
+        const void *rec;
+        if (st != MR_OK || (st = ooc_extsort_next(&b, &rec, err)) != MR_OK || !rec)
+            break;
+        const stl_member *e = rec;
+        const uint64_t first = join64(e->first_lo, e->first_hi);
+        if (first != key) {
+            key = first;
+            memcpy(block + 3 * fill, e->bits, 12);
+            if (++fill == 4096) {
+                st = ooc_file_write(t, &r->pos, 12 * (nv + 1 - fill), block, 12 * fill, err);
+                fill = 0;
+            }
+            nv++;
+        }
+        const stl_vertex_of o = {e->lo, e->hi, (uint32_t)(nv - 1)};
+        if (st == MR_OK)
+            st = ooc_extsort_add(&c, &o, err);
+    }
+    if (st == MR_OK && fill)
+        st = ooc_file_write(t, &r->pos, 12 * (nv - fill), block, 12 * fill, err);
+    ooc_extsort_free(&b);
+    if (st == MR_OK && nv > UINT32_MAX)
+        st = mr_fail_plain(err, MR_ERR_TOO_LARGE, path,
+                           "%llu vertices exceed the 32-bit index limit",
+                           (unsigned long long)nv);
+    if (st == MR_OK)
+        st = ooc_extsort_finish(&c, (size_t)(memory / 4), err);
+    /* 4: the triangles, corner by corner */
+    uint32_t tri[3 * 4096];
+    size_t tfill = 0;
+    uint64_t written = 0;
+    for (;;) {
+        const void *rec;
+        if (st != MR_OK || (st = ooc_extsort_next(&c, &rec, err)) != MR_OK || !rec)
+            break;
+        tri[tfill++] = ((const stl_vertex_of *)rec)->v;
+        if (tfill == 3 * 4096) {
+            st = ooc_file_write(t, &r->tri, 4 * written, tri, 4 * tfill, err);
+            written += tfill;
+            tfill = 0;
+        }
+    }
+    if (st == MR_OK && tfill)
+        st = ooc_file_write(t, &r->tri, 4 * written, tri, 4 * tfill, err);
+    ooc_extsort_free(&c);
+    if (st != MR_OK) {
+        raw_close(r);
+        return st;
+    }
+    return raw_finish(r, (size_t)nv, s, err);
 }
 
 mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error *err)

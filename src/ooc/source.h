@@ -6,7 +6,8 @@
  * file is parsed once in windows (mr_obj_stream) into two temporary
  * files, its positions (12 bytes a vertex, mapped for the reads at
  * random) and its triangles (12 bytes each, read in order), which the
- * passes then read. Internal.
+ * passes then read; a binary STL file is welded through external sorts
+ * into the same two files. Internal.
  */
 #ifndef MR_OOC_SOURCE_H
 #define MR_OOC_SOURCE_H
@@ -38,6 +39,12 @@ mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error
  * its windows parsed into temporary files in t. */
 typedef struct mr_obj_stream mr_obj_stream;
 mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, ooc_source *s,
+                              mr_error *err);
+/* A binary STL file as a source: its corners welded as mr_read_stl welds
+ * them (bitwise equal positions, numbered by first use) through external
+ * sorts in temporary files, in about `memory` bytes; MR_ERR_UNSUPPORTED
+ * for an ascii STL or a file of another size (read whole). */
+mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, ooc_source *s,
                               mr_error *err);
 void ooc_source_close(ooc_source *s);
 

@@ -1,0 +1,167 @@
+/* An external sort of fixed-size records (extsort.h). */
+#include "extsort.h"
+
+#include <stdlib.h>
+
+/* qsort's comparator has no context: the sort of a run sets this (one
+ * sort at a time on the calling thread). */
+static ooc_record_cmp run_cmp;
+
+static int qsort_cmp(const void *a, const void *b) { return run_cmp(a, b); }
+
+mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes,
+                           size_t run_records, ooc_record_cmp cmp, mr_error *err)
+{
+    memset(x, 0, sizeof *x);
+    x->temp = t;
+    x->file.fd = -1;
+    x->rec = record_bytes;
+    x->run_records = run_records < 1024 ? 1024 : run_records;
+    x->cmp = cmp;
+    x->buf = mr_alloc_array(x->run_records, record_bytes);
+    if (!x->buf)
+        return mr_fail_nomem(err, NULL, x->run_records * record_bytes);
+    return ooc_file_open(t, &x->file, err);
+}
+
+static mr_status flush_run(ooc_extsort *x, mr_error *err)
+{
+    if (x->fill == 0)
+        return MR_OK;
+    run_cmp = x->cmp;
+    qsort(x->buf, x->fill, x->rec, qsort_cmp);
+    if (x->nruns == x->cap) {
+        const size_t ncap = x->cap ? 2 * x->cap : 16;
+        ooc_run *r = mr_realloc_array(x->runs, ncap, sizeof *r);
+        if (!r)
+            return mr_fail_nomem(err, NULL, ncap * sizeof *r);
+        x->runs = r;
+        x->cap = ncap;
+    }
+    ooc_run *r = &x->runs[x->nruns++];
+    memset(r, 0, sizeof *r);
+    r->at = x->total - x->fill;
+    r->count = x->fill;
+    mr_status st = ooc_file_write(x->temp, &x->file, r->at * x->rec, x->buf, x->fill * x->rec, err);
+    x->fill = 0;
+    return st;
+}
+
+mr_status ooc_extsort_add(ooc_extsort *x, const void *record, mr_error *err)
+{
+    memcpy(x->buf + x->fill * x->rec, record, x->rec);
+    x->fill++;
+    x->total++;
+    return x->fill == x->run_records ? flush_run(x, err) : MR_OK;
+}
+
+/* The heap of runs by their head record (ties: the lower run, whose
+ * records came first). */
+static const char *head(const ooc_extsort *x, uint32_t r)
+{
+    const ooc_run *u = &x->runs[r];
+    return u->buf + u->pos * x->rec;
+}
+
+static bool before(const ooc_extsort *x, uint32_t a, uint32_t b)
+{
+    const int c = x->cmp(head(x, a), head(x, b));
+    return c < 0 || (c == 0 && a < b);
+}
+
+static void sift_down(ooc_extsort *x, size_t i)
+{
+    for (;;) {
+        size_t l = 2 * i + 1, m = i;
+        if (l < x->nheap && before(x, x->heap[l], x->heap[m]))
+            m = l;
+        if (l + 1 < x->nheap && before(x, x->heap[l + 1], x->heap[m]))
+            m = l + 1;
+        if (m == i)
+            return;
+        const uint32_t t = x->heap[i];
+        x->heap[i] = x->heap[m];
+        x->heap[m] = t;
+        i = m;
+    }
+}
+
+/* Read a run's next block; false when it is done. */
+static mr_status refill(ooc_extsort *x, ooc_run *r, bool *more, mr_error *err)
+{
+    const uint64_t left = r->count - r->next;
+    *more = left > 0;
+    if (!left)
+        return MR_OK;
+    const size_t n = left < x->block ? (size_t)left : x->block;
+    mr_status st = ooc_file_read(x->temp, &x->file, (r->at + r->next) * x->rec, r->buf, n * x->rec,
+                                 err);
+    r->next += n;
+    r->have = n;
+    r->pos = 0;
+    return st;
+}
+
+mr_status ooc_extsort_finish(ooc_extsort *x, size_t merge_bytes, mr_error *err)
+{
+    mr_status st = flush_run(x, err);
+    free(x->buf);
+    x->buf = NULL;
+    if (st != MR_OK)
+        return st;
+    const size_t per = x->nruns ? merge_bytes / x->nruns / x->rec : 0;
+    x->block = per < 256 ? 256 : per;
+    x->heap = mr_alloc_array(x->nruns + 1, sizeof *x->heap);
+    x->last = mr_alloc_array(1, x->rec);
+    if (!x->heap || !x->last)
+        return mr_fail_nomem(err, NULL, x->nruns * 4);
+    for (size_t r = 0; r < x->nruns; r++) {
+        ooc_run *u = &x->runs[r];
+        u->buf = mr_alloc_array(x->block, x->rec);
+        if (!u->buf)
+            return mr_fail_nomem(err, NULL, x->block * x->rec);
+        bool more;
+        if ((st = refill(x, u, &more, err)) != MR_OK)
+            return st;
+        if (more)
+            x->heap[x->nheap++] = (uint32_t)r;
+    }
+    for (size_t i = x->nheap / 2; i-- > 0;)
+        sift_down(x, i);
+    return MR_OK;
+}
+
+mr_status ooc_extsort_next(ooc_extsort *x, const void **record, mr_error *err)
+{
+    *record = NULL;
+    if (x->nheap == 0)
+        return MR_OK;
+    const uint32_t r = x->heap[0];
+    ooc_run *u = &x->runs[r];
+    memcpy(x->last, head(x, r), x->rec);
+    *record = x->last;
+    if (++u->pos == u->have) {
+        bool more;
+        mr_status st = refill(x, u, &more, err);
+        if (st != MR_OK)
+            return st;
+        if (!more)
+            x->heap[0] = x->heap[--x->nheap];
+    }
+    if (x->nheap)
+        sift_down(x, 0);
+    return MR_OK;
+}
+
+void ooc_extsort_free(ooc_extsort *x)
+{
+    free(x->buf);
+    for (size_t r = 0; r < x->nruns; r++)
+        free(x->runs[r].buf);
+    free(x->runs);
+    free(x->heap);
+    free(x->last);
+    ooc_file_close(x->temp, &x->file);
+    memset(x, 0, sizeof *x);
+    x->file.fd = -1;
+}
