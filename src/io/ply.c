@@ -204,6 +204,10 @@ typedef struct ply_reader {
     unsigned attrs;     /* MR_ATTR_* the vertex element provides */
     bool has_alpha;
     size_t tri_written; /* triangles decoded so far, over all face elements */
+    /* the file's map when the rows that locating reads are to be released
+     * as it goes (mr_ply_source: pages of a mapped file count in the
+     * resident set), or NULL */
+    const mr_mapped_file *release;
 } ply_reader;
 
 /* ------------------------------------------------------------------------ */
@@ -707,12 +711,16 @@ static mr_status walk_rows(ply_reader *r, ply_elem *e, ply_chunk *chunks, size_t
 {
     const unsigned char *d = (const unsigned char *)r->data;
     const size_t size = r->size;
-    size_t pos = e->start;
+    size_t pos = e->start, released = e->start;
     uint64_t tris = 0;
     for (uint64_t row = 0; row < e->count; row++) {
         if (chunks && row % CHUNK_ROWS == 0) {
             chunks[row / CHUNK_ROWS].off = pos;
             chunks[row / CHUNK_ROWS].tri = tris;
+        }
+        if (r->release && pos - released >= ((size_t)64 << 20)) {
+            mr_release_mapped(r->release, released, pos);
+            released = pos;
         }
         for (size_t i = e->prop_begin; i < e->prop_end; i++) {
             const ply_prop *p = &r->props[i];
@@ -811,6 +819,9 @@ static bool try_fixed_stride(ply_reader *r, ply_elem *e)
             }
         }
         same = same && ok;
+        if (r->release)
+            mr_release_mapped(r->release, e->start + (size_t)(r0 * stride),
+                              e->start + (size_t)(r1 * stride));
     }
     if (!same)
         return false;
@@ -1579,6 +1590,7 @@ mr_status mr_ply_source_open(const char *path, int threads, mr_ply_source **out,
     r->name = path;
     r->threads = threads > 0 ? threads : 1;
     r->err = err;
+    r->release = &s->file;
     if ((st = parse_header(r)) != MR_OK || (st = classify(r)) != MR_OK ||
         (st = check_counts(r)) != MR_OK)
         goto fail;
