@@ -99,7 +99,7 @@ static const char usage[] =
     "  --max-normal-turn D   refuse collapses that turn a triangle by more than D\n"
     "                        degrees (default 60)\n"
     "\n"
-    "inputs larger than memory (binary PLY; other formats are read whole):\n"
+    "inputs larger than memory (binary PLY, binary STL, OBJ; others are read whole):\n"
     "  --memory SIZE         memory budget (default 4G; K, M, G, T are powers of\n"
     "                        1024). An input whose simplification in memory needs\n"
     "                        more (about 160 bytes a triangle) is simplified out of\n"
@@ -109,10 +109,14 @@ static const char usage[] =
     "                        shared cut unlocked and reduced, each vertex's quadric\n"
     "                        carried from below, to the last one, which meets the\n"
     "                        target. The chunks depend on the input and SIZE only:\n"
-    "                        the same bytes on any machine and thread count. The\n"
-    "                        output must fit too (3/4 of a chunk: about SIZE/270\n"
-    "                        triangles). Geometry only: normals, texture\n"
-    "                        coordinates and colors need the in-memory path\n"
+    "                        the same bytes on any machine and thread count. An\n"
+    "                        output over 3/4 of a chunk (about SIZE/270 triangles)\n"
+    "                        stays as several top chunks, each to its share, whose\n"
+    "                        cuts are then reduced in bands, written as one PLY\n"
+    "                        stream (other formats: a larger SIZE). Binary PLY,\n"
+    "                        binary STL and OBJ are read in passes. Geometry only:\n"
+    "                        normals, texture coordinates and colors need the\n"
+    "                        in-memory path\n"
     "  --temp-dir DIR        temporary files (default: $TMPDIR, else the output's\n"
     "                        directory); they have no name (O_TMPFILE), so nothing\n"
     "                        is left behind however the process ends, SIGKILL\n"
@@ -464,6 +468,12 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
                 cli_bytes(a, sizeof a, fs->memory), cli_count(b, sizeof b, fs->chunks),
                 cli_count(c, sizeof c, fs->chunk_capacity), fs->levels, fs->passes,
                 cli_bytes(e, sizeof e, fs->temp_bytes_peak));
+        if (fs->top_chunks)
+            fprintf(stderr,
+                    "  forest     the output does not fit one chunk: the tree ends at %zu "
+                    "chunks, each simplified to its share, their cuts reduced in bands "
+                    "above them, the output written as one PLY stream\n",
+                    fs->top_chunks);
         for (unsigned l = 0; l < fs->levels && l < MR_LEVELS_MAX; l++)
             fprintf(stderr, "  level %-2u   %s chunks, %s triangles in, %.3f s\n", l,
                     cli_count(d, sizeof d, fs->level_chunks[l]),
@@ -537,9 +547,10 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
                (unsigned long long)fs->memory);
         if (fs->out_of_core) {
             printf(", \"chunks\": %zu, \"chunk_capacity\": %zu, \"oversized_chunks\": %zu, "
-                   "\"passes\": %u, \"temp_bytes_peak\": %llu, \"levels\": [",
+                   "\"passes\": %u, \"temp_bytes_peak\": %llu, \"top_chunks\": %zu, "
+                   "\"levels\": [",
                    fs->chunks, fs->chunk_capacity, fs->oversized_chunks, fs->passes,
-                   (unsigned long long)fs->temp_bytes_peak);
+                   (unsigned long long)fs->temp_bytes_peak, fs->top_chunks);
             for (unsigned l = 0; l < fs->levels && l < MR_LEVELS_MAX; l++)
                 printf("%s{\"chunks\": %zu, \"triangles\": %zu, \"seconds\": %.6f}",
                        l ? ", " : "", fs->level_chunks[l], fs->level_triangles[l],
@@ -560,7 +571,12 @@ static void print_summary(const cli_io *io, const mr_mesh *result, const cli_tim
 {
     const mr_simplify_stats *s = &((simplify_job *)user)->s;
     const mr_simplify_file_stats *fs = ((simplify_job *)user)->fs;
-    if (fs && fs->out_of_core)
+    if (fs && fs->out_of_core && fs->top_chunks)
+        cli_summary(io->out, s->output_vertices, s->output_triangles,
+                    "simplified out of core in %.3f s: %zu chunks, %u levels; the output "
+                    "larger than a chunk: %zu top chunks, their cuts reduced in bands",
+                    fs->seconds_total, fs->chunks, fs->levels, fs->top_chunks);
+    else if (fs && fs->out_of_core)
         cli_summary(io->out, s->output_vertices, s->output_triangles,
                     "simplified out of core in %.3f s: %zu chunks, %u levels",
                     fs->seconds_total, fs->chunks, fs->levels);

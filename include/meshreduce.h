@@ -673,6 +673,11 @@ typedef struct mr_simplify_file_stats {
     double seconds_simplify;     /* the chunks */
     double seconds_write;
     double seconds_total;
+    size_t top_chunks;           /* 0; or, when the output does not fit one
+                                    chunk: the pieces the tree ends at, each
+                                    simplified to its share, their cuts
+                                    then reduced in bands, the output
+                                    written as one PLY stream */
 } mr_simplify_file_stats;
 
 /* Simplify the file in_path into out_path (written whole or not at all,

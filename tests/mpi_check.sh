@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # meshreduce-mpi against meshreduce: the out-of-core simplification on
 # 1, 2, 3 and 4 ranks gives the single process's bytes (binary PLY and OBJ
-# inputs, full and half-edge collapse); an error is said once and leaves
+# inputs, full and half-edge collapse, an output larger than a chunk); an error is said once and leaves
 # no output; a rank killed mid-run ends the job with a non-zero status,
 # no output file and no temporary file.
 # usage: mpi_check.sh MESHREDUCE MESHREDUCE_MPI MPIEXEC WORKDIR
@@ -26,6 +26,15 @@ for input in scan.ply scan.obj; do
     echo "ok: $input $mode at 1-4 ranks: the single process's bytes"
   done
 done
+# an output larger than a chunk (the forest): the same bytes at 1-4 ranks
+"$MR" --threads 2 simplify "$W/scan.ply" -o "$W/one.ply" --ratio 60% --memory 6M -q \
+  || fail "single forest"
+for np in 1 2 3 4; do
+  run "$np" "$MPI" --threads 1 simplify "$W/scan.ply" -o "$W/np$np.ply" --ratio 60% --memory 6M -q \
+    || fail "$np ranks, forest"
+  cmp -s "$W/one.ply" "$W/np$np.ply" || fail "$np ranks, forest: other bytes"
+done
+echo "ok: the forest at 1-4 ranks: the single process's bytes"
 # --json on rank 0 only: one object
 out=$(run 3 "$MPI" simplify "$W/scan.ply" -o "$W/j.ply" --ratio 2% --memory 6M --json -q) \
   || fail "json run"

@@ -536,6 +536,101 @@ static void test_stl_input(void **state)
     mr_mesh_free(&w);
 }
 
+/* An output larger than a chunk (the forest): the tree ends at chunks
+ * that each take their share, their cuts reduced in bands, the output one
+ * PLY stream. The in-memory target exactly, closed stays closed and
+ * manifold (no crack where the bands meet the pieces), the error near the
+ * in-memory one's, both collapse modes, the same bytes at 1, 2, 3 and 8
+ * threads; an output that is not PLY is refused before any work. */
+static void test_forest(void **state)
+{
+    (void)state;
+    char in[1024], out[1024], obj[1024], tmp[1024];
+    tmp_path(in, "ooc-w-scan.ply");
+    tmp_path(out, "ooc-w-out.ply");
+    tmp_path(obj, "ooc-w-out.obj");
+    temp_dir(tmp, "ooc-w-tmp");
+    mr_mesh m;
+    make_scan(in, 200000, &m);
+    const bool quick = getenv("MR_TEST_QUICK") != NULL;
+    const struct {
+        double ratio;
+        size_t triangles;
+        mr_collapse_kind mode;
+    } cases[3] = {{0.5, 0, MR_COLLAPSE_FULL}, {0, 140000, MR_COLLAPSE_FULL},
+                  {0.6, 0, MR_COLLAPSE_HALF}};
+    char *first = NULL;
+    size_t first_n = 0;
+    for (int k = 0; k < (quick ? 1 : 3); k++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = cases[k].ratio;
+        o.target_triangles = cases[k].triangles;
+        o.collapse = cases[k].mode;
+        mr_simplified ref;
+        mr_error err;
+        assert_int_equal(mr_simplify(m.positions, 0, m.vertex_count, m.indices, m.triangle_count,
+                                     &o, &ref, &err),
+                         MR_OK);
+        mr_mesh rm = {ref.vertex_count, ref.triangle_count, ref.positions, NULL, NULL, NULL,
+                      ref.indices};
+        mr_simplify_file_stats st;
+        run_ok(in, out, &o, 4096, tmp, &st);
+        assert_true(st.out_of_core);
+        assert_true(st.top_chunks >= 4);
+        assert_true(st.simplify.target_reached);
+        assert_int_equal(entries(tmp), 0);
+        mr_mesh got;
+        read_mesh(out, &got);
+        assert_int_equal(st.simplify.output_vertices, got.vertex_count);
+        assert_int_equal(st.simplify.output_triangles, got.triangle_count);
+        if (cases[k].ratio > 0)
+            assert_int_equal(got.vertex_count, ref.vertex_count);
+        else
+            assert_int_equal(got.triangle_count, cases[k].triangles);
+        mr_stats s;
+        stats_of(&got, &s);
+        assert_true(s.closed);
+        assert_int_equal(s.boundary_edges, 0);
+        assert_int_equal(s.nonmanifold_edges, 0);
+        assert_int_equal(s.nonmanifold_vertices, 0);
+        const mr_compare_result a = distance(&m, &rm), b = distance(&m, &got);
+        print_message("forest %d: %zu top chunks; RMS %.4g%% (in memory %.4g%%), Hausdorff "
+                      "%.4g%% (%.4g%%)\n",
+                      k, st.top_chunks, 100 * b.rms_rel, 100 * a.rms_rel, 100 * b.hausdorff_rel,
+                      100 * a.hausdorff_rel);
+        if (b.rms_rel > 1.05 * a.rms_rel || b.hausdorff_rel > 1.35 * a.hausdorff_rel)
+            fail_msg("forest %d: RMS %g vs %g in memory, Hausdorff %g vs %g", k, b.rms_rel,
+                     a.rms_rel, b.hausdorff_rel, a.hausdorff_rel);
+        mr_mesh_free(&got);
+        mr_simplified_free(&ref);
+        if (k == 0)
+            first = tu_read_file(out, &first_n);
+    }
+    /* the same bytes at every thread count */
+    static const int threads[4] = {1, 2, 3, 8};
+    for (int t = 0; t < 4; t++) {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = 0.5;
+        o.threads = threads[t];
+        mr_simplify_file_stats st;
+        run_ok(in, out, &o, 4096, tmp, &st);
+        size_t n;
+        char *d = tu_read_file(out, &n);
+        assert_true(n == first_n && memcmp(d, first, n) == 0);
+        free(d);
+    }
+    free(first);
+    /* not PLY: refused, nothing left */
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    o.target_ratio = 0.5;
+    expect_failure(in, obj, &o, 4096, tmp, 0, MR_ERR_INVALID_ARGUMENT, "write it as PLY");
+    assert_int_equal(entries(tmp), 0);
+    mr_mesh_free(&m);
+}
+
 static void test_failures(void **state)
 {
     (void)state;
@@ -553,9 +648,11 @@ static void test_failures(void **state)
 
     /* budgets too small for the input, and for the output */
     expect_failure(in, out, &o, 64, tmp, 0, MR_ERR_INVALID_ARGUMENT, "too small");
-    mr_simplify_options big = o;
+    mr_simplify_options big = o; /* (as PLY: the forest, test_forest) */
     big.target_ratio = 0.9;
-    expect_failure(in, out, &big, 2048, tmp, 0, MR_ERR_INVALID_ARGUMENT,
+    char out_obj[1100];
+    snprintf(out_obj, sizeof out_obj, "%s.obj", out);
+    expect_failure(in, out_obj, &big, 2048, tmp, 0, MR_ERR_INVALID_ARGUMENT,
                    "does not fit the memory budget");
     /* the temporary-disk budget */
     expect_failure(in, out, &o, 2048, tmp, 100000, MR_ERR_IO, "temporary-disk budget");
@@ -720,7 +817,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fits_in_memory),  cmocka_unit_test(test_chunks_quality),
         cmocka_unit_test(test_threads_and_modes), cmocka_unit_test(test_targets_and_locks),
-        cmocka_unit_test(test_obj_input),  cmocka_unit_test(test_stl_input),
+        cmocka_unit_test(test_obj_input),  cmocka_unit_test(test_stl_input),  cmocka_unit_test(test_forest),
         cmocka_unit_test(test_failures),        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_cli),             cmocka_unit_test(test_faults),
     };

@@ -121,6 +121,35 @@ static void test_sweep_and_report(void **state)
         buf[got] = '\0';
         assert_int_not_equal(pclose(p), 0);
         tu_assert_contains(buf, "not a sweep CSV");
+        /* bench_outofcore's CSV: the time and memory curves */
+        static const char ooc[] =
+            "triangles,config,threads,ranks,memory,seconds,rss_bytes,chunks,levels,temp_bytes,"
+            "rms_rel,hausdorff_rel,sampled_rms_rel,sampled_max_rel\n"
+            "4000000,in memory,1,0,default,3.15,502000000,0,0,0,1e-4,1e-3,nan,nan\n"
+            "20000000,in memory,1,0,default,14.8,2461000000,0,0,0,1e-4,1e-3,nan,nan\n"
+            "4000000,out of core,2,0,256M,1.67,314000000,4,3,56000000,1e-4,1e-3,nan,nan\n"
+            "20000000,out of core,2,0,256M,9.94,382000000,8,4,276000000,1e-4,1e-3,nan,nan\n"
+            "20000000,mpi,1,2,1G,8.85,0,8,4,276000000,1e-4,1e-3,nan,nan\n";
+        tu_write_file(tu_fmt("%s/ooc.csv", dir), ooc, sizeof ooc - 1);
+        snprintf(cmd, sizeof cmd,
+                 "/usr/bin/python3 '%s/bench/plots.py' --outofcore '%s/ooc.csv' --out '%s/report' "
+                 ">/dev/null 2>&1",
+                 MR_SOURCE_DIR, dir, dir);
+        assert_int_equal(system(cmd), 0);
+        char *png = tu_read_file(tu_fmt("%s/report/outofcore.png", dir), &n);
+        assert_non_null(png);
+        assert_true(n > 1000);
+        assert_memory_equal(png, "\x89PNG\r\n\x1a\n", 8);
+        free(png);
+        snprintf(cmd, sizeof cmd,
+                 "/usr/bin/python3 '%s/bench/plots.py' --outofcore '%s/bad.csv' --out '%s/bad' "
+                 "2>&1",
+                 MR_SOURCE_DIR, dir, dir);
+        p = popen(cmd, "r");
+        got = fread(buf, 1, sizeof buf - 1, p);
+        buf[got] = '\0';
+        assert_int_not_equal(pclose(p), 0);
+        tu_assert_contains(buf, "not a bench_outofcore CSV");
     }
 }
 

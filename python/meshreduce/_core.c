@@ -937,8 +937,9 @@ PyDoc_STRVAR(simplify_file_doc,
 "temp_budget: bytes of them at most. The targets and options as simplify()'s;\n"
 "locked: a boolean mask of the input's vertices or their indices. Returns the\n"
 "statistics: those of simplify(), and out_of_core, chunks, chunk_capacity,\n"
-"levels (each with its chunks, triangles and seconds), passes, temp_bytes_peak,\n"
-"memory and seconds.");
+"top_chunks (an output larger than a chunk, written as PLY: the pieces the tree\n"
+"ends at, 0 otherwise), levels (each with its chunks, triangles and seconds),\n"
+"passes, temp_bytes_peak, memory and seconds.");
 
 static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
 {
@@ -1034,8 +1035,8 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
     if (!levels)
         goto done;
     result = Py_BuildValue(
-        "{s:O,s:s,s:s,s:n,s:n,s:n,s:n,s:n,s:n,s:d,s:n,s:n,s:O,s:K,s:n,s:n,s:n,s:I,s:K,s:N,"
-        "s:{s:d,s:d,s:d,s:d}}",
+        "{s:O,s:s,s:s,s:n,s:n,s:n,s:n,s:n,s:n,s:d,s:n,s:n,s:O,s:K,s:n,s:n,s:n,s:n,s:I,s:K,"
+        "s:N,s:{s:d,s:d,s:d,s:d}}",
         "target_reached", s->target_reached ? Py_True : Py_False, "stop_reason",
         stop_names[s->stop], "stop", mr_simplify_stop_string(s->stop), "input_vertices",
         (Py_ssize_t)s->input_vertices, "output_points", (Py_ssize_t)s->output_points,
@@ -1046,8 +1047,8 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
         "out_of_core", fs.out_of_core ? Py_True : Py_False, "memory",
         (unsigned long long)fs.memory, "chunks", (Py_ssize_t)fs.chunks, "chunk_capacity",
         (Py_ssize_t)fs.chunk_capacity, "oversized_chunks", (Py_ssize_t)fs.oversized_chunks,
-        "passes", fs.passes, "temp_bytes_peak", (unsigned long long)fs.temp_bytes_peak,
-        "levels", levels, "seconds", "read", fs.seconds_read, "simplify", fs.seconds_simplify,
+        "top_chunks", (Py_ssize_t)fs.top_chunks, "passes", fs.passes, "temp_bytes_peak",
+        (unsigned long long)fs.temp_bytes_peak, "levels", levels, "seconds", "read", fs.seconds_read, "simplify", fs.seconds_simplify,
         "write", fs.seconds_write, "total", fs.seconds_total);
 done:
     free(lock);

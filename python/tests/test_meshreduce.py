@@ -721,6 +721,12 @@ def test_simplify_file_matches_cli(tmp_path):
         if memory:
             assert st["chunks"] == out["chunks"] >= 2
             assert len(st["levels"]) == len(out["levels"])
+    # an output larger than a chunk: the forest, top_chunks, the CLI's bytes
+    out = json.loads(cli("simplify", src, "-o", tmp_path / "cli.ply", "--ratio", "60%",
+                         "--memory", "2M", "--json", "-q"))
+    st = meshreduce.simplify_file(src, tmp_path / "py.ply", ratio=0.6, memory=2 << 20)
+    assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
+    assert st["top_chunks"] == out["top_chunks"] >= 2
     # the locked vertices stay; a budget too small is an error, no output left
     m = meshreduce.read(src)
     st = meshreduce.simplify_file(src, tmp_path / "lk.ply", ratio=0.02, memory=2 << 20,

@@ -134,6 +134,16 @@ typedef struct job {
     ooc_comm *comm;
     int rank, ranks;
     int *owner;              /* per node: the rank that simplifies it */
+    /* an output larger than a chunk (the forest): the nodes that end the
+     * tree (tops, each with its share of the target) and those above them,
+     * which reduce their cut in a band; the pieces left (segments), each
+     * over a run of leaves */
+    uint8_t *top, *above;
+    size_t *top_target;
+    size_t band_t, band_v;   /* an above node's band: its targets */
+    piece *seg;
+    uint32_t *seg_first, *seg_last;
+    size_t nseg;
 } job;
 
 /* ---- the ranks ------------------------------------------------------------------ */
@@ -525,7 +535,15 @@ static mr_status piece_store(job *j, piece *p, mr_error *err)
     return st;
 }
 
+static mr_status piece_read(job *j, piece *p, bool keep, mr_error *err);
+
 static mr_status piece_load(job *j, piece *p, mr_error *err)
+{
+    return piece_read(j, p, false, err);
+}
+
+/* The piece's arrays from its file, which goes unless `keep`. */
+static mr_status piece_read(job *j, piece *p, bool keep, mr_error *err)
 {
     p->gid = mr_alloc_array(p->nv + 1, sizeof *p->gid);
     p->pos = mr_alloc_array(p->nv + 1, 3 * sizeof *p->pos);
@@ -543,7 +561,8 @@ static mr_status piece_load(job *j, piece *p, mr_error *err)
         st = ooc_file_read(&j->temp, &p->file, at, data[i], bytes[i], err);
         at += bytes[i];
     }
-    ooc_file_close(&j->temp, &p->file);
+    if (!keep)
+        ooc_file_close(&j->temp, &p->file);
     if (st != MR_OK)
         piece_free(p);
     return st;
@@ -583,6 +602,13 @@ static void node_options(job *j, uint32_t i, size_t nt, size_t nv, size_t cuts,
     o->max_error = j->max_error;
     o->error_absolute = 1;
     const ooc_node *n = &j->tree.nodes[i];
+    if (j->above && j->above[i]) {
+        /* a band of the forest: what run_band set */
+        o->target_vertices = j->band_v;
+        o->target_triangles = j->band_t < nt ? j->band_t : nt;
+        o->prune = 0;
+        return;
+    }
     if (n->parent < 0) {
         /* the root: the targets, as the whole input counts them */
         o->target_vertices = j->target_vertices < nv ? j->target_vertices : nv;
@@ -590,11 +616,20 @@ static void node_options(job *j, uint32_t i, size_t nt, size_t nv, size_t cuts,
         return;
     }
     o->target_vertices = 0;
-    o->until_error = 0;
     o->prune = 0;
+    if (j->top && j->top[i]) {
+        /* a top of the forest: its share of the target, exactly */
+        const size_t t = j->top_target[i] + cuts; /* a triangle a cut vertex, for the bands */
+        o->target_triangles = t < nt ? t : nt;
+        return;
+    }
+    o->until_error = 0;
     const size_t t = node_target(j, n, cuts);
     o->target_triangles = t < nt ? t : nt;
 }
+
+static mr_status keep_result(job *j, piece *p, mr_chunk_result *rp, const uint32_t *gid,
+                             mr_error *err);
 
 /* Run the chunk and keep its result as node i's piece (or, for the root,
  * hand it back in *root). gid: each chunk vertex's input vertex. */
@@ -629,7 +664,16 @@ static mr_status run_chunk(job *j, uint32_t i, const mr_chunk *c, const uint32_t
         *root = r;
         return MR_OK;
     }
-    piece *p = &j->pieces[i];
+    return keep_result(j, &j->pieces[i], &r, gid, err);
+}
+
+/* A chunk's result as a piece on disk (gid: each chunk vertex's input
+ * vertex). */
+static mr_status keep_result(job *j, piece *p, mr_chunk_result *rp, const uint32_t *gid,
+                             mr_error *err)
+{
+    mr_chunk_result r = *rp;
+    memset(rp, 0, sizeof *rp);
     p->nv = r.mesh.vertex_count;
     p->nt = r.mesh.triangle_count;
     p->gid = mr_alloc_array(p->nv + 1, sizeof *p->gid);
@@ -868,7 +912,7 @@ static mr_status run_tree(job *j, mr_chunk_result *root, mr_error *err)
             stack[sp++] = 0;
             stack[sp++] = n->child[0];
             stack[sp++] = 0;
-        } else {
+        } else if (!(j->above && j->above[i])) {
             st = run_inner(j, (uint32_t)i, root, err);
         }
         if (st == MR_OK && j->cancelled)
@@ -1004,7 +1048,7 @@ static mr_status run_levels(job *j, mr_chunk_result *root, mr_error *err)
         mr_status local = MR_OK;
         for (size_t i = 0; i < t->nnodes && local == MR_OK; i++) {
             const ooc_node *n = &t->nodes[i];
-            if (n->height != h || j->owner[i] != j->rank)
+            if (n->height != h || j->owner[i] != j->rank || (j->above && j->above[i]))
                 continue;
             local = n->child[0] < 0 ? run_leaf(j, (uint32_t)i, root, err)
                                     : run_inner(j, (uint32_t)i, root, err);
@@ -1016,9 +1060,11 @@ static mr_status run_levels(job *j, mr_chunk_result *root, mr_error *err)
         /* in node order on every rank: each pair's messages in one order */
         for (size_t i = 0; i < t->nnodes && st == MR_OK; i++) {
             const ooc_node *n = &t->nodes[i];
-            if (n->height != h || n->parent < 0)
+            if (n->height != h || n->parent < 0 || (j->above && j->above[i]))
                 continue;
-            const int from = j->owner[i], to = j->owner[n->parent];
+            /* a top of the forest: to rank 0, which reduces the cuts */
+            const int from = j->owner[i],
+                      to = j->above && j->above[n->parent] ? 0 : j->owner[n->parent];
             if (from == to)
                 continue;
             if (j->rank == from)
@@ -1071,6 +1117,631 @@ static mr_status gather_stats(job *j, mr_error *err)
     fs->simplify.seconds_output = sum[2];
     fs->temp_bytes_peak = peak;
     return MR_OK;
+}
+
+/* ---- the forest: an output larger than a chunk -------------------------------- */
+
+/* When the output does not fit one chunk (output_fits), the tree ends at
+ * its highest nodes whose share of the target does (the tops): each is
+ * simplified to its share (by input triangles) and a triangle for each
+ * vertex of its cut, which stays locked. Then each node above them,
+ * children first, reduces the cut
+ * between its two sides: the triangles within BAND_RINGS rings of the
+ * vertices that cut (a band, small beside a chunk) are taken out of the
+ * pieces on both sides, joined with their quadrics, and simplified with
+ * the band's rim (vertices the pieces still use) and the cuts further up
+ * locked; the band's result becomes a piece of its own. The bands take
+ * the excess the locked cuts left, in proportion to their cut vertices,
+ * and the last (the root's) takes what the targets still ask: the
+ * triangles exactly, the vertices but for the rim vertices that lose
+ * their last band triangle there (a few in thousands). The pieces are
+ * written as one PLY stream, a vertex they share once. */
+enum { BAND_RINGS = 6 };
+
+/* Input vertex ids to a value, open addressing (growing). */
+typedef struct gidmap {
+    uint32_t *key, *val;
+    size_t mask, count;
+} gidmap;
+
+static bool gidmap_init(gidmap *m, size_t hint)
+{
+    size_t cap = 64;
+    while (cap < 2 * hint)
+        cap *= 2;
+    m->key = mr_alloc_array(cap, sizeof *m->key);
+    m->val = mr_alloc_array(cap, sizeof *m->val);
+    m->mask = cap - 1;
+    m->count = 0;
+    if (!m->key || !m->val)
+        return false;
+    memset(m->key, 0xFF, cap * sizeof *m->key);
+    return true;
+}
+
+static void gidmap_free(gidmap *m)
+{
+    free(m->key);
+    free(m->val);
+    memset(m, 0, sizeof *m);
+}
+
+static uint32_t *gidmap_find(const gidmap *m, uint32_t g)
+{
+    for (size_t s = slot_of(g, m->mask);; s = (s + 1) & m->mask) {
+        if (m->key[s] == g)
+            return &m->val[s];
+        if (m->key[s] == UINT32_MAX)
+            return NULL;
+    }
+}
+
+/* g -> v unless g is there; *added says which. false: no memory. */
+static bool gidmap_put(gidmap *m, uint32_t g, uint32_t v, bool *added)
+{
+    if (2 * (m->count + 1) > m->mask + 1) {
+        gidmap n;
+        if (!gidmap_init(&n, m->mask + 1))
+            return gidmap_free(&n), false;
+        for (size_t s = 0; s <= m->mask; s++)
+            if (m->key[s] != UINT32_MAX) {
+                size_t t = slot_of(m->key[s], n.mask);
+                while (n.key[t] != UINT32_MAX)
+                    t = (t + 1) & n.mask;
+                n.key[t] = m->key[s];
+                n.val[t] = m->val[s];
+            }
+        n.count = m->count;
+        gidmap_free(m);
+        *m = n;
+    }
+    size_t s = slot_of(g, m->mask);
+    while (m->key[s] != UINT32_MAX && m->key[s] != g)
+        s = (s + 1) & m->mask;
+    *added = m->key[s] == UINT32_MAX;
+    if (*added) {
+        m->key[s] = g;
+        m->val[s] = v;
+        m->count++;
+    }
+    return true;
+}
+
+static bool fits_as_root(const job *j, const ooc_node *n)
+{
+    const double s =
+        j->share_triangles * (double)n->triangles / (double)j->tree.nodes[0].triangles;
+    return 4 * s <= 3 * (double)j->capacity;
+}
+
+/* The tops, the nodes above them and the tops' shares of the target. */
+static mr_status plan_forest(job *j, mr_error *err)
+{
+    const ooc_tree *t = &j->tree;
+    j->top = mr_calloc_array(t->nnodes, 1);
+    j->above = mr_calloc_array(t->nnodes, 1);
+    j->top_target = mr_calloc_array(t->nnodes, sizeof *j->top_target);
+    if (!j->top || !j->above || !j->top_target)
+        return mr_fail_nomem(err, NULL, t->nnodes * 10);
+    /* children come after their parent in the node array */
+    for (size_t i = 0; i < t->nnodes; i++) {
+        const ooc_node *n = &t->nodes[i];
+        if (n->parent >= 0 && !j->above[n->parent])
+            continue;
+        if (n->child[0] < 0 || fits_as_root(j, n))
+            j->top[i] = 1;
+        else
+            j->above[i] = 1;
+    }
+    const double goal = floor(j->share_triangles + 0.5), all = (double)t->nodes[0].triangles;
+    uint64_t cum = 0;
+    size_t prev = 0;
+    for (size_t i = 0; i < t->nnodes; i++)
+        if (j->top[i]) {
+            cum += t->nodes[i].triangles;
+            const size_t at = (size_t)floor(goal * (double)cum / all + 0.5);
+            j->top_target[i] = at - prev;
+            prev = at;
+            j->st->top_chunks++;
+        }
+    return MR_OK;
+}
+
+static inline bool seg_shared(const job *j, const gidmap *rim, size_t s, uint32_t g)
+{
+    return range_outside(j->range[g], j->seg_first[s], j->seg_last[s]) || gidmap_find(rim, g);
+}
+
+/* The pieces' vertices, a shared one once, and their triangles. */
+static mr_status count_forest(job *j, const gidmap *rim, size_t *nv, size_t *nt, mr_error *err)
+{
+    gidmap seen;
+    if (!gidmap_init(&seen, rim->count + 1024))
+        return gidmap_free(&seen), mr_fail_nomem(err, NULL, rim->count * 16);
+    mr_status st = MR_OK;
+    *nv = *nt = 0;
+    for (size_t s = 0; s < j->nseg && st == MR_OK; s++) {
+        piece *p = &j->seg[s];
+        if (!p->nt)
+            continue;
+        uint32_t *gid = mr_alloc_array(p->nv + 1, sizeof *gid);
+        if (!gid) {
+            st = mr_fail_nomem(err, NULL, p->nv * 4);
+            break;
+        }
+        st = ooc_file_read(&j->temp, &p->file, 0, gid, 4 * p->nv, err);
+        for (size_t v = 0; v < p->nv && st == MR_OK; v++) {
+            bool added = true;
+            if (seg_shared(j, rim, s, gid[v]) && !gidmap_put(&seen, gid[v], 0, &added))
+                st = mr_fail_nomem(err, NULL, seen.count * 16);
+            *nv += added;
+        }
+        *nt += p->nt;
+        free(gid);
+    }
+    gidmap_free(&seen);
+    return st;
+}
+
+/* In the loaded piece p, the triangles within `rings` rings of the
+ * vertices on node n's own cut (between its children l and r): tin[f] is
+ * a triangle's ring (0: outside the band); mark, per vertex, scratch. The
+ * rings do not grow past a vertex on a cut further up. */
+static void band_marks(const job *j, const piece *p, const ooc_node *n, const ooc_node *l,
+                       const ooc_node *r, int rings, uint8_t *mark, uint8_t *tin)
+{
+    bool any = false;
+    memset(mark, 0, p->nv);
+    memset(tin, 0, p->nt);
+    for (size_t v = 0; v < p->nv; v++) {
+        const uint32_t g = j->range[p->gid[v]];
+        if (!range_outside(g, n->first_leaf, n->last_leaf) &&
+            range_outside(g, l->first_leaf, l->last_leaf) &&
+            range_outside(g, r->first_leaf, r->last_leaf))
+            mark[v] = 1, any = true;
+    }
+    for (uint8_t ring = 1; any && ring <= rings; ring++) {
+        for (size_t f = 0; f < p->nt; f++) {
+            const uint32_t *c = p->idx + 3 * f;
+            if (!tin[f] && ((mark[c[0]] && mark[c[0]] <= ring) ||
+                            (mark[c[1]] && mark[c[1]] <= ring) ||
+                            (mark[c[2]] && mark[c[2]] <= ring)))
+                tin[f] = ring;
+        }
+        for (size_t f = 0; f < p->nt; f++)
+            if (tin[f] == ring)
+                for (int k = 0; k < 3; k++) {
+                    const uint32_t v = p->idx[3 * f + k];
+                    if (!mark[v] &&
+                        !range_outside(j->range[p->gid[v]], n->first_leaf, n->last_leaf))
+                        mark[v] = (uint8_t)(ring + 1);
+                }
+    }
+}
+
+/* The rings a band of node n takes: BAND_RINGS, or fewer where those do
+ * not fit a chunk (0: not even one). */
+static mr_status band_width(job *j, const ooc_node *n, const ooc_node *l, const ooc_node *r,
+                            int *rings, mr_error *err)
+{
+    uint64_t count[BAND_RINGS + 1] = {0};
+    mr_status st = MR_OK;
+    for (size_t s = 0; s < j->nseg && st == MR_OK; s++) {
+        piece *p = &j->seg[s];
+        if (!p->nt || j->seg_first[s] < n->first_leaf || j->seg_last[s] > n->last_leaf)
+            continue;
+        if ((st = piece_read(j, p, true, err)) != MR_OK)
+            break;
+        uint8_t *mark = mr_alloc_array(p->nv + 1, 1), *tin = mr_alloc_array(p->nt + 1, 1);
+        if (!mark || !tin)
+            st = mr_fail_nomem(err, NULL, p->nv + p->nt);
+        else
+            band_marks(j, p, n, l, r, BAND_RINGS, mark, tin);
+        for (size_t f = 0; st == MR_OK && f < p->nt; f++)
+            count[tin[f]]++;
+        free(mark);
+        free(tin);
+        piece_free(p);
+    }
+    uint64_t sum = 0;
+    *rings = 0;
+    for (int k = 1; k <= BAND_RINGS && sum + count[k] <= j->capacity; k++) {
+        sum += count[k];
+        *rings = k;
+    }
+    return st;
+}
+
+/* The band of above node N: out of every piece inside N, the triangles
+ * within BAND_RINGS rings of the vertices on N's own cut, simplified to
+ * `reduce` fewer triangles (the last band: to the targets); its result a
+ * new piece. *in and *out: its triangles before and after. */
+static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *rim, size_t *in,
+                          size_t *out, mr_error *err)
+{
+    const ooc_tree *t = &j->tree;
+    const ooc_node *n = &t->nodes[N], *l = &t->nodes[n->child[0]], *r = &t->nodes[n->child[1]];
+    *in = *out = 0;
+    /* the band, growing: its vertices (by input id), their quadrics and
+     * marks, its triangles */
+    gidmap at;
+    size_t bnv = 0, bnt = 0, vcap = 0, tcap = 0, rimmed = 0;
+    uint32_t *bgid = NULL, *bidx = NULL;
+    float *bpos = NULL;
+    mr_quadricf *bq = NULL;
+    uint8_t *bcut = NULL, *bwas = NULL, *brim = NULL, *block = NULL;
+    /* the shared vertices (cut or rim) the pieces' rests keep: locked in
+     * the band too, whichever piece brought them */
+    gidmap kept;
+    mr_status st = gidmap_init(&at, 4096) && gidmap_init(&kept, 4096)
+                       ? MR_OK
+                       : mr_fail_nomem(err, NULL, 1 << 16);
+    int rings = 0;
+    if (st == MR_OK)
+        st = band_width(j, n, l, r, &rings, err);
+    if (st == MR_OK && rings == 0)
+        st = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
+                           "the band across a cut of the forest holds more triangles than a "
+                           "chunk's %llu: give a larger memory budget",
+                           (unsigned long long)j->capacity);
+    for (size_t s = 0; s < j->nseg && st == MR_OK; s++) {
+        piece *p = &j->seg[s];
+        if (!p->nt || j->seg_first[s] < n->first_leaf || j->seg_last[s] > n->last_leaf)
+            continue;
+        if ((st = piece_load(j, p, err)) != MR_OK)
+            break;
+        uint8_t *mark = mr_calloc_array(p->nv + 1, 1), *use = mr_calloc_array(p->nv + 1, 1);
+        uint8_t *tin = mr_calloc_array(p->nt + 1, 1);
+        uint32_t *map = mr_alloc_array(p->nv + 1, sizeof *map);
+        if (!mark || !use || !tin || !map) {
+            free(mark), free(use), free(tin), free(map);
+            st = mr_fail_nomem(err, NULL, p->nv * 6 + p->nt);
+            piece_free(p);
+            break;
+        }
+        band_marks(j, p, n, l, r, rings, mark, tin);
+        for (size_t f = 0; f < p->nt; f++)
+            for (int k = 0; k < 3; k++)
+                use[p->idx[3 * f + k]] |= tin[f] ? 2 : 1;
+        /* the band's part: its vertices into the band (a rim vertex's
+         * quadric stays with the piece) */
+        for (size_t v = 0; v < p->nv && st == MR_OK; v++) {
+            if (!(use[v] & 2))
+                continue;
+            const uint32_t g = p->gid[v];
+            const bool was = seg_shared(j, rim, s, g); /* cut where its quadric was made */
+            bool added;
+            if (!gidmap_put(&at, g, (uint32_t)bnv, &added)) {
+                st = mr_fail_nomem(err, NULL, at.count * 16);
+                break;
+            }
+            if (added) {
+                if (bnv == vcap) {
+                    vcap = vcap ? 2 * vcap : 4096;
+                    uint32_t *a = mr_realloc_array(bgid, vcap, sizeof *a);
+                    bgid = a ? a : bgid;
+                    float *b = mr_realloc_array(bpos, vcap, 3 * sizeof *b);
+                    bpos = b ? b : bpos;
+                    mr_quadricf *q = mr_realloc_array(bq, vcap, sizeof *q);
+                    bq = q ? q : bq;
+                    uint8_t *c1 = mr_realloc_array(bcut, vcap, 1);
+                    bcut = c1 ? c1 : bcut;
+                    uint8_t *c2 = mr_realloc_array(bwas, vcap, 1);
+                    bwas = c2 ? c2 : bwas;
+                    uint8_t *c3 = mr_realloc_array(brim, vcap, 1);
+                    brim = c3 ? c3 : brim;
+                    if (!a || !b || !q || !c1 || !c2 || !c3) {
+                        st = mr_fail_nomem(err, NULL, vcap * (20 + sizeof *q));
+                        break;
+                    }
+                }
+                bgid[bnv] = g;
+                memcpy(bpos + 3 * bnv, p->pos + 3 * v, 12);
+                memset(&bq[bnv], 0, sizeof *bq);
+                bcut[bnv] = bwas[bnv] = brim[bnv] = 0;
+                bnv++;
+            }
+            const uint32_t b = *gidmap_find(&at, g);
+            map[v] = b;
+            if (use[v] & 1) {
+                brim[b] = 1; /* the piece keeps it, and its quadric */
+                if (!gidmap_put(rim, g, 0, &added)) {
+                    st = mr_fail_nomem(err, NULL, rim->count * 16);
+                    break;
+                }
+            } else {
+                mr_quadric qa, qb;
+                mr_quadric_load(&qa, &bq[b]);
+                mr_quadric_load(&qb, &p->q[v]);
+                mr_quadric_add(&qa, &qb);
+                mr_quadric_store(&bq[b], &qa);
+            }
+            bcut[b] |= brim[b] || range_outside(j->range[g], n->first_leaf, n->last_leaf);
+            bwas[b] |= was;
+        }
+        for (size_t f = 0; f < p->nt && st == MR_OK; f++) {
+            if (!tin[f])
+                continue;
+            if (bnt == tcap) {
+                tcap = tcap ? 2 * tcap : 8192;
+                uint32_t *a = mr_realloc_array(bidx, tcap, 3 * sizeof *a);
+                if (!a) {
+                    st = mr_fail_nomem(err, NULL, tcap * 12);
+                    break;
+                }
+                bidx = a;
+            }
+            for (int k = 0; k < 3; k++)
+                bidx[3 * bnt + (size_t)k] = map[p->idx[3 * f + k]];
+            bnt++;
+        }
+        /* the piece's rest, kept */
+        size_t nv = 0, nt = 0;
+        for (size_t v = 0; v < p->nv && st == MR_OK; v++) {
+            bool added;
+            if ((use[v] & 1) && seg_shared(j, rim, s, p->gid[v]) &&
+                !gidmap_put(&kept, p->gid[v], 0, &added))
+                st = mr_fail_nomem(err, NULL, kept.count * 16);
+        }
+        for (size_t v = 0; v < p->nv; v++)
+            if (use[v] & 1) {
+                map[v] = (uint32_t)nv;
+                p->gid[nv] = p->gid[v];
+                memcpy(p->pos + 3 * nv, p->pos + 3 * v, 12);
+                p->q[nv] = p->q[v];
+                nv++;
+            }
+        for (size_t f = 0; f < p->nt; f++)
+            if (!tin[f]) {
+                for (int k = 0; k < 3; k++)
+                    p->idx[3 * nt + (size_t)k] = map[p->idx[3 * f + (size_t)k]];
+                nt++;
+            }
+        p->nv = nt ? nv : 0;
+        p->nt = nt;
+        free(mark), free(use), free(tin), free(map);
+        if (st == MR_OK && nt)
+            st = piece_store(j, p, err);
+        else
+            piece_free(p);
+    }
+    for (size_t v = 0; v < bnv && st == MR_OK; v++) {
+        bool added;
+        if (!brim[v] && gidmap_find(&kept, bgid[v])) {
+            brim[v] = bcut[v] = 1;
+            if (!gidmap_put(rim, bgid[v], 0, &added))
+                st = mr_fail_nomem(err, NULL, rim->count * 16);
+        }
+        rimmed += brim[v];
+    }
+    gidmap_free(&kept);
+    if (st == MR_OK && bnt) {
+        if (last) {
+            /* what the targets still ask, exactly: the pieces' rest counts */
+            size_t rest_nv = 0, rest_nt = 0;
+            st = count_forest(j, rim, &rest_nv, &rest_nt, err);
+            const double tt = j->target_triangles ? (double)j->target_triangles - (double)rest_nt : 0;
+            const double tv = j->target_vertices
+                                  ? (double)j->target_vertices - (double)rest_nv + (double)rimmed
+                                  : 0;
+            j->band_t = !j->target_triangles ? 0 : tt < 1 ? 1 : (size_t)tt;
+            j->band_v = !j->target_vertices ? 0 : tv < 1 ? 1 : (size_t)tv;
+        } else {
+            const double tt = (double)bnt - (reduce > 0 ? reduce : 0);
+            j->band_t = tt < 1 ? 1 : (size_t)tt;
+            j->band_v = 0;
+        }
+        if (j->o->vertex_lock && st == MR_OK) {
+            block = mr_alloc_array(bnv, 1);
+            if (!block)
+                st = mr_fail_nomem(err, NULL, bnv);
+            for (size_t v = 0; st == MR_OK && v < bnv; v++)
+                block[v] = j->o->vertex_lock[bgid[v]] != 0;
+        }
+        mr_chunk_result root;
+        memset(&root, 0, sizeof root);
+        const mr_chunk c = {bpos, bnv, bidx, bnt, bcut, block, bq, bwas, j->diagonal};
+        if (st == MR_OK)
+            st = run_chunk(j, N, &c, bgid, &root, err);
+        piece *p = &j->seg[j->nseg];
+        memset(p, 0, sizeof *p);
+        p->file.fd = -1;
+        if (st == MR_OK && n->parent < 0) {
+            st = keep_result(j, p, &root, bgid, err);
+        } else if (st == MR_OK) {
+            *p = j->pieces[N];
+            memset(&j->pieces[N], 0, sizeof j->pieces[N]);
+            j->pieces[N].file.fd = -1;
+        }
+        mr_chunk_result_free(&root);
+        if (st == MR_OK) {
+            j->seg_first[j->nseg] = n->first_leaf;
+            j->seg_last[j->nseg] = n->last_leaf;
+            j->nseg++;
+            *in = bnt;
+            *out = p->nt;
+        } else {
+            ooc_file_close(&j->temp, &p->file);
+        }
+    }
+    gidmap_free(&at);
+    free(bgid), free(bidx), free(bpos), free(bq), free(bcut), free(bwas), free(brim), free(block);
+    return st;
+}
+
+/* The pieces as one PLY stream: the vertices, a shared one at its first
+ * piece, then the triangles. */
+static mr_status write_forest(job *j, const char *out_path, const mr_write_options *write,
+                              const gidmap *rim, mr_error *err)
+{
+    mr_write_options defaults;
+    if (!write) {
+        mr_write_options_default(&defaults);
+        write = &defaults;
+    }
+    size_t nv, nt;
+    mr_status st = count_forest(j, rim, &nv, &nt, err);
+    if (st != MR_OK)
+        return st;
+    mr_simplify_stats *s = &j->st->simplify;
+    s->output_vertices = s->output_points = nv;
+    s->output_triangles = nt;
+    enum { BLOCK = 1 << 16 };
+    float *pos = mr_alloc_array(3 * (size_t)BLOCK, sizeof *pos);
+    size_t *base = mr_alloc_array(j->nseg + 1, sizeof *base);
+    gidmap id;
+    const bool ok = gidmap_init(&id, rim->count + 1024);
+    if (!pos || !base || !ok) {
+        free(pos), free(base), gidmap_free(&id);
+        return mr_fail_nomem(err, NULL, 12 * (size_t)BLOCK);
+    }
+    const double t0 = mr_now_seconds();
+    mr_output_file of;
+    st = mr_output_open(&of, out_path, err);
+    if (st != MR_OK) {
+        free(pos), free(base), gidmap_free(&id);
+        return st;
+    }
+    static const size_t bufsize = 1 << 20;
+    char *buf = malloc(bufsize);
+    if (buf)
+        setvbuf(of.f, buf, _IOFBF, bufsize);
+    mr_ply_stream ps;
+    st = mr_ply_stream_begin(&ps, of.f, nv, nt, 0, write, out_path, err);
+    size_t next = 0, fill = 0;
+    for (size_t k = 0; k < j->nseg && st == MR_OK; k++) {
+        piece *p = &j->seg[k];
+        base[k] = next;
+        if (!p->nt || (st = piece_read(j, p, true, err)) != MR_OK)
+            continue;
+        for (size_t v = 0; v < p->nv && st == MR_OK; v++) {
+            bool added = true;
+            if (seg_shared(j, rim, k, p->gid[v]) &&
+                !gidmap_put(&id, p->gid[v], (uint32_t)next, &added))
+                st = mr_fail_nomem(err, NULL, id.count * 16);
+            if (!added)
+                continue;
+            memcpy(pos + 3 * fill, p->pos + 3 * v, 12);
+            next++;
+            if (++fill == BLOCK) {
+                const mr_mesh b = {fill, 0, pos, NULL, NULL, NULL, NULL};
+                st = mr_ply_stream_vertices(&ps, &b, err);
+                fill = 0;
+            }
+        }
+        piece_free(p);
+    }
+    if (st == MR_OK && fill) {
+        const mr_mesh b = {fill, 0, pos, NULL, NULL, NULL, NULL};
+        st = mr_ply_stream_vertices(&ps, &b, err);
+    }
+    for (size_t k = 0; k < j->nseg && st == MR_OK; k++) {
+        piece *p = &j->seg[k];
+        if (!p->nt || (st = piece_read(j, p, false, err)) != MR_OK)
+            continue;
+        uint32_t *local = mr_alloc_array(p->nv + 1, sizeof *local);
+        if (!local) {
+            st = mr_fail_nomem(err, NULL, p->nv * 4);
+            piece_free(p);
+            break;
+        }
+        size_t counter = base[k];
+        for (size_t v = 0; v < p->nv; v++) {
+            if (seg_shared(j, rim, k, p->gid[v])) {
+                const uint32_t o = *gidmap_find(&id, p->gid[v]);
+                counter += o == counter;
+                local[v] = o;
+            } else {
+                local[v] = (uint32_t)counter++;
+            }
+        }
+        for (size_t c = 0; c < 3 * p->nt; c++)
+            p->idx[c] = local[p->idx[c]];
+        st = mr_ply_stream_faces(&ps, p->idx, p->nt, err);
+        free(local);
+        piece_free(p);
+    }
+    if (st == MR_OK)
+        st = mr_ply_stream_end(&ps, err);
+    st = mr_output_close(&of, out_path, st, err);
+    free(buf);
+    free(pos);
+    free(base);
+    gidmap_free(&id);
+    j->st->seconds_write = mr_now_seconds() - t0;
+    return st;
+}
+
+/* Rank 0, after the tops: the bands, then the output. */
+static mr_status run_forest(job *j, const char *out_path, const mr_write_options *write,
+                            mr_error *err)
+{
+    const ooc_tree *t = &j->tree;
+    size_t ntop = 0, nabove = 0;
+    for (size_t i = 0; i < t->nnodes; i++)
+        ntop += j->top[i], nabove += j->above[i];
+    j->seg = mr_calloc_array(ntop + nabove + 1, sizeof *j->seg);
+    j->seg_first = mr_alloc_array(ntop + nabove + 1, sizeof *j->seg_first);
+    j->seg_last = mr_alloc_array(ntop + nabove + 1, sizeof *j->seg_last);
+    uint64_t *w = mr_calloc_array(t->nnodes, sizeof *w);
+    gidmap rim;
+    const bool ok = gidmap_init(&rim, 4096);
+    if (!j->seg || !j->seg_first || !j->seg_last || !w || !ok) {
+        free(w), gidmap_free(&rim);
+        return mr_fail_nomem(err, NULL, (ntop + nabove) * sizeof *j->seg);
+    }
+    double now = 0;
+    for (size_t i = 0; i < t->nnodes; i++)
+        if (j->top[i]) {
+            j->seg[j->nseg] = j->pieces[i];
+            memset(&j->pieces[i], 0, sizeof j->pieces[i]);
+            j->pieces[i].file.fd = -1;
+            j->seg_first[j->nseg] = t->nodes[i].first_leaf;
+            j->seg_last[j->nseg] = t->nodes[i].last_leaf;
+            now += (double)j->seg[j->nseg].nt;
+            j->nseg++;
+        }
+    /* each above node's weight: the vertices on its own cut */
+    uint64_t all = 0;
+    for (size_t v = 0; v < j->nv; v++) {
+        const uint32_t r = j->range[v];
+        if (r == RANGE_NONE)
+            continue;
+        int32_t i = 0;
+        while (j->above[i]) {
+            const ooc_node *n = &t->nodes[i];
+            const ooc_node *a = &t->nodes[n->child[0]], *b = &t->nodes[n->child[1]];
+            if (!range_outside(r, a->first_leaf, a->last_leaf))
+                i = n->child[0];
+            else if (!range_outside(r, b->first_leaf, b->last_leaf))
+                i = n->child[1];
+            else {
+                w[i]++, all++;
+                break;
+            }
+        }
+    }
+    const double excess = now - floor(j->share_triangles + 0.5);
+    double done = 0;
+    uint64_t cum = 0;
+    mr_status st = MR_OK;
+    for (size_t i = t->nnodes; i-- > 0 && st == MR_OK;) {
+        if (!j->above[i])
+            continue;
+        cum += w[i];
+        const double plan = all ? floor(excess * (double)cum / (double)all + 0.5) : 0;
+        size_t in, out;
+        st = run_band(j, (uint32_t)i, plan - done, i == 0, &rim, &in, &out, err);
+        done += (double)in - (double)out;
+        if (st == MR_OK && j->cancelled)
+            st = mr_fail_plain(err, MR_ERR_CANCELLED, NULL,
+                               "simplify: cancelled by the progress callback");
+    }
+    free(w);
+    if (st == MR_OK)
+        st = write_forest(j, out_path, write, &rim, err);
+    gidmap_free(&rim);
+    return st;
 }
 
 /* ---- the job --------------------------------------------------------------------- */
@@ -1133,10 +1804,19 @@ static mr_status resolve_targets(job *j, mr_error *err)
 /* The root holds two halves of a chunk, from which it makes the output:
  * at most three quarters of a chunk, so that it still chooses among a
  * third more collapses than it makes. */
-static mr_status output_fits(const job *j, uint64_t memory, mr_error *err)
+static mr_status output_fits(const job *j, uint64_t memory, const char *out_path,
+                             const mr_write_options *write, bool *forest, mr_error *err)
 {
+    *forest = false;
     if (4 * j->share_triangles <= 3 * (double)j->capacity)
         return MR_OK;
+    /* a forest, written as a PLY stream */
+    const mr_format fmt = write && write->format != MR_FORMAT_AUTO ? write->format
+                                                                   : mr_format_from_path(out_path);
+    if (fmt == MR_FORMAT_PLY) {
+        *forest = true;
+        return MR_OK;
+    }
     char a[32], b[32];
     const uint64_t need =
         memory +
@@ -1144,8 +1824,9 @@ static mr_status output_fits(const job *j, uint64_t memory, mr_error *err)
     return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
                          "the output (about %.0f triangles) does not fit the memory budget "
                          "of %s: its chunks hold %llu triangles, and the last one makes the "
-                         "output from at most a chunk's worth (3/4 of one at most); give at "
-                         "least %s",
+                         "output from at most a chunk's worth (3/4 of one at most); write it "
+                         "as PLY (the chunks' results are then written as one stream) or give "
+                         "at least %s",
                          j->share_triangles, size_text(a, sizeof a, memory),
                          (unsigned long long)j->capacity, size_up(b, sizeof b, need));
 }
@@ -1244,8 +1925,9 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     /* the targets' triangles as far as the counts tell before the passes
      * (the vertex count's at least), to say early what does not fit */
     j->referenced = j->nv;
-    if ((st = resolve_targets(j, err)) == MR_OK && (st = output_fits(j, memory, err)) == MR_OK &&
-        !stl)
+    bool forest = false;
+    if ((st = resolve_targets(j, err)) == MR_OK &&
+        (st = output_fits(j, memory, out_path, write, &forest, err)) == MR_OK && !stl)
         st = ooc_temp_init(&j->temp, ooc ? ooc->temp_dir : NULL, out_path,
                            ooc ? ooc->temp_budget : 0, err);
     /* the passes: an OBJ file's parse into temporary files (a binary STL's
@@ -1342,7 +2024,10 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     for (size_t v = 0; v < j->nv; v++)
         j->referenced += j->range[v] != RANGE_NONE;
     fs->simplify.input_vertices = j->referenced;
-    if ((st = resolve_targets(j, err)) != MR_OK || (st = output_fits(j, memory, err)) != MR_OK)
+    if ((st = resolve_targets(j, err)) != MR_OK ||
+        (st = output_fits(j, memory, out_path, write, &forest, err)) != MR_OK)
+        return st;
+    if (forest && (st = plan_forest(j, err)) != MR_OK)
         return st;
 
     /* the tree */
@@ -1350,9 +2035,20 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     memset(&root, 0, sizeof root);
     st = j->ranks > 1 ? run_levels(j, &root, err) : run_tree(j, &root, err);
     ooc_file_close(&j->temp, &j->spill);
+    if (st == MR_OK && forest)
+        st = agree(j, j->rank == 0 ? run_forest(j, out_path, write, err) : MR_OK, err);
     if (st == MR_OK)
         st = gather_stats(j, err);
-    if (st == MR_OK && j->rank == 0) {
+    if (st == MR_OK && j->rank == 0 && forest) {
+        mr_simplify_stats *s = &fs->simplify;
+        const bool reached = j->o->until_error ||
+                             (j->target_triangles && s->output_triangles <= j->target_triangles) ||
+                             (j->target_vertices && s->output_vertices <= j->target_vertices);
+        s->stop = reached ? MR_STOP_TARGET : MR_STOP_REFUSED;
+        s->target_reached = reached;
+        if (!j->o->error_absolute)
+            s->max_error /= j->diagonal;
+    } else if (st == MR_OK && j->rank == 0) {
         mr_simplify_stats *s = &fs->simplify;
         s->output_vertices = s->output_points = root.mesh.vertex_count;
         s->output_triangles = root.mesh.triangle_count;
@@ -1501,6 +2197,16 @@ mr_status ooc_simplify_file(const char *in_path, const char *out_path,
                 ooc_file_close(&j.temp, &j.pieces[i].file);
             }
         free(j.pieces);
+        for (size_t i = 0; i < j.nseg; i++) {
+            piece_free(&j.seg[i]);
+            ooc_file_close(&j.temp, &j.seg[i].file);
+        }
+        free(j.seg);
+        free(j.seg_first);
+        free(j.seg_last);
+        free(j.top);
+        free(j.above);
+        free(j.top_target);
         free(j.owner);
         free(j.range);
         free(j.leaf_at);
