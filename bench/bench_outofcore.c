@@ -3,6 +3,7 @@
  *
  *   bench_outofcore [--sizes 4M,20M] [--large 100M,300M] [--runs N]
  *                   [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC]
+ *                   [--cluster]
  *
  * For each generated scan (written once into DIR as binary PLY, streamed:
  * mr_generate_file), the whole process, as a user runs it: `meshreduce
@@ -25,6 +26,12 @@
  * smaller sizes beside it.
  * --csv writes the rows for bench/plots.py (time and peak memory against
  * the input's size).
+ * --cluster: then grid clustering of each --sizes scan, the file read in
+ * passes (mr_cluster_file) against read whole, clustered in memory and
+ * written (mr_mesh_read, mr_mesh_cluster, mr_mesh_write: the bytes are the
+ * same), both in a child process of this program (its peak RSS), at 1 and 2
+ * threads, to a fixed cell (1/500 of the diagonal) and to a target count
+ * (the ratio of the vertices), median of N alternating runs.
  */
 #define _GNU_SOURCE
 #include "benchutil.h"
@@ -264,9 +271,113 @@ typedef struct config {
     const char *memory; /* NULL: the default (in memory when it fits) */
 } config;
 
+/* The child of --cluster: MODE (file or memory) IN OUT THREADS CELL_REL
+ * TARGET; exit 0 on success. */
+static int cluster_child(char **argv)
+{
+    const bool file = !strcmp(argv[0], "file");
+    mr_cluster_options o;
+    mr_cluster_options_default(&o);
+    o.threads = atoi(argv[3]);
+    o.cell_rel = atof(argv[4]);
+    o.target_vertices = (size_t)atoll(argv[5]);
+    mr_error err;
+    if (file)
+        return mr_cluster_file(argv[1], argv[2], &o, NULL, NULL, &err) == MR_OK ? 0 : 1;
+    mr_mesh in, out;
+    if (mr_mesh_read(argv[1], NULL, &in, &err) != MR_OK)
+        return 1;
+    if (mr_mesh_cluster(&in, &o, &out, NULL, &err) != MR_OK)
+        return 1;
+    mr_mesh_free(&in);
+    const int rc = mr_mesh_write(argv[2], &out, NULL, &err) == MR_OK ? 0 : 1;
+    mr_mesh_free(&out);
+    return rc;
+}
+
+static char *read_all(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *d = size >= 0 ? malloc((size_t)size + 1) : NULL;
+    *n = d ? fread(d, 1, (size_t)size, f) : 0;
+    fclose(f);
+    return d;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* --cluster: in passes against in memory, on each of the sizes. */
+static double cluster_section(const char *self, const char *dir, const size_t *sizes,
+                              int nsizes, int runs, double ratio)
+{
+    printf("\ncluster: the file read in passes (mr_cluster_file) against read whole and "
+           "clustered in memory; a child process each, median of %d alternating runs\n\n",
+           runs);
+    printf("%-9s %-22s %3s %9s %9s %9s %9s %7s\n", "input", "grid", "thr", "passes s",
+           "memory s", "passes RSS", "memory RSS", "ratio");
+    double worst = -1;
+    for (int si = 0; si < nsizes; si++) {
+        char in[1024], label[32], out[2][1100], target[32];
+        snprintf(label, sizeof label, "%zuM", sizes[si] / 1000000);
+        snprintf(in, sizeof in, "%s/scan-%s.ply", dir, label);
+        snprintf(out[0], sizeof out[0], "%s/cluster-file.ply", dir);
+        snprintf(out[1], sizeof out[1], "%s/cluster-memory.ply", dir);
+        /* the scan's vertices: about half its triangles */
+        snprintf(target, sizeof target, "%zu", (size_t)(ratio * (double)sizes[si] / 2));
+        for (int g = 0; g < 2; g++)
+            for (int threads = 1; threads <= 2; threads++) {
+                char th[8];
+                snprintf(th, sizeof th, "%d", threads);
+                double sec[2][64];
+                size_t rss[2] = {0, 0};
+                const int n = runs < 64 ? runs : 64;
+                for (int r = 0; r < n; r++)
+                    for (int m = 0; m < 2; m++) {
+                        const int k = (r & 1) ? 1 - m : m; /* alternating */
+                        char *av[] = {(char *)self, "--cluster-child", k ? "memory" : "file", in,
+                                      out[k], th, g ? "0" : "0.002", g ? target : "0", NULL};
+                        run_result rr = run_cmd(av);
+                        if (rr.status != 0) {
+                            fprintf(stderr, "cluster child failed (%d)\n", rr.status);
+                            exit(1);
+                        }
+                        sec[k][r] = rr.seconds;
+                        rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
+                        free(rr.out);
+                    }
+                size_t na, nb;
+                char *a = read_all(out[0], &na), *b = read_all(out[1], &nb);
+                const bool same = a && b && na == nb && memcmp(a, b, na) == 0;
+                free(a);
+                free(b);
+                qsort(sec[0], (size_t)n, sizeof(double), cmp_double);
+                qsort(sec[1], (size_t)n, sizeof(double), cmp_double);
+                const double f = sec[0][n / 2], m = sec[1][n / 2];
+                printf("%-9s %-22s %3d %9.3f %9.3f %8.0fMB %8.0fMB %6.2fx%s\n", label,
+                       g ? "--target-vertices 1%" : "--cell-rel 0.002", threads, f, m,
+                       rss[0] / 1e6, rss[1] / 1e6, m / f, same ? "" : "  OTHER BYTES");
+                if (worst < 0 || m / f < worst)
+                    worst = m / f;
+            }
+    }
+    return worst;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 8 && !strcmp(argv[1], "--cluster-child"))
+        return cluster_child(argv + 2);
     size_t sizes[8], large[8];
+    bool cluster = false;
     int nsizes = parse_list("4M,20M", sizes, 8), nlarge = 0, runs = 3;
     double ratio = 0.01;
     const char *dir = "bench/work", *csv = NULL, *mpiexec = NULL;
@@ -285,9 +396,12 @@ int main(int argc, char **argv)
             csv = argv[++i];
         else if (!strcmp(argv[i], "--mpi") && i + 1 < argc)
             mpiexec = argv[++i];
+        else if (!strcmp(argv[i], "--cluster"))
+            cluster = true;
         else {
             fprintf(stderr, "usage: bench_outofcore [--sizes 4M,20M] [--large 100M,300M] "
-                            "[--runs N] [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC]\n");
+                            "[--runs N] [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC] "
+                            "[--cluster]\n");
             return 2;
         }
     }
@@ -499,5 +613,11 @@ int main(int argc, char **argv)
     if (bar_mpi > 0)
         printf("bar: 2 ranks of 1 thread %.2fx faster than 1 rank at 20M (at least 1.7)\n",
                bar_mpi);
+    if (cluster) {
+        const double w = cluster_section("/proc/self/exe", dir, sizes, nsizes, runs, ratio);
+        printf("\nbar: cluster in passes at least as fast as in memory: worst %.2fx (in "
+               "memory's time over the passes')\n",
+               w);
+    }
     return 0;
 }

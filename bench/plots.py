@@ -2,11 +2,14 @@
 """The benchmark report's plots, from the sweep's CSV (bench/sweep.c), with matplotlib.
 
     plots.py [CSV] [--out DIR]
+    plots.py --outofcore CSV [--out DIR]
 
 CSV defaults to bench/report/sweep.csv; DIR (default bench/report) receives
 time-threads.png, speedup-threads.png, peers.png and error-MESH.png, the plots that
 bench/REPORT.md embeds (bench/report.c writes the comparison sheets, rendered by the
-library, and REPORT.md itself). Debian's python3-matplotlib (make report installs it);
+library, and REPORT.md itself). With --outofcore, CSV is bench_outofcore's (--csv) and DIR
+receives outofcore.png: time and peak memory against the input's size, a line per run
+(in memory, out of core at each budget, MPI), which bench/RESULTS.md embeds. Debian's python3-matplotlib (make report installs it);
 the Agg backend, so no display is needed. Exit 1 with one line on a CSV that is not the
 sweep's.
 """
@@ -83,11 +86,76 @@ def finish(fig, ax, path, title, xlabel, ylabel):
     plt.close(fig)
 
 
+OUTOFCORE_COLUMNS = ("triangles", "config", "threads", "ranks", "memory", "seconds",
+                     "rss_bytes")
+
+
+def read_outofcore(path):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows or any(c not in rows[0] for c in OUTOFCORE_COLUMNS):
+        raise ValueError("%s: not a bench_outofcore CSV (columns %s)"
+                         % (path, ", ".join(OUTOFCORE_COLUMNS)))
+    for r in rows:
+        try:
+            for k in ("triangles", "threads", "ranks"):
+                r[k] = int(r[k])
+            for k in ("seconds", "rss_bytes"):
+                r[k] = float(r[k])
+        except ValueError:
+            raise ValueError("%s: not a bench_outofcore CSV (a row's numbers: %s)"
+                             % (path, ",".join(str(v) for v in r.values())))
+    return rows
+
+
+def outofcore_plot(path, out):
+    rows = read_outofcore(path)
+    fig, (at, am) = plt.subplots(1, 2, figsize=(12, 5))
+    series = {}
+    for r in rows:
+        if r["config"] == "mpi":
+            label = "MPI %s, %d ranks" % (r["memory"], r["ranks"])
+        elif r["config"] == "in memory":
+            label = "in memory, %d thread%s" % (r["threads"], "s" if r["threads"] > 1 else "")
+        else:
+            label = "out of core %s, %d thread%s" % (r["memory"], r["threads"],
+                                                    "s" if r["threads"] > 1 else "")
+        series.setdefault(label, []).append(r)
+    for label, rs in series.items():
+        rs.sort(key=lambda r: r["triangles"])
+        xs = [r["triangles"] for r in rs]
+        at.plot(xs, [r["seconds"] for r in rs], marker="o", label=label)
+        if any(r["rss_bytes"] > 0 for r in rs):
+            am.plot(xs, [r["rss_bytes"] / 1e9 for r in rs], marker="o", label=label)
+    for ax in (at, am):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.grid(True, which="major", color="#e6e6e6")
+        ax.set_xlabel("input triangles")
+    at.set_title("Time (whole process, median)", loc="left")
+    at.set_ylabel("seconds")
+    am.set_title("Peak resident memory (per process)", loc="left")
+    am.set_ylabel("GB")
+    am.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
+    os.makedirs(out, exist_ok=True)
+    fig.savefig(os.path.join(out, "outofcore.png"), dpi=100, bbox_inches="tight")
+    plt.close(fig)
+    print("plots: outofcore.png in %s" % out)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("csv", nargs="?", default="bench/report/sweep.csv")
     ap.add_argument("--out", default="bench/report")
+    ap.add_argument("--outofcore", metavar="CSV", help="bench_outofcore's CSV")
     a = ap.parse_args()
+    if a.outofcore:
+        try:
+            outofcore_plot(a.outofcore, a.out)
+        except (OSError, ValueError) as e:
+            print("plots: %s" % e, file=sys.stderr)
+            return 1
+        return 0
     try:
         meshes, rows = read_sweep(a.csv)
     except (OSError, ValueError) as e:
