@@ -111,22 +111,37 @@ def read_outofcore(path):
 def outofcore_plot(path, out):
     rows = read_outofcore(path)
     fig, (at, am) = plt.subplots(1, 2, figsize=(12, 5))
+    # a line per run across the sizes; where one size has several budgets
+    # for a run, a line per budget; each point labelled with its budget
+    plural = lambda n: "s" if n > 1 else ""  # noqa: E731
+    budgets = {}
+    for r in rows:
+        budgets.setdefault((r["config"], r["threads"], r["ranks"], r["triangles"]),
+                           set()).add(r["memory"])
     series = {}
     for r in rows:
+        split = len(budgets[(r["config"], r["threads"], r["ranks"], r["triangles"])]) > 1
         if r["config"] == "mpi":
-            label = "MPI %s, %d ranks" % (r["memory"], r["ranks"])
+            label = "MPI, %d rank%s" % (r["ranks"], plural(r["ranks"]))
         elif r["config"] == "in memory":
-            label = "in memory, %d thread%s" % (r["threads"], "s" if r["threads"] > 1 else "")
+            label = "in memory, %d thread%s" % (r["threads"], plural(r["threads"]))
         else:
-            label = "out of core %s, %d thread%s" % (r["memory"], r["threads"],
-                                                    "s" if r["threads"] > 1 else "")
+            label = "out of core, %d thread%s" % (r["threads"], plural(r["threads"]))
+        if split:
+            label += ", --memory " + r["memory"]
         series.setdefault(label, []).append(r)
     for label, rs in series.items():
         rs.sort(key=lambda r: r["triangles"])
         xs = [r["triangles"] for r in rs]
-        at.plot(xs, [r["seconds"] for r in rs], marker="o", label=label)
+        line, = at.plot(xs, [r["seconds"] for r in rs], marker="o", label=label)
         if any(r["rss_bytes"] > 0 for r in rs):
-            am.plot(xs, [r["rss_bytes"] / 1e9 for r in rs], marker="o", label=label)
+            am.plot(xs, [r["rss_bytes"] / 1e9 for r in rs], marker="o", label=label,
+                    color=line.get_color())
+            for r in rs:
+                if r["config"] != "in memory":
+                    am.annotate(r["memory"], (r["triangles"], r["rss_bytes"] / 1e9),
+                                textcoords="offset points", xytext=(4, -10), fontsize=7,
+                                color=line.get_color())
     for ax in (at, am):
         ax.set_xscale("log")
         ax.set_yscale("log")

@@ -1364,7 +1364,7 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
     *in = *out = 0;
     /* the band, growing: its vertices (by input id), their quadrics and
      * marks, its triangles */
-    gidmap at;
+    gidmap at = {0}, kept = {0};
     size_t bnv = 0, bnt = 0, vcap = 0, tcap = 0, rimmed = 0;
     uint32_t *bgid = NULL, *bidx = NULL;
     float *bpos = NULL;
@@ -1372,7 +1372,6 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
     uint8_t *bcut = NULL, *bwas = NULL, *brim = NULL, *block = NULL;
     /* the shared vertices (cut or rim) the pieces' rests keep: locked in
      * the band too, whichever piece brought them */
-    gidmap kept;
     mr_status st = gidmap_init(&at, 4096) && gidmap_init(&kept, 4096)
                        ? MR_OK
                        : mr_fail_nomem(err, NULL, 1 << 16);
