@@ -741,7 +741,9 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
         st = mr_fail_nomem(err, NULL, nv * 14);
     if (st == MR_OK) {
         const uint32_t *gid = key;
-        if (key[nv - 1] - key[0] < (uint32_t)(64 * nv))
+        /* mapped ahead only where the leaf's vertices fill most of their
+         * range of the file: the mapped pages count in the resident set */
+        if (key[nv - 1] - key[0] < (uint32_t)(2 * nv))
             j->src.prefetch(j->src.impl, key[0], key[nv - 1]);
         const ptrdiff_t n3 = (ptrdiff_t)nv;
 #pragma omp parallel for schedule(static) num_threads(j->threads) if (n3 > 16384)
