@@ -10,6 +10,7 @@
  * cancel -- each with no output file and no temporary file left.
  */
 #include "testutil.h"
+#include "ooc/extsort.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -467,6 +468,72 @@ static void expect_failure(const char *in, const char *out, const mr_simplify_op
     assert_false(tu_file_exists(out));
 }
 
+/* The external sort on its own: records with a key that ties often (so
+ * the comparator orders most of them), in many runs, come back in the
+ * full order and each once; a record size it cannot take is refused. */
+typedef struct xrec {
+    uint32_t a, b, c;
+} xrec;
+
+static uint64_t xrec_key(const void *r) { return ((const xrec *)r)->a % 5; }
+
+static int xrec_cmp(const void *x, const void *y)
+{
+    const xrec *p = x, *q = y;
+    if (p->a != q->a)
+        return p->a < q->a ? -1 : 1;
+    return p->b < q->b ? -1 : p->b > q->b;
+}
+
+static void test_extsort(void **state)
+{
+    (void)state;
+    char dir[1024];
+    temp_dir(dir, "ooc-x-tmp");
+    ooc_temp t;
+    mr_error err;
+    assert_int_equal(ooc_temp_init(&t, dir, NULL, 0, &err), MR_OK);
+    ooc_extsort x;
+    const size_t n = 50000;
+    /* 1024 records a run at least: about 49 runs */
+    assert_int_equal(ooc_extsort_init(&x, &t, sizeof(xrec), 1, xrec_key, 3, xrec_cmp, 2, &err),
+                     MR_OK);
+    uint64_t sum = 0;
+    uint32_t seed = 12345;
+    for (size_t i = 0; i < n; i++) {
+        seed = seed * 1664525u + 1013904223u;
+        const xrec r = {seed >> 20, (uint32_t)i, seed};
+        sum += r.c;
+        assert_int_equal(ooc_extsort_add(&x, &r, &err), MR_OK);
+    }
+    assert_true(x.nruns > 40);
+    assert_int_equal(ooc_extsort_finish(&x, 1 << 16, &err), MR_OK);
+    xrec prev = {0, 0, 0};
+    size_t got = 0;
+    uint64_t back = 0;
+    for (;;) {
+        const void *rec;
+        assert_int_equal(ooc_extsort_next(&x, &rec, &err), MR_OK);
+        if (!rec)
+            break;
+        const xrec *r = rec;
+        if (got) {
+            const uint64_t kp = xrec_key(&prev), kr = xrec_key(r);
+            assert_true(kp < kr || (kp == kr && xrec_cmp(&prev, r) < 0));
+        }
+        prev = *r;
+        back += r->c;
+        got++;
+    }
+    assert_int_equal(got, n);
+    assert_true(back == sum);
+    ooc_extsort_free(&x);
+    assert_int_equal(ooc_extsort_init(&x, &t, 65, 1 << 20, xrec_key, 3, xrec_cmp, 1, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    ooc_extsort_free(&x);
+    assert_int_equal(entries(dir), 0);
+}
+
 /* A binary STL input: welded out of core through external sorts (runs
  * that do not fit the budget, merged), it gives the bytes of the PLY file
  * of the in-memory reader's weld, out of core and in memory; a non-finite
@@ -817,7 +884,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fits_in_memory),  cmocka_unit_test(test_chunks_quality),
         cmocka_unit_test(test_threads_and_modes), cmocka_unit_test(test_targets_and_locks),
-        cmocka_unit_test(test_obj_input),  cmocka_unit_test(test_stl_input),  cmocka_unit_test(test_forest),
+        cmocka_unit_test(test_obj_input),  cmocka_unit_test(test_extsort),     cmocka_unit_test(test_stl_input),  cmocka_unit_test(test_forest),
         cmocka_unit_test(test_failures),        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_cli),             cmocka_unit_test(test_faults),
     };

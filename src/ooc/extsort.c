@@ -1,35 +1,88 @@
 /* An external sort of fixed-size records (extsort.h). */
 #include "extsort.h"
 
+#include "../mesh/adjacency.h"
+
 #include <stdlib.h>
 
-/* qsort's comparator has no context: the sort of a run sets this (one
- * sort at a time on the calling thread). */
-static ooc_record_cmp run_cmp;
+/* Bytes a record takes in a run beside itself: the sorted copy is the
+ * record again; its key, its place, and the radix sort's copies of both. */
+enum { RUN_EXTRA = 8 + 4 + 8 + 4 };
 
-static int qsort_cmp(const void *a, const void *b) { return run_cmp(a, b); }
-
-mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes,
-                           size_t run_records, ooc_record_cmp cmp, mr_error *err)
+mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes, size_t run_bytes,
+                           ooc_record_key key, unsigned key_bits, ooc_record_cmp cmp,
+                           int threads, mr_error *err)
 {
     memset(x, 0, sizeof *x);
     x->temp = t;
     x->file.fd = -1;
+    if (record_bytes == 0 || record_bytes > 64)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "an external sort's records of %zu bytes (1 to 64)", record_bytes);
     x->rec = record_bytes;
-    x->run_records = run_records < 1024 ? 1024 : run_records;
+    const size_t per = 2 * record_bytes + RUN_EXTRA;
+    x->run_records = run_bytes / per < 1024 ? 1024 : run_bytes / per;
+    if (x->run_records > UINT32_MAX)
+        x->run_records = UINT32_MAX;
+    x->key = key;
+    x->key_bits = key_bits ? key_bits : 64;
     x->cmp = cmp;
+    x->threads = threads > 0 ? threads : 1;
     x->buf = mr_alloc_array(x->run_records, record_bytes);
-    if (!x->buf)
-        return mr_fail_nomem(err, NULL, x->run_records * record_bytes);
+    x->sorted = mr_alloc_array(x->run_records, record_bytes);
+    x->keys = mr_alloc_array(x->run_records, sizeof *x->keys);
+    x->ids = mr_alloc_array(x->run_records, sizeof *x->ids);
+    if (!x->buf || !x->sorted || !x->keys || !x->ids)
+        return mr_fail_nomem(err, NULL, x->run_records * per);
     return ooc_file_open(t, &x->file, err);
+}
+
+/* The full order: the key, then the comparator. */
+static int order(const ooc_extsort *x, const void *a, const void *b)
+{
+    const uint64_t ka = x->key(a), kb = x->key(b);
+    return ka < kb ? -1 : ka > kb ? 1 : x->cmp(a, b);
+}
+
+/* The run in memory in order: radix-sorted by key (stable), then each
+ * stretch of one key put in the comparator's order (an insertion sort:
+ * such stretches are short and mostly in order already). */
+static mr_status sort_run(ooc_extsort *x, mr_error *err)
+{
+    const size_t n = x->fill, rec = x->rec;
+    for (size_t i = 0; i < n; i++) {
+        x->keys[i] = x->key(x->buf + i * rec);
+        x->ids[i] = (uint32_t)i;
+    }
+    mr_status st = mr_radix_sort_u64(x->keys, x->ids, n, x->key_bits, x->threads, err);
+    if (st != MR_OK)
+        return st;
+    for (size_t i = 0; i < n; i++)
+        memcpy(x->sorted + i * rec, x->buf + (size_t)x->ids[i] * rec, rec);
+    char tmp[64];
+    for (size_t i = 1; i < n; i++) {
+        if (x->keys[i] != x->keys[i - 1] ||
+            x->cmp(x->sorted + (i - 1) * rec, x->sorted + i * rec) <= 0)
+            continue;
+        /* out of order within its key: insert it back */
+        memcpy(tmp, x->sorted + i * rec, rec);
+        size_t j = i;
+        while (j > 0 && x->keys[j - 1] == x->keys[i] && x->cmp(x->sorted + (j - 1) * rec, tmp) > 0) {
+            memcpy(x->sorted + j * rec, x->sorted + (j - 1) * rec, rec);
+            j--;
+        }
+        memcpy(x->sorted + j * rec, tmp, rec);
+    }
+    return MR_OK;
 }
 
 static mr_status flush_run(ooc_extsort *x, mr_error *err)
 {
     if (x->fill == 0)
         return MR_OK;
-    run_cmp = x->cmp;
-    qsort(x->buf, x->fill, x->rec, qsort_cmp);
+    mr_status st = sort_run(x, err);
+    if (st != MR_OK)
+        return st;
     if (x->nruns == x->cap) {
         const size_t ncap = x->cap ? 2 * x->cap : 16;
         ooc_run *r = mr_realloc_array(x->runs, ncap, sizeof *r);
@@ -42,7 +95,7 @@ static mr_status flush_run(ooc_extsort *x, mr_error *err)
     memset(r, 0, sizeof *r);
     r->at = x->total - x->fill;
     r->count = x->fill;
-    mr_status st = ooc_file_write(x->temp, &x->file, r->at * x->rec, x->buf, x->fill * x->rec, err);
+    st = ooc_file_write(x->temp, &x->file, r->at * x->rec, x->sorted, x->fill * x->rec, err);
     x->fill = 0;
     return st;
 }
@@ -65,7 +118,7 @@ static const char *head(const ooc_extsort *x, uint32_t r)
 
 static bool before(const ooc_extsort *x, uint32_t a, uint32_t b)
 {
-    const int c = x->cmp(head(x, a), head(x, b));
+    const int c = order(x, head(x, a), head(x, b));
     return c < 0 || (c == 0 && a < b);
 }
 
@@ -106,7 +159,12 @@ mr_status ooc_extsort_finish(ooc_extsort *x, size_t merge_bytes, mr_error *err)
 {
     mr_status st = flush_run(x, err);
     free(x->buf);
-    x->buf = NULL;
+    free(x->sorted);
+    free(x->keys);
+    free(x->ids);
+    x->buf = x->sorted = NULL;
+    x->keys = NULL;
+    x->ids = NULL;
     if (st != MR_OK)
         return st;
     const size_t per = x->nruns ? merge_bytes / x->nruns / x->rec : 0;
@@ -156,6 +214,9 @@ mr_status ooc_extsort_next(ooc_extsort *x, const void **record, mr_error *err)
 void ooc_extsort_free(ooc_extsort *x)
 {
     free(x->buf);
+    free(x->sorted);
+    free(x->keys);
+    free(x->ids);
     for (size_t r = 0; r < x->nruns; r++)
         free(x->runs[r].buf);
     free(x->runs);

@@ -2,17 +2,20 @@
  * An external sort of fixed-size records through one temporary file
  * (extsort.c), for the out-of-core readers' tables that grow with the
  * input (binary STL's weld of its corners): records come in any order,
- * are sorted in memory in runs of a given count and written, then come
- * back in order from a merge of the runs (a heap of the runs' heads, each
- * read in blocks). Internal.
+ * are sorted in memory in runs and written, then come back in order from
+ * a merge of the runs (a heap of the runs' heads, each read in blocks).
+ * The order: a 64-bit key of each record first (a run is radix-sorted by
+ * it, stably), then the comparator among equal keys. Internal.
  */
 #ifndef MR_OOC_EXTSORT_H
 #define MR_OOC_EXTSORT_H
 
 #include "temp.h"
 
-/* A total order of two records (<0, 0, >0). */
+/* A total order of two records (<0, 0, >0), among records of one key. */
 typedef int (*ooc_record_cmp)(const void *a, const void *b);
+/* A record's key: the order's first part. */
+typedef uint64_t (*ooc_record_key)(const void *a);
 
 typedef struct ooc_run {
     uint64_t at, count;   /* first record, records */
@@ -27,7 +30,13 @@ typedef struct ooc_extsort {
     size_t rec;           /* bytes a record */
     size_t run_records;   /* records a run holds in memory */
     ooc_record_cmp cmp;
+    ooc_record_key key;
+    unsigned key_bits;    /* the keys' significant bits */
+    int threads;          /* for a run's sort */
     char *buf;            /* the run being filled */
+    char *sorted;         /* a run in order */
+    uint64_t *keys;       /* a run's keys */
+    uint32_t *ids;        /* and its records' places */
     size_t fill;
     ooc_run *runs;
     size_t nruns, cap;
@@ -39,8 +48,11 @@ typedef struct ooc_extsort {
     char *last;           /* the record next() handed out */
 } ooc_extsort;
 
-mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes,
-                           size_t run_records, ooc_record_cmp cmp, mr_error *err);
+/* Runs in about run_bytes of memory (the records, their keys and the
+ * sort's buffers). */
+mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes, size_t run_bytes,
+                           ooc_record_key key, unsigned key_bits, ooc_record_cmp cmp,
+                           int threads, mr_error *err);
 mr_status ooc_extsort_add(ooc_extsort *x, const void *record, mr_error *err);
 /* No more records: the merge starts (its blocks take about
  * merge_bytes in all). */

@@ -1889,7 +1889,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                            ooc ? ooc->temp_budget : 0, err);
         if ((st = agree(j, st, err)) != MR_OK)
             return st;
-        st = agree(j, ooc_source_from_stl(j->in_path, &j->temp, memory, &j->src, err), err);
+        st = agree(j, ooc_source_from_stl(j->in_path, &j->temp, memory, j->threads, &j->src, err), err);
         if (st != MR_OK)
             return st;
         j->nv = j->src.vertex_count;

@@ -241,6 +241,27 @@ static int member_cmp(const void *a, const void *b)
     return c ? c : cmp_u64(join64(x->lo, x->hi), join64(y->lo, y->hi));
 }
 
+/* The sorts' keys: a corner's position hashed (equal positions are
+ * neighbours in the order, which is all the weld asks of it), a member's
+ * first corner, a corner's number. */
+static uint64_t corner_key(const void *a)
+{
+    const stl_corner *x = a;
+    return mr_mix64(((uint64_t)x->bits[0] << 32 | x->bits[1]) ^ mr_mix64(x->bits[2]));
+}
+
+static uint64_t member_key(const void *a)
+{
+    const stl_member *x = a;
+    return join64(x->first_lo, x->first_hi);
+}
+
+static uint64_t vertex_of_key(const void *a)
+{
+    const stl_vertex_of *x = a;
+    return join64(x->lo, x->hi);
+}
+
 static int vertex_of_cmp(const void *a, const void *b)
 {
     const stl_vertex_of *x = a, *y = b;
@@ -255,13 +276,13 @@ static uint32_t le32(const unsigned char *p)
 /*
  * The weld of mr_read_stl -- corners whose coordinates are bitwise equal
  * are one vertex, numbered in the order of their first corner -- in three
- * external sorts: the corners by position (each group's first corner is
+ * external sorts: the corners by position, hashed (each group's first corner is
  * its vertex's key), the corners by that key (the keys in order number
  * the vertices, whose positions go to the first file), the corners' vertex
  * ids back by corner (the triangles, in order, to the second).
  */
-mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, ooc_source *s,
-                              mr_error *err)
+mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, int threads,
+                              ooc_source *s, mr_error *err)
 {
     memset(s, 0, sizeof *s);
     mr_mapped_file f;
@@ -284,15 +305,20 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, oo
     r->pos.fd = r->tri.fd = -1;
     r->nt = (size_t)count;
     const uint64_t corners = 3 * count;
-    /* the runs and the merges in about half the budget */
-    const size_t run = (size_t)(memory / 2 / sizeof(stl_member));
+    /* the runs and the merges in about half the budget; the corners'
+     * numbers (3 t + k) in index_bits */
+    const size_t run = (size_t)(memory / 2);
+    unsigned index_bits = 1;
+    while (index_bits < 64 && (corners >> index_bits) != 0)
+        index_bits++;
     ooc_extsort a, b, c;
     memset(&a, 0, sizeof a), memset(&b, 0, sizeof b), memset(&c, 0, sizeof c);
     a.file.fd = b.file.fd = c.file.fd = -1;
     if ((st = ooc_file_open(t, &r->pos, err)) == MR_OK &&
         (st = ooc_file_open(t, &r->tri, err)) == MR_OK)
-        st = ooc_extsort_init(&a, t, sizeof(stl_corner), run, corner_cmp, err);
-    /* 1: the corners by position, in runs */
+        st = ooc_extsort_init(&a, t, sizeof(stl_corner), run, corner_key, 64, corner_cmp,
+                                  threads, err);
+    /* 1: the corners by position (hashed: equal positions together), in runs */
     for (uint64_t k = 0; k < corners && st == MR_OK; k++) {
         const unsigned char *p = d + 84 + 50 * (k / 3) + 12 + 12 * (k % 3);
         stl_corner e;
@@ -317,7 +343,8 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, oo
         st = ooc_extsort_finish(&a, (size_t)(memory / 4), err);
     /* 2: each corner with its group's first, by that */
     if (st == MR_OK)
-        st = ooc_extsort_init(&b, t, sizeof(stl_member), run, member_cmp, err);
+        st = ooc_extsort_init(&b, t, sizeof(stl_member), run, member_key, index_bits,
+                                  member_cmp, threads, err);
     stl_member m = {0};
     uint32_t prev[3] = {0, 0, 0};
     bool any = false;
@@ -342,7 +369,8 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, oo
         st = ooc_extsort_finish(&b, (size_t)(memory / 4), err);
     /* 3: the vertices in order of their first corner, each corner's id */
     if (st == MR_OK)
-        st = ooc_extsort_init(&c, t, sizeof(stl_vertex_of), run, vertex_of_cmp, err);
+        st = ooc_extsort_init(&c, t, sizeof(stl_vertex_of), run, vertex_of_key, index_bits,
+                                  vertex_of_cmp, threads, err);
     uint64_t nv = 0, key = UINT64_MAX;
     float block[3 * 4096];
     size_t fill = 0;

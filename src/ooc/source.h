@@ -42,10 +42,11 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
                               mr_error *err);
 /* A binary STL file as a source: its corners welded as mr_read_stl welds
  * them (bitwise equal positions, numbered by first use) through external
- * sorts in temporary files, in about `memory` bytes; MR_ERR_UNSUPPORTED
+ * sorts in temporary files, in about `memory` bytes (the runs' radix
+ * sorts on `threads`); MR_ERR_UNSUPPORTED
  * for an ascii STL or a file of another size (read whole). */
-mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, ooc_source *s,
-                              mr_error *err);
+mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, int threads,
+                              ooc_source *s, mr_error *err);
 void ooc_source_close(ooc_source *s);
 
 #endif
