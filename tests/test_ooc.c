@@ -689,6 +689,19 @@ static void test_forest(void **state)
         free(d);
     }
     free(first);
+    /* an error bound that stops it short of the count: reached, as in memory */
+    {
+        mr_simplify_options o;
+        mr_simplify_options_default(&o);
+        o.target_ratio = 0.5;
+        o.max_error = 2e-7;
+        mr_simplify_file_stats st;
+        run_ok(in, out, &o, 4096, tmp, &st);
+        assert_true(st.top_chunks >= 4);
+        assert_true(st.simplify.output_vertices > m.vertex_count / 2);
+        assert_int_equal(st.simplify.stop, MR_STOP_MAX_ERROR);
+        assert_true(st.simplify.target_reached);
+    }
     /* not PLY: refused, nothing left */
     mr_simplify_options o;
     mr_simplify_options_default(&o);

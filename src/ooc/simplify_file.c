@@ -141,6 +141,7 @@ typedef struct job {
     uint8_t *top, *above;
     size_t *top_target;
     size_t band_t, band_v;   /* an above node's band: its targets */
+    mr_simplify_stop band_stop; /* why the root's band stopped */
     piece *seg;
     uint32_t *seg_first, *seg_last;
     size_t nseg;
@@ -1548,6 +1549,7 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
         memset(p, 0, sizeof *p);
         p->file.fd = -1;
         if (st == MR_OK && n->parent < 0) {
+            j->band_stop = root.mesh.stats.stop;
             st = keep_result(j, p, &root, bgid, err);
         } else if (st == MR_OK) {
             *p = j->pieces[N];
@@ -2042,11 +2044,14 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         st = gather_stats(j, err);
     if (st == MR_OK && j->rank == 0 && forest) {
         mr_simplify_stats *s = &fs->simplify;
-        const bool reached = j->o->until_error ||
-                             (j->target_triangles && s->output_triangles <= j->target_triangles) ||
-                             (j->target_vertices && s->output_vertices <= j->target_vertices);
-        s->stop = reached ? MR_STOP_TARGET : MR_STOP_REFUSED;
-        s->target_reached = reached;
+        const bool counts =
+            (j->target_triangles && s->output_triangles <= j->target_triangles) ||
+            (j->target_vertices && s->output_vertices <= j->target_vertices);
+        /* short of the counts: why the last band stopped (the error bound
+         * counts as reached, as in memory) */
+        s->stop = counts ? MR_STOP_TARGET
+                         : j->band_stop == MR_STOP_TARGET ? MR_STOP_REFUSED : j->band_stop;
+        s->target_reached = j->o->until_error || s->stop <= MR_STOP_MAX_ERROR;
         if (!j->o->error_absolute)
             s->max_error /= j->diagonal;
     } else if (st == MR_OK && j->rank == 0) {
