@@ -39,7 +39,6 @@
 #include "../qem/chunk.h"
 #include "../qem/core/simplifier.h"
 #include "../io/io_internal.h"
-#include "../io/mapped.h"
 #include "../mesh/adjacency.h"
 
 #include "../core/omp_compat.h"
@@ -1323,9 +1322,9 @@ static void band_marks(const job *j, const piece *p, const ooc_node *n, const oo
 }
 
 /* The rings a band of node n takes: BAND_RINGS, or fewer where those do
- * not fit a chunk (0: not even one). */
+ * not fit a chunk (0: not even one); *triangles: the band's with them. */
 static mr_status band_width(job *j, const ooc_node *n, const ooc_node *l, const ooc_node *r,
-                            int *rings, mr_error *err)
+                            int *rings, size_t *triangles, mr_error *err)
 {
     uint64_t count[BAND_RINGS + 1] = {0};
     mr_status st = MR_OK;
@@ -1352,6 +1351,7 @@ static mr_status band_width(job *j, const ooc_node *n, const ooc_node *l, const 
         sum += count[k];
         *rings = k;
     }
+    *triangles = (size_t)sum;
     return st;
 }
 
@@ -1368,7 +1368,7 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
     /* the band, growing: its vertices (by input id), their quadrics and
      * marks, its triangles */
     gidmap at = {0}, kept = {0};
-    size_t bnv = 0, bnt = 0, vcap = 0, tcap = 0, rimmed = 0;
+    size_t bnv = 0, bnt = 0, rimmed = 0;
     uint32_t *bgid = NULL, *bidx = NULL;
     float *bpos = NULL;
     mr_quadricf *bq = NULL;
@@ -1379,13 +1379,25 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
                        ? MR_OK
                        : mr_fail_nomem(err, NULL, 1 << 16);
     int rings = 0;
+    size_t cap = 0; /* the band's triangles; its vertices at most three times that */
     if (st == MR_OK)
-        st = band_width(j, n, l, r, &rings, err);
+        st = band_width(j, n, l, r, &rings, &cap, err);
     if (st == MR_OK && rings == 0)
         st = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
                            "the band across a cut of the forest holds more triangles than a "
                            "chunk's %llu: give a larger memory budget",
                            (unsigned long long)j->capacity);
+    if (st == MR_OK) {
+        bgid = mr_alloc_array(3 * cap + 1, sizeof *bgid);
+        bpos = mr_alloc_array(3 * cap + 1, 3 * sizeof *bpos);
+        bq = mr_alloc_array(3 * cap + 1, sizeof *bq);
+        bcut = mr_alloc_array(3 * cap + 1, 1);
+        bwas = mr_alloc_array(3 * cap + 1, 1);
+        brim = mr_alloc_array(3 * cap + 1, 1);
+        bidx = mr_alloc_array(cap + 1, 3 * sizeof *bidx);
+        if (!bgid || !bpos || !bq || !bcut || !bwas || !brim || !bidx)
+            st = mr_fail_nomem(err, NULL, cap * (3 * (19 + sizeof *bq) + 12));
+    }
     for (size_t s = 0; s < j->nseg && st == MR_OK; s++) {
         piece *p = &j->seg[s];
         if (!p->nt || j->seg_first[s] < n->first_leaf || j->seg_last[s] > n->last_leaf)
@@ -1418,25 +1430,6 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
                 break;
             }
             if (added) {
-                if (bnv == vcap) {
-                    vcap = vcap ? 2 * vcap : 4096;
-                    uint32_t *a = mr_realloc_array(bgid, vcap, sizeof *a);
-                    bgid = a ? a : bgid;
-                    float *b = mr_realloc_array(bpos, vcap, 3 * sizeof *b);
-                    bpos = b ? b : bpos;
-                    mr_quadricf *q = mr_realloc_array(bq, vcap, sizeof *q);
-                    bq = q ? q : bq;
-                    uint8_t *c1 = mr_realloc_array(bcut, vcap, 1);
-                    bcut = c1 ? c1 : bcut;
-                    uint8_t *c2 = mr_realloc_array(bwas, vcap, 1);
-                    bwas = c2 ? c2 : bwas;
-                    uint8_t *c3 = mr_realloc_array(brim, vcap, 1);
-                    brim = c3 ? c3 : brim;
-                    if (!a || !b || !q || !c1 || !c2 || !c3) {
-                        st = mr_fail_nomem(err, NULL, vcap * (20 + sizeof *q));
-                        break;
-                    }
-                }
                 bgid[bnv] = g;
                 memcpy(bpos + 3 * bnv, p->pos + 3 * v, 12);
                 memset(&bq[bnv], 0, sizeof *bq);
@@ -1464,15 +1457,6 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
         for (size_t f = 0; f < p->nt && st == MR_OK; f++) {
             if (!tin[f])
                 continue;
-            if (bnt == tcap) {
-                tcap = tcap ? 2 * tcap : 8192;
-                uint32_t *a = mr_realloc_array(bidx, tcap, 3 * sizeof *a);
-                if (!a) {
-                    st = mr_fail_nomem(err, NULL, tcap * 12);
-                    break;
-                }
-                bidx = a;
-            }
             for (int k = 0; k < 3; k++)
                 bidx[3 * bnt + (size_t)k] = map[p->idx[3 * f + k]];
             bnt++;
@@ -2152,18 +2136,11 @@ mr_status ooc_simplify_file(const char *in_path, const char *out_path,
         }
     } else if (format == MR_FORMAT_STL) {
         /* the header's count: the weld waits for the out-of-core path */
-        mr_mapped_file f;
-        if (mr_map_file(in_path, &f, &quiet) == MR_OK) {
-            const unsigned char *d = (const unsigned char *)f.data;
-            const uint64_t n = f.size >= 84 ? (uint64_t)d[80] | (uint64_t)d[81] << 8 |
-                                                  (uint64_t)d[82] << 16 | (uint64_t)d[83] << 24
-                                            : 0;
-            if (n && f.size == 84 + 50 * n) {
-                j.nt = (size_t)n;
-                stl = true;
-                st = MR_OK;
-            }
-            mr_unmap_file(&f);
+        const uint64_t n = ooc_stl_triangles(in_path);
+        if (n) {
+            j.nt = (size_t)n;
+            stl = true;
+            st = MR_OK;
         }
     } else if (format == MR_FORMAT_OBJ) {
         struct stat sb;

@@ -169,23 +169,16 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
  * failure r is closed. */
 static mr_status raw_finish(raw_source *r, size_t nv, ooc_source *s, mr_error *err)
 {
-    ooc_temp *t = r->temp;
-    mr_status st = MR_OK;
-    {
-        r->map_bytes = 12 * nv;
-        void *m = mmap(NULL, r->map_bytes, PROT_READ, MAP_SHARED, r->pos.fd, 0);
-        if (m == MAP_FAILED) {
-            r->map_bytes = 0;
-            st = mr_fail_plain(err, MR_ERR_IO, t->dir, "cannot map a temporary file: %s",
-                               strerror(errno));
-        } else {
-            r->map = m;
-        }
-    }
-    if (st != MR_OK) {
+    r->map_bytes = 12 * nv;
+    void *m = mmap(NULL, r->map_bytes, PROT_READ, MAP_SHARED, r->pos.fd, 0);
+    if (m == MAP_FAILED) {
+        r->map_bytes = 0;
+        const mr_status st = mr_fail_plain(err, MR_ERR_IO, r->temp->dir,
+                                           "cannot map a temporary file: %s", strerror(errno));
         raw_close(r);
         return st;
     }
+    r->map = m;
     s->impl = r;
     s->vertex_count = nv;
     s->triangle_count = r->nt;
@@ -273,6 +266,26 @@ static uint32_t le32(const unsigned char *p)
     return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
+/* A binary STL's triangles, when the file is one of the size its header
+ * says (else 0). */
+static uint64_t stl_count(const mr_mapped_file *f)
+{
+    const unsigned char *d = (const unsigned char *)f->data;
+    const uint64_t count = f->size >= 84 ? le32(d + 80) : 0;
+    return f->size >= 84 && f->size == 84 + 50 * count ? count : 0;
+}
+
+uint64_t ooc_stl_triangles(const char *path)
+{
+    mr_mapped_file f;
+    mr_error quiet;
+    if (mr_map_file(path, &f, &quiet) != MR_OK)
+        return 0;
+    const uint64_t count = stl_count(&f);
+    mr_unmap_file(&f);
+    return count;
+}
+
 /*
  * The weld of mr_read_stl -- corners whose coordinates are bitwise equal
  * are one vertex, numbered in the order of their first corner -- in three
@@ -290,8 +303,8 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, in
     if (st != MR_OK)
         return st;
     const unsigned char *d = (const unsigned char *)f.data;
-    const uint64_t count = f.size >= 84 ? le32(d + 80) : 0;
-    if (f.size < 84 || f.size != 84 + 50 * count || count == 0) {
+    const uint64_t count = stl_count(&f);
+    if (count == 0) {
         mr_unmap_file(&f);
         return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
                              "not a binary STL of the size its header says (read whole)");
@@ -316,8 +329,8 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, in
     a.file.fd = b.file.fd = c.file.fd = -1;
     if ((st = ooc_file_open(t, &r->pos, err)) == MR_OK &&
         (st = ooc_file_open(t, &r->tri, err)) == MR_OK)
-        st = ooc_extsort_init(&a, t, sizeof(stl_corner), run, corner_key, 64, corner_cmp,
-                                  threads, err);
+        st = ooc_extsort_init(&a, t, sizeof(stl_corner), run, corner_key, 64, corner_cmp, threads,
+                              err);
     /* 1: the corners by position (hashed: equal positions together), in runs */
     for (uint64_t k = 0; k < corners && st == MR_OK; k++) {
         const unsigned char *p = d + 84 + 50 * (k / 3) + 12 + 12 * (k % 3);
@@ -343,8 +356,8 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, in
         st = ooc_extsort_finish(&a, (size_t)(memory / 4), err);
     /* 2: each corner with its group's first, by that */
     if (st == MR_OK)
-        st = ooc_extsort_init(&b, t, sizeof(stl_member), run, member_key, index_bits,
-                                  member_cmp, threads, err);
+        st = ooc_extsort_init(&b, t, sizeof(stl_member), run, member_key, index_bits, member_cmp,
+                              threads, err);
     stl_member m = {0};
     uint32_t prev[3] = {0, 0, 0};
     bool any = false;
@@ -370,7 +383,7 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, in
     /* 3: the vertices in order of their first corner, each corner's id */
     if (st == MR_OK)
         st = ooc_extsort_init(&c, t, sizeof(stl_vertex_of), run, vertex_of_key, index_bits,
-                                  vertex_of_cmp, threads, err);
+                              vertex_of_cmp, threads, err);
     uint64_t nv = 0, key = UINT64_MAX;
     float block[3 * 4096];
     size_t fill = 0;

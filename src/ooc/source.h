@@ -47,6 +47,9 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
  * for an ascii STL or a file of another size (read whole). */
 mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, int threads,
                               ooc_source *s, mr_error *err);
+/* The triangles of the binary STL file at path, from its header, when its
+ * size is the header's (0: not such a file, or unreadable). */
+uint64_t ooc_stl_triangles(const char *path);
 void ooc_source_close(ooc_source *s);
 
 #endif
