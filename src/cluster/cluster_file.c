@@ -164,7 +164,6 @@ static mr_status count_file(double cell, void *user, size_t *k, mr_error *err)
         fc->block->vertex_count = m;
         if ((s = mr_ply_source_vertices(fc->src, v0, m, fc->block, err)) != MR_OK)
             break;
-        mr_ply_source_release(fc->src); /* mapped pages count in the resident set */
         /* the sample: the vertices whose index is a multiple of stride */
         const size_t first = (fc->stride - v0 % fc->stride) % fc->stride;
         if (first >= m)
@@ -220,7 +219,6 @@ static mr_status cluster_stream(mr_ply_source *src, const char *in_path,
         b.vertex_count = m;
         if ((s = mr_ply_source_vertices(src, v0, m, &b, err)) != MR_OK)
             break;
-        mr_ply_source_release(src); /* mapped pages count in the resident set */
         for (size_t i = 0; i < m; i++)
             for (int k = 0; k < 3; k++) {
                 const double x = b.positions[3 * i + (size_t)k];
@@ -282,7 +280,6 @@ static mr_status cluster_stream(mr_ply_source *src, const char *in_path,
         b.vertex_count = m;
         if ((s = mr_ply_source_vertices(src, v0, m, &b, err)) != MR_OK)
             break;
-        mr_ply_source_release(src); /* mapped pages count in the resident set */
         /* the keys on every thread, sorted (stable: a cell's vertices stay
          * in index order); then each run of one cell looked up once and
          * its vertices added in order */

@@ -88,9 +88,10 @@ mr_status mr_ply_stream_end(mr_ply_stream *s, mr_error *err);
  * mesh (the out-of-core cluster): the file is mapped and its header parsed
  * and checked as mr_read_ply does; the vertices of any range then decode
  * into a block of arrays (positions, and the attributes the block has
- * arrays for), a vertex's position reads straight from the map, and the
- * faces come chunk by chunk (at most mr_ply_source_max_faces triangles a
- * call, polygons as fans), their pages given back as they are read. The
+ * arrays for), their rows' pages given back once decoded, a vertex's
+ * position reads straight from the map, and the faces come chunk by chunk
+ * (at most mr_ply_source_max_faces triangles a call, polygons as fans),
+ * their pages given back as they are read. The
  * values are mr_read_ply's for the same file, byte for byte, and so are
  * the errors (bad indices, non-finite positions: file and offset). Ascii
  * PLY, vertex elements with lists and triangle strips are refused

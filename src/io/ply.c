@@ -1672,9 +1672,12 @@ mr_status mr_ply_source_vertices(mr_ply_source *s, size_t first, size_t count,
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, s->r.name,
                              "vertices %zu..%zu past the %llu the file holds", first,
                              first + count, (unsigned long long)e->count);
-    mr_populate_mapped(&s->file, e->start + first * (size_t)e->row_size,
-                       e->start + (first + count) * (size_t)e->row_size);
+    const size_t begin = e->start + first * (size_t)e->row_size,
+                 end = e->start + (first + count) * (size_t)e->row_size;
+    mr_populate_mapped(&s->file, begin, end);
     const uint64_t bad = decode_vertex_range(&s->r, e, block, first, first, first + count);
+    /* decoded: the rows' pages go (mapped pages count in the resident set) */
+    mr_release_mapped(&s->file, begin, end);
     if (bad != UINT64_MAX)
         return nonfinite_at(&s->r, e, block->positions + 3 * (bad - first), bad);
     return MR_OK;

@@ -217,7 +217,6 @@ static mr_status bounds_pass(job *j, mr_error *err)
         b.vertex_count = m;
         if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
             break;
-        j->src.release(j->src.impl); /* a mapped file's pages count in the resident set */
         for (size_t i = 0; i < m; i++)
             for (int k = 0; k < 3; k++) {
                 const double x = b.positions[3 * i + (size_t)k];

@@ -57,6 +57,12 @@ static mr_status raw_vertices(void *impl, size_t first, size_t count, const mr_m
     (void)err;
     const raw_source *r = impl;
     memcpy(block->positions, r->map + 3 * first, 12 * count);
+    /* copied: the pages within the range go (they count in the resident set) */
+    const uintptr_t page = 4096, a = (uintptr_t)(r->map + 3 * first),
+                    b = (uintptr_t)(r->map + 3 * (first + count));
+    const uintptr_t lo = (a + page - 1) / page * page, hi = b / page * page;
+    if (hi > lo)
+        madvise((void *)lo, hi - lo, MADV_DONTNEED);
     return MR_OK;
 }
 
