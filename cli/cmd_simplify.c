@@ -649,10 +649,10 @@ static int run(int argc, char **argv)
     if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
-    if (cli_comm || job.ooc_given ||
-        ((mr_format_from_path(io.in) == MR_FORMAT_PLY || mr_format_from_path(io.in) == MR_FORMAT_STL ||
-          mr_format_from_path(io.in) == MR_FORMAT_OBJ) &&
-         cli_file_size(io.in) > FILE_PATH_BYTES))
+    const mr_format in_format = mr_format_from_path(io.in);
+    const bool streamed = in_format == MR_FORMAT_PLY || in_format == MR_FORMAT_STL ||
+                          in_format == MR_FORMAT_OBJ;
+    if (cli_comm || job.ooc_given || (streamed && cli_file_size(io.in) > FILE_PATH_BYTES))
         return run_file(&io, &job);
     return cli_run_job(&io, &steps, &job);
 }

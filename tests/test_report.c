@@ -26,6 +26,29 @@ static const char *expected_header =
     "time_min,time_max,triangles_per_second,peak_bytes_per_triangle,hausdorff_rel,rms_rel,"
     "vertex_similarity\n";
 
+/* A PNG file of some size at path. */
+static void check_png(const char *path)
+{
+    size_t n;
+    char *png = tu_read_file(path, &n);
+    assert_non_null(png);
+    assert_true(n > 1000);
+    assert_memory_equal(png, "\x89PNG\r\n\x1a\n", 8);
+    free(png);
+}
+
+/* The command fails (non-zero exit) and says `says`. */
+static void expect_refusal(const char *cmd, const char *says)
+{
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char buf[512] = "";
+    const size_t got = fread(buf, 1, sizeof buf - 1, p);
+    buf[got] = '\0';
+    assert_int_not_equal(pclose(p), 0);
+    tu_assert_contains(buf, says);
+}
+
 static void test_sweep_and_report(void **state)
 {
     (void)state;
@@ -96,31 +119,18 @@ static void test_sweep_and_report(void **state)
     static const char *pngs[] = {"sheet-scan-20k", "time-threads", "speedup-threads", "peers",
                                  "error-scan-20k"};
     for (size_t i = 0; i < (plots ? sizeof pngs / sizeof *pngs : 1); i++) {
-        char *png = tu_read_file(tu_fmt("%s/report/%s.png", dir, pngs[i]), &n);
-        assert_non_null(png);
-        assert_true(n > 1000);
-        assert_memory_equal(png, "\x89PNG\r\n\x1a\n", 8);
-        free(png);
+        check_png(tu_fmt("%s/report/%s.png", dir, pngs[i]));
     }
 
     /* A CSV that is not the sweep's: a clear error, exit 1. */
     tu_write_file(tu_fmt("%s/bad.csv", dir), "a,b,c\n1,2,3\n", 12);
     snprintf(cmd, sizeof cmd, "'%s' '%s/bad.csv' --out '%s/bad' 2>&1", report, dir, dir);
-    FILE *p = popen(cmd, "r");
-    char buf[512] = "";
-    size_t got = fread(buf, 1, sizeof buf - 1, p);
-    buf[got] = '\0';
-    assert_int_not_equal(pclose(p), 0);
-    tu_assert_contains(buf, "not a sweep CSV");
+    expect_refusal(cmd, "not a sweep CSV");
     if (plots) { /* and the plots' script says the same */
         snprintf(cmd, sizeof cmd,
                  "/usr/bin/python3 '%s/bench/plots.py' '%s/bad.csv' --out '%s/bad' 2>&1",
                  MR_SOURCE_DIR, dir, dir);
-        p = popen(cmd, "r");
-        got = fread(buf, 1, sizeof buf - 1, p);
-        buf[got] = '\0';
-        assert_int_not_equal(pclose(p), 0);
-        tu_assert_contains(buf, "not a sweep CSV");
+        expect_refusal(cmd, "not a sweep CSV");
         /* bench_outofcore's CSV: the time and memory curves */
         static const char ooc[] =
             "triangles,config,threads,ranks,memory,seconds,rss_bytes,chunks,levels,temp_bytes,"
@@ -136,20 +146,12 @@ static void test_sweep_and_report(void **state)
                  ">/dev/null 2>&1",
                  MR_SOURCE_DIR, dir, dir);
         assert_int_equal(system(cmd), 0);
-        char *png = tu_read_file(tu_fmt("%s/report/outofcore.png", dir), &n);
-        assert_non_null(png);
-        assert_true(n > 1000);
-        assert_memory_equal(png, "\x89PNG\r\n\x1a\n", 8);
-        free(png);
+        check_png(tu_fmt("%s/report/outofcore.png", dir));
         snprintf(cmd, sizeof cmd,
                  "/usr/bin/python3 '%s/bench/plots.py' --outofcore '%s/bad.csv' --out '%s/bad' "
                  "2>&1",
                  MR_SOURCE_DIR, dir, dir);
-        p = popen(cmd, "r");
-        got = fread(buf, 1, sizeof buf - 1, p);
-        buf[got] = '\0';
-        assert_int_not_equal(pclose(p), 0);
-        tu_assert_contains(buf, "not a bench_outofcore CSV");
+        expect_refusal(cmd, "not a bench_outofcore CSV");
     }
 }
 
