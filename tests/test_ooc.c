@@ -76,6 +76,18 @@ static size_t entries(const char *dir)
     return n;
 }
 
+/* The two files hold the same bytes. */
+static void assert_same_file(const char *a, const char *b)
+{
+    size_t na, nb;
+    char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
+    assert_non_null(da);
+    assert_non_null(db);
+    assert_true(na == nb && memcmp(da, db, na) == 0);
+    free(da);
+    free(db);
+}
+
 /* Simplify in to out with a budget of `kib` KiB (temporary files in tmp);
  * the status, with the stats. */
 static mr_status run(const char *in, const char *out, const mr_simplify_options *o,
@@ -156,11 +168,7 @@ static void test_fits_in_memory(void **state)
     for (int i = 0; i < 2; i++) {
         run_ok(inputs[i], b, &o, 0 /* the default */, tmp, &st);
         assert_int_equal(st.out_of_core, 0);
-        size_t na, nb;
-        char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
-        assert_true(na == nb && memcmp(da, db, na) == 0);
-        free(da);
-        free(db);
+        assert_same_file(a, b);
         assert_int_equal(st.simplify.output_triangles, out.triangle_count);
     }
     assert_int_equal(entries(tmp), 0);
@@ -415,10 +423,7 @@ static void test_obj_input(void **state)
     run_ok(ply, a, &o, 2048, tmp, &st);
     run_ok(obj, b, &o, 2048, tmp, &st);
     assert_true(st.out_of_core && st.chunks >= 4);
-    size_t na, nb;
-    char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
-    assert_true(na == nb && memcmp(da, db, na) == 0);
-    free(db);
+    assert_same_file(a, b);
     /* texture coordinates */
     m.texcoords = malloc(8 * m.vertex_count);
     assert_non_null(m.texcoords);
@@ -437,10 +442,7 @@ static void test_obj_input(void **state)
     c.temp_dir = tmp;
     mr_error err;
     assert_int_equal(mr_simplify_file(uv, b, &o, &c, &w, &st, &err), MR_OK);
-    db = tu_read_file(b, &nb);
-    assert_true(na == nb && memcmp(da, db, na) == 0); /* the geometry's bytes */
-    free(da);
-    free(db);
+    assert_same_file(a, b); /* the geometry's bytes */
     assert_int_equal(entries(tmp), 0);
     mr_mesh_free(&m);
 }
@@ -565,11 +567,7 @@ static void test_stl_input(void **state)
         assert_int_equal(st.out_of_core, !pass);
         if (!pass)
             assert_true(st.chunks >= 4);
-        size_t na, nb;
-        char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
-        assert_true(na == nb && memcmp(da, db, na) == 0);
-        free(da);
-        free(db);
+        assert_same_file(a, b);
         assert_int_equal(entries(tmp), 0);
     }
     /* the budget of the sorts' runs: a tighter one merges more runs */
@@ -577,11 +575,7 @@ static void test_stl_input(void **state)
     run_ok(ref, a, &o, 1536, tmp, &st);
     run_ok(stl, b, &o, 1536, tmp, &st);
     assert_true(st.out_of_core);
-    size_t na, nb;
-    char *da = tu_read_file(a, &na), *db = tu_read_file(b, &nb);
-    assert_true(na == nb && memcmp(da, db, na) == 0);
-    free(da);
-    free(db);
+    assert_same_file(a, b);
     /* a NaN at triangle 5000, corner 2 */
     size_t n;
     unsigned char *d = (unsigned char *)tu_read_file(stl, &n);
