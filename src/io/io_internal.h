@@ -110,6 +110,13 @@ void mr_ply_source_position(const mr_ply_source *s, uint32_t v, float p[3]);
 /* The next chunk's triangles into idx; *count 0 once every face is read. */
 mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *count,
                                    mr_error *err);
+/* The next face chunks' triangles into idx, decoded on the source's
+ * threads: whole chunks while they fit `cap` triangles (one at least), at
+ * most max_chunks of them and none past the end of a face element;
+ * *count the triangles, *chunks the chunks (0: every face is read). */
+mr_status mr_ply_source_next_batch(mr_ply_source *s, uint32_t *idx, size_t cap,
+                                   size_t max_chunks, size_t *count, size_t *chunks,
+                                   mr_error *err);
 /* Start the faces again from the first (another pass). */
 void mr_ply_source_rewind(mr_ply_source *s);
 /* The face chunks (next_faces calls) of the file; start the faces at the

@@ -1736,6 +1736,66 @@ mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *coun
     return MR_OK;
 }
 
+mr_status mr_ply_source_next_batch(mr_ply_source *s, uint32_t *idx, size_t cap,
+                                   size_t max_chunks, size_t *count, size_t *chunks,
+                                   mr_error *err)
+{
+    ply_reader *r = &s->r;
+    r->err = err;
+    *count = 0;
+    *chunks = 0;
+    while (s->elem < r->elem_count &&
+           (r->elems[s->elem].kind != EK_FACE || s->chunk >= r->elems[s->elem].chunk_count)) {
+        s->elem++;
+        s->chunk = 0;
+    }
+    if (s->elem >= r->elem_count || max_chunks == 0)
+        return MR_OK; /* every face read */
+    ply_elem *e = &r->elems[s->elem];
+    const size_t c0 = s->chunk;
+    const uint64_t tri0 = e->chunks[c0].tri;
+    size_t c1 = c0;
+    while (c1 < e->chunk_count && c1 - c0 < max_chunks) {
+        const uint64_t t1 = c1 + 1 < e->chunk_count ? e->chunks[c1 + 1].tri : e->tris;
+        if (c1 > c0 && t1 - tri0 > cap)
+            break;
+        c1++;
+    }
+    const uint64_t tri1 = c1 < e->chunk_count ? e->chunks[c1].tri : e->tris;
+    const ply_prop *ip = &r->props[e->index_prop];
+    const bool tri32 = e->stride && ip->fixed_count == 3 && type_size[ip->type] == 4;
+    mr_populate_mapped(&s->file, e->chunks[c0].off,
+                       c1 < e->chunk_count ? e->chunks[c1].off : r->size);
+    const ptrdiff_t n = (ptrdiff_t)(c1 - c0);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(r->threads) if (n > 1)
+    for (ptrdiff_t k = 0; k < n; k++) {
+        const size_t ck = c0 + (size_t)k;
+        ply_chunk *c = &e->chunks[ck];
+        const uint64_t row0 = (uint64_t)ck * CHUNK_ROWS;
+        const uint64_t row1 = row0 + CHUNK_ROWS < e->count ? row0 + CHUNK_ROWS : e->count;
+        c->bad_row = UINT64_MAX;
+        uint32_t *out = idx + 3 * (size_t)(c->tri - tri0);
+        if (tri32)
+            decode_tri32_chunk(r, e, c, row0, row1, out);
+        else
+            decode_fan_chunk(r, e, c, row0, row1, out);
+    }
+    for (size_t k = c0; k < c1; k++)
+        if (e->chunks[k].bad_row != UINT64_MAX)
+            return index_error(r, e, e->chunks[k].bad_row, e->chunks[k].bad_off,
+                               e->chunks[k].bad_value);
+    *count = (size_t)(tri1 - tri0);
+    *chunks = c1 - c0;
+    s->chunk = c1;
+    /* the chunks' bytes are read: give their pages back */
+    if (s->chunk < e->chunk_count && e->chunks[s->chunk].off > s->released) {
+        const size_t end = e->chunks[s->chunk].off;
+        mr_release_mapped(&s->file, s->released, end);
+        s->released = end;
+    }
+    return MR_OK;
+}
+
 void mr_ply_source_release(mr_ply_source *s) { mr_release_mapped(&s->file, 0, s->file.size); }
 
 void mr_ply_source_rewind(mr_ply_source *s)

@@ -35,6 +35,12 @@ static mr_status ply_next_faces(void *impl, uint32_t *idx, size_t *count, mr_err
     return mr_ply_source_next_faces(impl, idx, count, err);
 }
 
+static mr_status ply_next_batch(void *impl, uint32_t *idx, size_t cap, size_t max_chunks,
+                                size_t *count, size_t *chunks, mr_error *err)
+{
+    return mr_ply_source_next_batch(impl, idx, cap, max_chunks, count, chunks, err);
+}
+
 static void ply_release(void *impl) { mr_ply_source_release(impl); }
 
 static void ply_close(void *impl) { mr_ply_source_close(impl); }
@@ -104,6 +110,29 @@ static mr_status raw_next_faces(void *impl, uint32_t *idx, size_t *count, mr_err
     return st;
 }
 
+static mr_status raw_next_batch(void *impl, uint32_t *idx, size_t cap, size_t max_chunks,
+                                size_t *count, size_t *chunks, mr_error *err)
+{
+    raw_source *r = impl;
+    const size_t left = (r->nt - r->next + RAW_FACES - 1) / RAW_FACES;
+    size_t k = cap / RAW_FACES;
+    k = k < 1 ? 1 : k;
+    k = k < max_chunks ? k : max_chunks;
+    k = k < left ? k : left;
+    *count = 0;
+    *chunks = 0;
+    if (k == 0)
+        return MR_OK;
+    const size_t n = r->nt - r->next < k * RAW_FACES ? r->nt - r->next : k * RAW_FACES;
+    mr_status st = ooc_file_read(r->temp, &r->tri, 12 * (uint64_t)r->next, idx, 12 * n, err);
+    if (st == MR_OK) {
+        r->next += n;
+        *count = n;
+        *chunks = k;
+    }
+    return st;
+}
+
 static void raw_release(void *impl)
 {
     const raw_source *r = impl;
@@ -157,11 +186,6 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
     }
     const unsigned attributes = st == MR_OK ? mr_obj_stream_attributes(os) : 0;
     mr_obj_stream_close(os);
-    if (st == MR_OK && r->nt == 0)
-        st = mr_fail_plain(err, MR_ERR_EMPTY, path,
-                           "a point cloud (%zu vertices, no faces): simplify needs a triangle "
-                           "mesh",
-                           nv);
     if (st != MR_OK) {
         raw_close(r);
         return st;
@@ -196,6 +220,7 @@ static mr_status raw_finish(raw_source *r, size_t nv, ooc_source *s, mr_error *e
     s->rewind = raw_rewind;
     s->seek = raw_seek;
     s->next_faces = raw_next_faces;
+    s->next_batch = raw_next_batch;
     s->release = raw_release;
     s->close = raw_close;
     return MR_OK;
@@ -468,6 +493,7 @@ mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error
     s->rewind = ply_rewind;
     s->seek = ply_seek;
     s->next_faces = ply_next_faces;
+    s->next_batch = ply_next_batch;
     s->release = ply_release;
     s->close = ply_close;
     return MR_OK;

@@ -27,6 +27,12 @@ typedef struct ooc_source {
     void (*rewind)(void *impl);
     void (*seek)(void *impl, size_t chunk); /* faces from that call on */
     mr_status (*next_faces)(void *impl, uint32_t *idx, size_t *count, mr_error *err);
+    /* the next whole next_faces calls' triangles at once (decoded on
+     * several threads where the format allows): while they fit cap
+     * triangles (one call's at least), at most max_chunks calls';
+     * *chunks the calls it stands for (0: none left) */
+    mr_status (*next_batch)(void *impl, uint32_t *idx, size_t cap, size_t max_chunks,
+                            size_t *count, size_t *chunks, mr_error *err);
     void (*release)(void *impl);
     void (*close)(void *impl);
 } ooc_source;
