@@ -65,15 +65,19 @@ mr_status mr_check_indices(const uint32_t *indices, size_t triangle_count,
 #define RADIX_SIZE (1u << RADIX_BITS)
 
 #define RADIX_NAME mr_radix_sort_u64
+#define RADIX_SCRATCH_NAME mr_radix_sort_u64_scratch
 #define RADIX_KEY uint64_t
 #include "radix_sort.inc"
 #undef RADIX_NAME
+#undef RADIX_SCRATCH_NAME
 #undef RADIX_KEY
 
 #define RADIX_NAME mr_radix_sort_u32
+#define RADIX_SCRATCH_NAME mr_radix_sort_u32_scratch
 #define RADIX_KEY uint32_t
 #include "radix_sort.inc"
 #undef RADIX_NAME
+#undef RADIX_SCRATCH_NAME
 #undef RADIX_KEY
 
 static int compare_u64(const void *a, const void *b)

@@ -60,6 +60,15 @@ mr_status mr_radix_sort_u64(uint64_t *keys, uint32_t *values, size_t n, unsigned
                             int threads, mr_error *err);
 mr_status mr_radix_sort_u32(uint32_t *keys, uint32_t *values, size_t n, unsigned key_bits,
                             int threads, mr_error *err);
+/* The same on the caller's scratch (n keys, and n values where values is
+ * not NULL): a caller that sorts block after block allocates it once, so
+ * that no block's sort faults fresh pages in. */
+mr_status mr_radix_sort_u64_scratch(uint64_t *keys, uint32_t *values, size_t n,
+                                    unsigned key_bits, int threads, uint64_t *tmp_keys,
+                                    uint32_t *tmp_values, mr_error *err);
+mr_status mr_radix_sort_u32_scratch(uint32_t *keys, uint32_t *values, size_t n,
+                                    unsigned key_bits, int threads, uint32_t *tmp_keys,
+                                    uint32_t *tmp_values, mr_error *err);
 
 /*
  * pairs[i] = ((uint64_t)group << 32) | id with distinct ids. Sorts the

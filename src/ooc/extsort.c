@@ -6,8 +6,10 @@
 #include <stdlib.h>
 
 /* Bytes a record takes in a run beside itself: the sorted copy is the
- * record again; its key, its place, and the radix sort's copies of both. */
-enum { RUN_EXTRA = 8 + 4 + 8 + 4 };
+ * record again; its key and its place; the radix sort's copies of both
+ * live in the sorted copy's room (free until the sort is done) when a
+ * record has 12 bytes at least, else beside. */
+enum { RUN_EXTRA = 8 + 4, RADIX_EXTRA = 8 + 4 };
 
 mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes, size_t run_bytes,
                            ooc_record_key key, unsigned key_bits, ooc_record_cmp cmp,
@@ -20,7 +22,7 @@ mr_status ooc_extsort_init(ooc_extsort *x, ooc_temp *t, size_t record_bytes, siz
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "an external sort's records of %zu bytes (1 to 64)", record_bytes);
     x->rec = record_bytes;
-    const size_t per = 2 * record_bytes + RUN_EXTRA;
+    const size_t per = 2 * record_bytes + RUN_EXTRA + (record_bytes < RADIX_EXTRA ? RADIX_EXTRA : 0);
     x->run_records = run_bytes / per < 1024 ? 1024 : run_bytes / per;
     if (x->run_records > UINT32_MAX)
         x->run_records = UINT32_MAX;
@@ -54,7 +56,16 @@ static mr_status sort_run(ooc_extsort *x, mr_error *err)
         x->keys[i] = x->key(x->buf + i * rec);
         x->ids[i] = (uint32_t)i;
     }
-    mr_status st = mr_radix_sort_u64(x->keys, x->ids, n, x->key_bits, x->threads, err);
+    mr_status st;
+    if (rec >= RADIX_EXTRA) {
+        /* the sort's copies in the sorted run's room: allocated once,
+         * faulted in once, not again for every run */
+        uint64_t *tk = (uint64_t *)(void *)x->sorted;
+        uint32_t *tv = (uint32_t *)(void *)(x->sorted + 8 * n);
+        st = mr_radix_sort_u64_scratch(x->keys, x->ids, n, x->key_bits, x->threads, tk, tv, err);
+    } else {
+        st = mr_radix_sort_u64(x->keys, x->ids, n, x->key_bits, x->threads, err);
+    }
     if (st != MR_OK)
         return st;
     for (size_t i = 0; i < n; i++)
