@@ -283,7 +283,7 @@ static int cluster_child(char **argv)
     o.target_vertices = (size_t)atoll(argv[5]);
     mr_error err;
     if (file)
-        return mr_cluster_file(argv[1], argv[2], &o, NULL, NULL, &err) == MR_OK ? 0 : 1;
+        return mr_cluster_file(argv[1], argv[2], &o, NULL, NULL, NULL, &err) == MR_OK ? 0 : 1;
     mr_mesh in, out;
     if (mr_mesh_read(argv[1], NULL, &in, &err) != MR_OK)
         return 1;

@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char usage[] =
     "usage: meshreduce cluster IN -o OUT (--cell C | --cell-rel F | --target-vertices N)\n"
@@ -14,10 +15,15 @@ static const char usage[] =
     "triangle quadrics (Lindstrom) or at the mean of its points; collapsed and\n"
     "duplicate triangles are removed. Fast, parallel, independent of vertex order,\n"
     "the same at any thread count. Normals, texture coordinates and colors are\n"
-    "averaged per cell. A binary PLY input is read in passes (Lindstrom's\n"
-    "out-of-core clustering: 4 bytes a vertex beside what the output needs; the\n"
-    "same file as when read whole; --json's read and write times are then in\n"
-    "its total); it must be a regular file.\n"
+    "averaged per cell. A file is read in passes (Lindstrom's out-of-core\n"
+    "clustering: 4 bytes a vertex beside what the output needs; the same file as\n"
+    "when read whole; --json's read and write times are then in its total): a\n"
+    "binary PLY file in place, a binary STL file welded and an OBJ file parsed\n"
+    "into temporary files when its clustering in memory would not fit --memory\n"
+    "(about 64 bytes a triangle; else, and ascii files, read whole). An OBJ file\n"
+    "streamed is clustered by its v lines, positions only (give --no-normals\n"
+    "--no-texcoords --no-colors where it has more). Standard input is read whole.\n"
+    "meshreduce-mpi shares the passes out over its ranks, the same bytes.\n"
     "\n"
     "cell size (exactly one):\n"
     "  --cell C                cell edge length (absolute, > 0)\n"
@@ -34,6 +40,16 @@ static const char usage[] =
     "  --stats                 print counts, the cell size and the time per phase\n"
     "  --json                  print them as one JSON object on stdout\n"
     "  -q, --quiet             no summary on success (--stats and --json still print)\n"
+    "\n"
+    "files larger than memory:\n"
+    "  --memory SIZE           memory budget (default 4G; K, M, G, T are powers of\n"
+    "                          1024): whether an OBJ or STL file is streamed, and\n"
+    "                          the STL weld's sorts\n"
+    "  --temp-dir DIR          temporary files (default: $TMPDIR, else the output's\n"
+    "                          directory); they have no name, so nothing is left\n"
+    "                          behind however the process ends (see simplify --help)\n"
+    "  --temp-budget SIZE      fail with a clear error rather than let the temporary\n"
+    "                          files pass SIZE (default: no limit)\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP;
 
 /* The options, the relative cell size asked for and the statistics of one
@@ -42,6 +58,7 @@ typedef struct cluster_job {
     mr_cluster_options o;
     double cell_rel;
     cli_choice size_option; /* --cell, --cell-rel or --target-vertices */
+    mr_out_of_core_options ooc;
     mr_cluster_stats s;
 } cluster_job;
 
@@ -74,6 +91,18 @@ static int option(int argc, char **argv, int *i, void *user)
             CLI_OK)
             return rc;
         job->o.target_vertices = (size_t)n;
+    } else if (cli_value(argc, argv, i, "--memory", &v)) {
+        if (!cli_parse_size(v, &n) || n == 0)
+            return cli_usage_error("cluster", "--memory needs a size such as 512M or 4G");
+        job->ooc.memory = n;
+    } else if (cli_value(argc, argv, i, "--temp-dir", &v)) {
+        if (!v || !*v)
+            return cli_usage_error("cluster", "--temp-dir needs a directory");
+        job->ooc.temp_dir = v;
+    } else if (cli_value(argc, argv, i, "--temp-budget", &v)) {
+        if (!cli_parse_size(v, &n) || n == 0)
+            return cli_usage_error("cluster", "--temp-budget needs a size such as 10G");
+        job->ooc.temp_budget = n;
     } else {
         return CLI_NO_MATCH;
     }
@@ -116,10 +145,12 @@ static void print_json(const cli_io *io, const mr_mesh *result, const cli_times 
     printf(", \"cell\": %.17g, \"cells\": %zu, \"input_vertices\": %zu, "
            "\"input_triangles\": %zu, \"output_vertices\": %zu, \"output_triangles\": %zu, "
            "\"seconds\": {\"read\": %.6f, \"cells\": %.6f, \"representatives\": %.6f, "
-           "\"triangles\": %.6f, \"total\": %.6f, \"write\": %.6f}}\n",
+           "\"triangles\": %.6f, \"total\": %.6f, \"write\": %.6f}, \"streamed\": %s, "
+           "\"temp_bytes_peak\": %llu}\n",
            s->cell, s->cells, s->input_vertices, s->input_triangles, s->output_vertices,
            s->output_triangles, t->read, s->seconds_cells, s->seconds_representatives,
-           s->seconds_triangles, s->seconds_total, t->write);
+           s->seconds_triangles, s->seconds_total, t->write, s->streamed ? "true" : "false",
+           (unsigned long long)s->temp_bytes_peak);
 }
 
 static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times *t,
@@ -133,6 +164,9 @@ static void print_stats(const cli_io *io, const mr_mesh *result, const cli_times
             cli_count(b, sizeof b, s->output_triangles));
     fprintf(stderr, "cell       %.9g (%s occupied cells)\n", s->cell,
             cli_count(a, sizeof a, s->cells));
+    if (s->streamed)
+        fprintf(stderr, "read       in passes%s%s\n", s->temp_bytes_peak ? ", temporary files " : "",
+                s->temp_bytes_peak ? cli_bytes(a, sizeof a, s->temp_bytes_peak) : "");
     fprintf(stderr, "time       read %.3f s, cells %.3f s, representatives %.3f s, "
                     "triangles %.3f s, write %.3f s\n",
             t->read, s->seconds_cells, s->seconds_representatives, s->seconds_triangles,
@@ -153,6 +187,7 @@ static int run(int argc, char **argv)
     cli_io_init(&io, "cluster", CLI_ACCEPT_OUTPUT | CLI_ACCEPT_WRITE | CLI_ACCEPT_REPORT);
     cluster_job job = {.cell_rel = 0};
     mr_cluster_options_default(&job.o);
+    mr_out_of_core_options_default(&job.ooc);
     int rc = cli_io_parse(&io, argc, argv, option, &job);
     if (rc != CLI_OK)
         return rc;
@@ -162,17 +197,18 @@ static int run(int argc, char **argv)
     if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
-    /* meshreduce-mpi: the clustering is one streaming pass, on rank 0 */
-    if (cli_comm && cli_comm->rank != 0)
-        return CLI_OK;
-    if (mr_format_from_path(io.in) == MR_FORMAT_PLY) {
-        /* read in passes (binary PLY: memory that grows with the output),
-         * the same bytes as the mesh read whole */
+    struct stat sb;
+    if (stat(io.in, &sb) == 0 && S_ISREG(sb.st_mode)) {
+        /* a file: read in passes (memory that grows with the output), the
+         * same bytes as the mesh read whole; meshreduce-mpi: on its ranks */
         job.o.cell_rel = job.cell_rel;
         const double t0 = cli_now();
         mr_error err;
-        if (mr_cluster_file(io.in, io.out, &job.o, &io.write, &job.s, &err) != MR_OK)
+        if (ooc_cluster_file(io.in, io.out, &job.o, &job.ooc, &io.write, cli_comm, &job.s,
+                             &err) != MR_OK)
             return cli_fail_err(&err);
+        if (cli_comm && cli_comm->rank != 0)
+            return CLI_OK;
         const cli_times t = {0, cli_now() - t0, 0}; /* reading and writing inside */
         if (io.json)
             print_json(&io, NULL, &t, &job);
@@ -182,6 +218,8 @@ static int run(int argc, char **argv)
             print_summary(&io, NULL, &t, &job);
         return CLI_OK;
     }
+    if (cli_comm && cli_comm->rank != 0)
+        return CLI_OK; /* standard input: rank 0 reads it */
     return cli_run_job(&io, &steps, &job);
 }
 

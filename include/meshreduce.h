@@ -897,6 +897,9 @@ typedef struct mr_cluster_stats {
     double seconds_representatives;
     double seconds_triangles;
     double seconds_total;
+    int streamed;             /* mr_cluster_file: 1 when the file was read in
+                                 passes, 0 when read whole */
+    uint64_t temp_bytes_peak; /* its temporary files at most (STL, OBJ) */
 } mr_cluster_stats;
 
 mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, mr_mesh *out,
@@ -905,15 +908,21 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
 /* Cluster the mesh in the file in_path into out_path (written as by
  * mr_mesh_write with `write`, which may be NULL): the same bytes as
  * mr_mesh_read, mr_mesh_cluster and mr_mesh_write, in memory that grows
- * with the output only for a binary PLY input: its vertices and faces are
- * read in passes from the mapped file (a provisional cell id per vertex, 4
- * bytes, and the cells and the surviving triangles), as in Lindstrom's
- * out-of-core clustering; a target count costs a few passes more over the
- * vertices (a sample's first). Other inputs are read whole and clustered
- * in memory. The input must be a regular file (it is read more than
- * once). */
+ * with the output, as in Lindstrom's out-of-core clustering: the input is
+ * read in passes (its box, its vertices in blocks into their cells with a
+ * provisional cell id a vertex, 4 bytes, its faces in batches), a binary
+ * PLY file in place, a binary STL file welded and an OBJ file parsed into
+ * temporary files (ooc's temp_dir and temp_budget) when its in-memory
+ * clustering would not fit ooc's memory (NULL: defaults; about 64 bytes a
+ * triangle; else it is read whole, as are ascii PLY and STL files). An
+ * OBJ file streamed is clustered by its v lines, positions only: when its
+ * vertices have normals, texture coordinates or colors that `write`
+ * keeps, an error says so. A target count costs a few passes more over
+ * the vertices (a sample's first). The input must be a regular file (it
+ * is read more than once). */
 mr_status mr_cluster_file(const char *in_path, const char *out_path,
-                          const mr_cluster_options *options, const mr_write_options *write,
+                          const mr_cluster_options *options, const mr_out_of_core_options *ooc,
+                          const mr_write_options *write,
                           mr_cluster_stats *stats, mr_error *err);
 
 /* ------------------------------------------------------------------------ */

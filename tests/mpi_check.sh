@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # meshreduce-mpi against meshreduce: the out-of-core simplification on
 # 1, 2, 3 and 4 ranks gives the single process's bytes (binary PLY and OBJ
-# inputs, full and half-edge collapse, an output larger than a chunk); an error is said once and leaves
+# inputs, full and half-edge collapse, an output larger than a chunk), and
+# so does the streaming cluster (PLY, OBJ, STL); an error is said once and leaves
 # no output; a rank killed mid-run ends the job with a non-zero status,
 # no output file and no temporary file.
 # usage: mpi_check.sh MESHREDUCE MESHREDUCE_MPI MPIEXEC WORKDIR
@@ -35,6 +36,23 @@ for np in 1 2 3 4; do
   cmp -s "$W/one.ply" "$W/np$np.ply" || fail "$np ranks, forest: other bytes"
 done
 echo "ok: the forest at 1-4 ranks: the single process's bytes"
+# cluster: the passes shared out over 1-4 ranks give the single process's
+# bytes (binary PLY in place; OBJ and binary STL through temporary files
+# under a small budget; a cell and a target count)
+"$MR" convert "$W/scan.ply" "$W/scan.stl" -q || fail "convert stl"
+for input in scan.ply scan.obj scan.stl; do
+  for size in "--cell-rel 0.004" "--target-vertices 3000"; do
+    args=($size --memory 1M --temp-dir "$W/tmp")
+    "$MR" --threads 2 cluster "$W/$input" -o "$W/one.ply" "${args[@]}" -q || fail "single cluster $input"
+    for np in 1 2 3 4; do
+      t=$(( np % 2 + 1 ))
+      run "$np" "$MPI" --threads "$t" cluster "$W/$input" -o "$W/np$np.ply" "${args[@]}" -q \
+        || fail "cluster: $np ranks, $input, $size"
+      cmp -s "$W/one.ply" "$W/np$np.ply" || fail "cluster: $np ranks ($t threads), $input, $size: other bytes"
+    done
+  done
+  echo "ok: cluster of $input at 1-4 ranks: the single process's bytes"
+done
 # --json on rank 0 only: one object
 out=$(run 3 "$MPI" simplify "$W/scan.ply" -o "$W/j.ply" --ratio 2% --memory 6M --json -q) \
   || fail "json run"

@@ -162,6 +162,14 @@ static void tmp_path(char buf[1024], const char *name)
     snprintf(buf, 1024, "%s", tu_tmp_path(name));
 }
 
+/* The mesh m written as OBJ at path (its attributes with it); path. */
+static const char *obj_attr_path(const char *path, const mr_mesh *m)
+{
+    mr_error err;
+    assert_int_equal(mr_mesh_write(path, m, NULL, &err), MR_OK);
+    return path;
+}
+
 static void test_cluster_file(void **state)
 {
     (void)state;
@@ -193,7 +201,7 @@ static void test_cluster_file(void **state)
         size_t na, nb;
         char *a = cluster_in_core(cases[c].in, out_a, &o, NULL, &na);
         mr_cluster_stats st;
-        assert_int_equal(mr_cluster_file(cases[c].in, out_b, &o, NULL, &st, &err), MR_OK);
+        assert_int_equal(mr_cluster_file(cases[c].in, out_b, &o, NULL, NULL, &st, &err), MR_OK);
         char *b = tu_read_file(out_b, &nb);
         assert_non_null(a);
         assert_non_null(b);
@@ -259,12 +267,71 @@ static void test_cluster_file(void **state)
         o.cell_rel = 0.004;
         size_t na, nb;
         char *a = cluster_in_core(inputs[c], out_a, &o, NULL, &na);
-        assert_int_equal(mr_cluster_file(inputs[c], out_b, &o, NULL, NULL, &err), MR_OK);
+        if (mr_cluster_file(inputs[c], out_b, &o, NULL, NULL, NULL, &err) != MR_OK)
+            fail_msg("%s: %s", inputs[c], err.message);
         char *b = tu_read_file(out_b, &nb);
         if (na != nb || memcmp(a, b, na) != 0)
             fail_msg("%s: the file path's output differs from the in-core one", inputs[c]);
         free(a);
         free(b);
+    }
+
+    /* OBJ and binary STL streamed through temporary files (a budget their
+     * in-memory clustering does not fit): the in-core bytes, at 1, 2, 3
+     * and 8 threads, a cell and a target count */
+    char stl[1024], plain_obj[1024];
+    tmp_path(stl, "cf.stl");
+    tmp_path(plain_obj, "cf-plain.obj");
+    assert_int_equal(mr_mesh_write(stl, &m, NULL, &err), MR_OK);
+    assert_int_equal(mr_mesh_write(plain_obj, &m, NULL, &err), MR_OK);
+    mr_out_of_core_options small;
+    mr_out_of_core_options_default(&small);
+    small.memory = 1 << 20;
+    const char *streamed[] = {plain_obj, stl};
+    const int thread_counts[] = {1, 2, 3, 8};
+    for (size_t c = 0; c < 2; c++)
+        for (size_t t = 0; t < 4; t++) {
+            mr_cluster_options o;
+            mr_cluster_options_default(&o);
+            o.threads = thread_counts[t];
+            if (t % 2)
+                o.target_vertices = 4000;
+            else
+                o.cell_rel = 0.004;
+            size_t na, nb;
+            char *a = cluster_in_core(streamed[c], out_a, &o, NULL, &na);
+            mr_cluster_stats cs;
+            if (mr_cluster_file(streamed[c], out_b, &o, &small, NULL, &cs, &err) != MR_OK)
+                fail_msg("%s: %s", streamed[c], err.message);
+            assert_int_equal(cs.streamed, 1);
+            assert_true(cs.temp_bytes_peak > 0);
+            char *b = tu_read_file(out_b, &nb);
+            if (na != nb || memcmp(a, b, na) != 0)
+                fail_msg("%s at %d threads: the streamed output differs from the in-core one",
+                         streamed[c], thread_counts[t]);
+            free(a);
+            free(b);
+        }
+    /* an OBJ file whose vertices have attributes: streamed, it says that
+     * the streaming path carries none, and writes nothing; with them
+     * dropped from the output it clusters the v lines */
+    {
+        mr_cluster_options o;
+        mr_cluster_options_default(&o);
+        o.cell_rel = 0.004;
+        unlink(out_b);
+        assert_int_equal(mr_cluster_file(obj_attr_path(obj, &at), out_b, &o, &small, NULL, NULL,
+                                         &err),
+                         MR_ERR_UNSUPPORTED);
+        tu_assert_contains(err.message, "does not carry");
+        assert_false(tu_file_exists(out_b));
+        mr_write_options w;
+        mr_write_options_default(&w);
+        w.write_normals = w.write_texcoords = w.write_colors = 0;
+        mr_cluster_stats cs;
+        assert_int_equal(mr_cluster_file(obj, out_b, &o, &small, &w, &cs, &err), MR_OK);
+        assert_int_equal(cs.streamed, 1);
+        assert_true(cs.output_triangles > 0);
     }
 
     /* a face index out of range: the reader's error, and no output */
@@ -287,13 +354,13 @@ static void test_cluster_file(void **state)
     mr_error e2;
     mr_mesh junk;
     assert_int_equal(mr_mesh_read(bad, NULL, &junk, &e2), MR_ERR_PARSE);
-    assert_int_equal(mr_cluster_file(bad, bad_out, &o, NULL, NULL, &err), MR_ERR_PARSE);
+    assert_int_equal(mr_cluster_file(bad, bad_out, &o, NULL, NULL, NULL, &err), MR_ERR_PARSE);
     assert_string_equal(err.message, e2.message);
     assert_false(tu_file_exists(bad_out));
     /* a FIFO: the out-of-core path needs a regular file */
     unlink(fifo);
     assert_int_equal(mkfifo(fifo, 0600), 0);
-    assert_int_equal(mr_cluster_file(fifo, bad_out, &o, NULL, NULL, &err), MR_ERR_IO);
+    assert_int_equal(mr_cluster_file(fifo, bad_out, &o, NULL, NULL, NULL, &err), MR_ERR_IO);
     tu_assert_contains(err.message, "not a regular file");
     unlink(fifo);
     mr_mesh_free(&m);

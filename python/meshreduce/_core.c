@@ -919,6 +919,36 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
 
 static int path_arg(PyObject *o, PyObject **bytes);
 
+/* The out-of-core options of simplify_file() and cluster_file(): memory,
+ * temp_dir (its bytes object into *dir, which the caller releases) and
+ * temp_budget, each None for the default. */
+static int ooc_options_from(mr_out_of_core_options *c, PyObject *memory, PyObject *temp_dir,
+                            PyObject *temp_budget, PyObject **dir)
+{
+    mr_out_of_core_options_default(c);
+    size_t n;
+    if (memory != Py_None) {
+        if (to_size(memory, "memory", &n) < 0)
+            return -1;
+        if (n == 0) {
+            PyErr_SetString(PyExc_ValueError, "memory must be positive (bytes)");
+            return -1;
+        }
+        c->memory = n;
+    }
+    if (temp_budget != Py_None) {
+        if (to_size(temp_budget, "temp_budget", &n) < 0)
+            return -1;
+        c->temp_budget = n;
+    }
+    if (temp_dir != Py_None) {
+        if (!path_arg(temp_dir, dir))
+            return -1;
+        c->temp_dir = PyBytes_AS_STRING(*dir);
+    }
+    return 0;
+}
+
 PyDoc_STRVAR(simplify_file_doc,
 "simplify_file($module, /, input, output, *, ratio=None, vertex_count=None,\n"
 "              triangle_count=None, max_error=None, absolute=False, collapse='full',\n"
@@ -972,26 +1002,8 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
                               lock_border, boundary_weight, max_normal_turn, prune, threads, 0,
                               0, quality, partitions, progress) < 0)
         goto done;
-    size_t n;
-    if (memory != Py_None) {
-        if (to_size(memory, "memory", &n) < 0)
-            goto done;
-        if (n == 0) {
-            PyErr_SetString(PyExc_ValueError, "memory must be positive (bytes)");
-            goto done;
-        }
-        c.memory = n;
-    }
-    if (temp_budget != Py_None) {
-        if (to_size(temp_budget, "temp_budget", &n) < 0)
-            goto done;
-        c.temp_budget = n;
-    }
-    if (temp_dir != Py_None) {
-        if (!path_arg(temp_dir, &dir))
-            goto done;
-        c.temp_dir = PyBytes_AS_STRING(dir);
-    }
+    if (ooc_options_from(&c, memory, temp_dir, temp_budget, &dir) < 0)
+        goto done;
     const char *in_path = PyBytes_AS_STRING(input), *out_path = PyBytes_AS_STRING(output);
     mr_error err;
     mr_status st;
@@ -1659,26 +1671,35 @@ static PyObject *py_cluster(PyObject *self, PyObject *args, PyObject *kw)
 
 PyDoc_STRVAR(cluster_file_doc,
 "cluster_file($module, /, input, output, *, cell=None, cell_rel=None, vertex_count=None,\n"
-"             threads=0)\n"
+"             threads=0, memory=None, temp_dir=None, temp_budget=None)\n"
 "--\n"
 "\n"
 "Grid clustering from a file into a file, as `meshreduce cluster IN -o OUT`\n"
-"(mr_cluster_file): a binary PLY input is read in passes, in memory that grows\n"
-"with the output (4 bytes a vertex beside it), the same bytes as cluster() on\n"
-"the mesh read whole; other inputs are read whole. The cell size as in\n"
-"cluster(). Returns the statistics (cell, cells, counts, seconds).");
+"(mr_cluster_file): the input is read in passes, in memory that grows with the\n"
+"output (4 bytes a vertex beside it), the same bytes as cluster() on the mesh\n"
+"read whole: a binary PLY file in place, a binary STL or OBJ file through\n"
+"temporary files in temp_dir (at most temp_budget bytes) when its clustering in\n"
+"memory would not fit `memory` bytes (default 4 GiB; else it is read whole, as\n"
+"ascii files are). The cell size as in cluster(). Returns the statistics (cell,\n"
+"cells, counts, streamed: whether it was read in passes, temp_bytes_peak,\n"
+"seconds).");
 
 static PyObject *py_cluster_file(PyObject *self, PyObject *args, PyObject *kw)
 {
-    static char *kwlist[] = {"input", "output", "cell", "cell_rel", "vertex_count", "threads",
-                             NULL};
+    static char *kwlist[] = {"input",  "output", "cell",     "cell_rel",    "vertex_count",
+                             "threads", "memory", "temp_dir", "temp_budget", NULL};
     PyObject *input = NULL, *output = NULL, *cell = Py_None, *cell_rel = Py_None,
-             *vcount = Py_None;
+             *vcount = Py_None, *memory = Py_None, *temp_dir = Py_None,
+             *temp_budget = Py_None;
     int threads = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOi", kwlist, path_arg, &input,
-                                     path_arg, &output, &cell, &cell_rel, &vcount, &threads))
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOiOOO", kwlist, path_arg, &input,
+                                     path_arg, &output, &cell, &cell_rel, &vcount, &threads,
+                                     &memory, &temp_dir, &temp_budget))
         return NULL;
-    PyObject *result = NULL;
+    PyObject *result = NULL, *dir = NULL;
+    mr_out_of_core_options c;
+    if (ooc_options_from(&c, memory, temp_dir, temp_budget, &dir) < 0)
+        goto done;
     mr_cluster_options o;
     mr_cluster_options_default(&o);
     const int given = (cell != Py_None) + (cell_rel != Py_None) + (vcount != Py_None);
@@ -1718,22 +1739,25 @@ static PyObject *py_cluster_file(PyObject *self, PyObject *args, PyObject *kw)
     mr_status st;
     const char *in_path = PyBytes_AS_STRING(input), *out_path = PyBytes_AS_STRING(output);
     Py_BEGIN_ALLOW_THREADS
-    st = mr_cluster_file(in_path, out_path, &o, NULL, &cs, &err);
+    st = mr_cluster_file(in_path, out_path, &o, &c, NULL, &cs, &err);
     Py_END_ALLOW_THREADS
     if (st != MR_OK) {
         raise_mr_error(&err);
         goto done;
     }
     result = Py_BuildValue(
-        "{s:d,s:n,s:n,s:n,s:n,s:n,s:{s:d,s:d,s:d,s:d}}", "cell", cs.cell, "cells",
+        "{s:d,s:n,s:n,s:n,s:n,s:n,s:O,s:K,s:{s:d,s:d,s:d,s:d}}", "cell", cs.cell, "cells",
         (Py_ssize_t)cs.cells, "input_vertices", (Py_ssize_t)cs.input_vertices, "input_triangles",
         (Py_ssize_t)cs.input_triangles, "output_vertices", (Py_ssize_t)cs.output_vertices,
-        "output_triangles", (Py_ssize_t)cs.output_triangles, "seconds", "cells",
+        "output_triangles", (Py_ssize_t)cs.output_triangles, "streamed",
+        cs.streamed ? Py_True : Py_False, "temp_bytes_peak", (unsigned long long)cs.temp_bytes_peak,
+        "seconds", "cells",
         cs.seconds_cells, "representatives", cs.seconds_representatives, "triangles",
         cs.seconds_triangles, "total", cs.seconds_total);
 done:
     Py_XDECREF(input);
     Py_XDECREF(output);
+    Py_XDECREF(dir);
     return result;
 }
 

@@ -702,6 +702,19 @@ def test_cluster_file_matches_cli(tmp_path):
     with pytest.raises(meshreduce.MeshIOError):
         meshreduce.cluster_file(tmp_path / "missing.ply", tmp_path / "x.ply", cell=1.0)
     assert not (tmp_path / "x.ply").exists()
+    # an OBJ file: streamed through temporary files under a small budget,
+    # read whole under the default; the same bytes either way, as the CLI's
+    obj = tmp_path / "scan.obj"
+    cli("convert", src, obj, "-q")
+    whole = meshreduce.cluster_file(obj, tmp_path / "whole.ply", cell_rel=0.01)
+    streamed = meshreduce.cluster_file(obj, tmp_path / "streamed.ply", cell_rel=0.01,
+                                       memory=1 << 20, temp_dir=tmp_path)
+    out = json.loads(cli("cluster", obj, "-o", tmp_path / "cli.ply", "--cell-rel", "0.01",
+                         "--memory", "1M", "--temp-dir", tmp_path, "--json", "-q"))
+    assert not whole["streamed"] and streamed["streamed"] and out["streamed"]
+    assert streamed["temp_bytes_peak"] > 0
+    assert ((tmp_path / "whole.ply").read_bytes() == (tmp_path / "streamed.ply").read_bytes()
+            == (tmp_path / "cli.ply").read_bytes())
 
 
 @needs_cli

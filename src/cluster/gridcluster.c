@@ -384,6 +384,12 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
         const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
         const double diagonal = sqrt(dx * dx + dy * dy + dz * dz);
         cell = options->cell_rel * diagonal;
+        if (diagonal == 0)
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                                 "all %zu vertices are at one point, so a cell of %g of the "
+                                 "bounding-box diagonal (0) is no cell size; give a cell or a "
+                                 "target vertex count",
+                                 n, options->cell_rel);
         if (!(cell > 0) || isinf(cell))
             return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                                  "a cell of %g of the bounding-box diagonal (%g) is no usable "

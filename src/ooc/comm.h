@@ -47,4 +47,15 @@ mr_status ooc_simplify_file(const char *in_path, const char *out_path,
                             const mr_out_of_core_options *ooc, const mr_write_options *write,
                             ooc_comm *comm, mr_simplify_file_stats *stats, mr_error *err);
 
+/* mr_cluster_file on the ranks of comm (NULL: one rank): each rank reads
+ * its share of the vertex blocks for the box, every vertex block for the
+ * cells (summing only those of its cells: a hash of the key shares them
+ * out) and its share of the face chunks; rank 0 numbers the cells, adds
+ * the survivors' quadrics in the file's order and writes the output. The
+ * same bytes at any rank and thread count, and as one rank's. */
+mr_status ooc_cluster_file(const char *in_path, const char *out_path,
+                           const mr_cluster_options *options, const mr_out_of_core_options *ooc,
+                           const mr_write_options *write, ooc_comm *comm,
+                           mr_cluster_stats *stats, mr_error *err);
+
 #endif
