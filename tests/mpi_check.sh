@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # meshreduce-mpi against meshreduce: the out-of-core simplification on
 # 1, 2, 3 and 4 ranks gives the single process's bytes (binary PLY and OBJ
-# inputs, full and half-edge collapse, an output larger than a chunk), and
+# inputs, full and half-edge collapse, an output larger than a chunk, a
+# PLY with texture coordinates and colors), and
 # so does the streaming cluster (PLY, OBJ, STL); an error is said once and leaves
 # no output; a rank killed mid-run ends the job with a non-zero status,
 # no output file and no temporary file.
@@ -27,15 +28,26 @@ for input in scan.ply scan.obj; do
     echo "ok: $input $mode at 1-4 ranks: the single process's bytes"
   done
 done
-# an output larger than a chunk (the forest): the same bytes at 1-4 ranks
-"$MR" --threads 2 simplify "$W/scan.ply" -o "$W/one.ply" --ratio 60% --memory 6M -q \
-  || fail "single forest"
-for np in 1 2 3 4; do
-  run "$np" "$MPI" --threads 1 simplify "$W/scan.ply" -o "$W/np$np.ply" --ratio 60% --memory 6M -q \
-    || fail "$np ranks, forest"
-  cmp -s "$W/one.ply" "$W/np$np.ply" || fail "$np ranks, forest: other bytes"
-done
-echo "ok: the forest at 1-4 ranks: the single process's bytes"
+# meshreduce-mpi's simplify of $W/INPUT on 1-4 ranks (1 or 2 threads) gives
+# the single process's bytes; usage: same_at_ranks WHAT INPUT ARGS...
+same_at_ranks() {
+  local what=$1 input=$2
+  shift 2
+  "$MR" --threads 2 simplify "$W/$input" -o "$W/one.ply" "$@" -q || fail "single $what"
+  for np in 1 2 3 4; do
+    t=$(( np % 2 + 1 ))
+    run "$np" "$MPI" --threads "$t" simplify "$W/$input" -o "$W/np$np.ply" "$@" -q \
+      || fail "$np ranks, $what"
+    cmp -s "$W/one.ply" "$W/np$np.ply" || fail "$np ranks ($t threads), $what: other bytes"
+  done
+  echo "ok: $what at 1-4 ranks: the single process's bytes"
+}
+# an output larger than a chunk (the forest)
+same_at_ranks "the forest" scan.ply --ratio 60% --memory 6M
+# texture coordinates and colors carried through the chunks (seams across
+# the cuts)
+/usr/bin/python3 "$(dirname "$0")/make_seamed.py" "$W/scan.ply" "$W/seamed.ply" || fail "seamed input"
+same_at_ranks "attributes" seamed.ply --ratio 2% --memory 8M --temp-dir "$W/tmp"
 # cluster: the passes shared out over 1-4 ranks give the single process's
 # bytes (binary PLY in place; OBJ and binary STL through temporary files
 # under a small budget; a cell and a target count)

@@ -107,6 +107,10 @@ size_t mr_ply_source_max_faces(const mr_ply_source *s);
 mr_status mr_ply_source_vertices(mr_ply_source *s, size_t first, size_t count,
                                  const mr_mesh *block, mr_error *err);
 void mr_ply_source_position(const mr_ply_source *s, uint32_t v, float p[3]);
+/* Vertex v whole, at random: the arrays of `one` (a mesh of one vertex,
+ * its attribute arrays those wanted, or NULL) filled as the reader fills
+ * a vertex. */
+void mr_ply_source_vertex(const mr_ply_source *s, uint32_t v, const mr_mesh *one);
 /* The next chunk's triangles into idx; *count 0 once every face is read. */
 mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *count,
                                    mr_error *err);

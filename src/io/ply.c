@@ -924,64 +924,85 @@ static mr_status nonfinite_error(const ply_reader *r, uint64_t v, size_t at)
  * by column, in blocks of rows spread over the threads. x y z as the first
  * three host-order floats is the common layout and is copied as is.
  * Returns the first row with a non-finite position, or UINT64_MAX. */
-static uint64_t decode_vertex_range(const ply_reader *r, const ply_elem *e, const mr_mesh *dst,
-                                    size_t first, size_t i0, size_t i1)
+/* The vertex element's columns that go somewhere in dst. */
+typedef struct vertex_column {
+    size_t off;
+    ply_type type;
+    double div;
+    float *dst;
+    int ds;
+} vertex_column;
+
+typedef struct vertex_columns {
+    vertex_column cols[SLOTS];
+    int ncols;
+    bool xyz_first; /* x y z leading as host floats: 12 bytes a row */
+    bool fill;      /* colors without alpha: alpha filled */
+} vertex_columns;
+
+static void vertex_columns_of(const ply_reader *r, const ply_elem *e, const mr_mesh *dst,
+                              vertex_columns *vc)
 {
-    const unsigned char *base = (const unsigned char *)r->data + e->start;
-    const size_t stride = (size_t)e->row_size;
     slot_map sm;
     make_slot_map(dst, &sm);
-
-    struct column {
-        size_t off;
-        ply_type type;
-        double div;
-        float *dst;
-        int ds;
-    } cols[SLOTS];
-    int ncols = 0;
+    vc->ncols = 0;
     size_t off = 0;
     for (size_t i = e->prop_begin; i < e->prop_end; i++) {
         const ply_prop *p = &r->props[i];
-        if (p->slot >= 0 && sm.dst[p->slot] && ncols < SLOTS)
-            cols[ncols++] = (struct column){off, p->type, p->divisor, sm.dst[p->slot],
-                                            sm.stride[p->slot]};
+        if (p->slot >= 0 && sm.dst[p->slot] && vc->ncols < SLOTS)
+            vc->cols[vc->ncols++] = (vertex_column){off, p->type, p->divisor, sm.dst[p->slot],
+                                                    sm.stride[p->slot]};
         off += type_size[p->type];
     }
-    /* x y z leading as host floats: copy 12 bytes per row */
-    const bool xyz_first = !r->swap && ncols >= 3 && cols[0].off == 0 && cols[1].off == 4 &&
-                           cols[2].off == 8 && cols[0].dst == dst->positions &&
-                           cols[1].dst == dst->positions + 1 &&
-                           cols[2].dst == dst->positions + 2 && cols[0].type == PT_F32 &&
-                           cols[1].type == PT_F32 && cols[2].type == PT_F32;
-    float *colors = dst->colors;
-    const bool fill = colors && !r->has_alpha;
+    const vertex_column *c = vc->cols;
+    vc->xyz_first = !r->swap && vc->ncols >= 3 && c[0].off == 0 && c[1].off == 4 &&
+                    c[2].off == 8 && c[0].dst == dst->positions &&
+                    c[1].dst == dst->positions + 1 && c[2].dst == dst->positions + 2 &&
+                    c[0].type == PT_F32 && c[1].type == PT_F32 && c[2].type == PT_F32;
+    vc->fill = dst->colors && !r->has_alpha;
+}
 
+/* Rows a0..a1 into dst (whose row 0 is `first`): the first with a
+ * non-finite position, or UINT64_MAX. */
+static uint64_t decode_rows(const ply_reader *r, const ply_elem *e, const vertex_columns *vc,
+                            const mr_mesh *dst, size_t first, size_t a0, size_t a1)
+{
+    const unsigned char *base = (const unsigned char *)r->data + e->start;
+    const size_t stride = (size_t)e->row_size;
+    int c = 0;
+    if (vc->xyz_first) {
+        float *pos = dst->positions + 3 * (a0 - first);
+        if (stride == 12)
+            memcpy(pos, base + a0 * 12, (a1 - a0) * 12);
+        else
+            for (size_t i = a0; i < a1; i++, pos += 3)
+                memcpy(pos, base + i * stride, 12);
+        c = 3;
+    }
+    for (; c < vc->ncols; c++)
+        decode_column(base + a0 * stride + vc->cols[c].off, stride, vc->cols[c].type, r->swap,
+                      vc->cols[c].div, vc->cols[c].dst + (a0 - first) * (size_t)vc->cols[c].ds,
+                      vc->cols[c].ds, a1 - a0);
+    if (vc->fill)
+        fill_alpha(dst->colors, a0 - first, a1 - first);
+    const uint64_t v = first_nonfinite(dst->positions, a0 - first, a1 - first);
+    return v != UINT64_MAX ? v + first : UINT64_MAX;
+}
+
+static uint64_t decode_vertex_range(const ply_reader *r, const ply_elem *e, const mr_mesh *dst,
+                                    size_t first, size_t i0, size_t i1)
+{
+    vertex_columns vc;
+    vertex_columns_of(r, e, dst, &vc);
     const int64_t nblocks = (int64_t)((i1 - i0 + CHUNK_ROWS - 1) / CHUNK_ROWS);
     uint64_t bad = UINT64_MAX;
 #pragma omp parallel for schedule(static) num_threads(r->threads) if (nblocks > 4) \
     reduction(min : bad)
     for (int64_t b = 0; b < nblocks; b++) {
         size_t a0 = i0 + (size_t)b * CHUNK_ROWS, a1 = a0 + CHUNK_ROWS < i1 ? a0 + CHUNK_ROWS : i1;
-        int c = 0;
-        if (xyz_first) {
-            float *pos = dst->positions + 3 * (a0 - first);
-            if (stride == 12)
-                memcpy(pos, base + a0 * 12, (a1 - a0) * 12);
-            else
-                for (size_t i = a0; i < a1; i++, pos += 3)
-                    memcpy(pos, base + i * stride, 12);
-            c = 3;
-        }
-        for (; c < ncols; c++)
-            decode_column(base + a0 * stride + cols[c].off, stride, cols[c].type, r->swap,
-                          cols[c].div, cols[c].dst + (a0 - first) * (size_t)cols[c].ds,
-                          cols[c].ds, a1 - a0);
-        if (fill)
-            fill_alpha(colors, a0 - first, a1 - first);
-        const uint64_t v = first_nonfinite(dst->positions, a0 - first, a1 - first);
-        if (v != UINT64_MAX && v + first < bad)
-            bad = v + first;
+        const uint64_t v = decode_rows(r, e, &vc, dst, first, a0, a1);
+        if (v < bad)
+            bad = v;
     }
     return bad;
 }
@@ -1695,6 +1716,14 @@ void mr_ply_source_position(const mr_ply_source *s, uint32_t v, float p[3])
         else
             p[k] = (float)rd_real(c, s->xyz_type[k], s->r.swap);
     }
+}
+
+void mr_ply_source_vertex(const mr_ply_source *s, uint32_t v, const mr_mesh *one)
+{
+    /* one row, on the calling thread (no parallel region a vertex) */
+    vertex_columns vc;
+    vertex_columns_of(&s->r, s->r.vertex, one, &vc);
+    (void)decode_rows(&s->r, s->r.vertex, &vc, one, v, v, (size_t)v + 1);
 }
 
 mr_status mr_ply_source_next_faces(mr_ply_source *s, uint32_t *idx, size_t *count,

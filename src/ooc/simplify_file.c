@@ -33,6 +33,7 @@
  * only: the same bytes on any number of threads.
  */
 #include "comm.h"
+#include "extsort.h"
 #include "source.h"
 #include "temp.h"
 #include "tree.h"
@@ -52,6 +53,10 @@
  * quadrics carried in and out). */
 #define INCORE_BYTES_PER_TRIANGLE 160
 #define CHUNK_BYTES_PER_TRIANGLE 200
+/* What attributes add to a chunk's, a triangle, at most: the wedges'
+ * arrays and their copies, the surface points, the corners' wedges
+ * (mr_mesh_simplify's path). */
+#define ATTR_BYTES_PER_TRIANGLE 160
 /* The nodes below the root aim at this many times their share. */
 #define SLACK 4
 /* The smallest chunk worth the name. */
@@ -88,6 +93,8 @@ typedef struct piece {
     float *pos;
     mr_quadricf *q;
     uint32_t *idx;
+    /* the attributes carried (job.attrs), or NULL */
+    float *normals, *texcoords, *colors;
     ooc_file file;
 } piece;
 
@@ -97,9 +104,31 @@ static void piece_free(piece *p)
     free(p->pos);
     free(p->q);
     free(p->idx);
+    free(p->normals);
+    free(p->texcoords);
+    free(p->colors);
     p->gid = p->idx = NULL;
-    p->pos = NULL;
+    p->pos = p->normals = p->texcoords = p->colors = NULL;
     p->q = NULL;
+}
+
+/* Floats a vertex of each attribute (MR_ATTR_* order: normals, texture
+ * coordinates, colors). */
+static const unsigned attr_bit[3] = {MR_ATTR_NORMALS, MR_ATTR_TEXCOORDS, MR_ATTR_COLORS};
+static const size_t attr_floats[3] = {3, 2, 4};
+
+/* The bytes a vertex's carried attributes take. */
+static size_t attr_bytes(unsigned attrs)
+{
+    size_t n = 0;
+    for (int a = 0; a < 3; a++)
+        n += attrs & attr_bit[a] ? 4 * attr_floats[a] : 0;
+    return n;
+}
+
+static float **piece_attr(piece *p, int a)
+{
+    return a == 0 ? &p->normals : a == 1 ? &p->texcoords : &p->colors;
 }
 
 typedef struct job {
@@ -112,12 +141,17 @@ typedef struct job {
     int threads;
     size_t batch;            /* faces a batch of a pass */
     size_t nv, nt;           /* the input's counts */
-    size_t referenced;       /* vertices some triangle uses */
+    size_t referenced;       /* vertices some triangle uses (with attributes:
+                                their positions, as the vertex targets count
+                                surface points) */
+    size_t points;           /* with attributes: the referenced positions */
     double lo[3], hi[3];     /* every vertex's box */
     double diagonal;         /* its diagonal: the quadrics' unit and the base
                                 of relative errors */
     uint64_t capacity;       /* C */
-    uint32_t *range;         /* per vertex: its first and last leaf */
+    uint32_t *range;         /* per vertex: its first and last leaf (with
+                                attributes: of every vertex at its position) */
+    unsigned attrs;          /* MR_ATTR_* carried through the chunks */
     ooc_file spill;          /* the leaves' triangles */
     uint64_t *leaf_at;       /* the triangle each leaf's run starts at */
     uint64_t *leaf_count;    /* triangles written to it */
@@ -515,6 +549,112 @@ static mr_status spill_batch(job *j, const uint32_t *idx, const double *c, size_
     return MR_OK;
 }
 
+/* ---- vertices at one position ------------------------------------------------ */
+
+/* A referenced vertex by its position's bits. */
+typedef struct at_point {
+    uint32_t bits[3];
+    uint32_t v;
+} at_point;
+
+static uint64_t at_point_key(const void *a)
+{
+    const at_point *x = a;
+    return mr_mix64(((uint64_t)x->bits[0] << 32 | x->bits[1]) ^ mr_mix64(x->bits[2]));
+}
+
+static int at_point_cmp(const void *a, const void *b)
+{
+    const at_point *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x->bits[k] != y->bits[k])
+            return x->bits[k] < y->bits[k] ? -1 : 1;
+    return x->v < y->v ? -1 : x->v > y->v;
+}
+
+/* With attributes, a surface point's vertices (wedges: a UV seam, a hard
+ * edge) may sit in different leaves, each the only one at that point in
+ * its leaf, so that no vertex id tells a cut: every vertex at one position
+ * (bitwise, as mr_surface_points joins them) takes the leaves of all of
+ * them, so that a node's cut locks each of its wedges, and the node above
+ * joins them; j->points counts the positions (the surface points of
+ * mr_surface_points, but for parts that only touch at a point, which it
+ * keeps apart). The vertices by position through an external sort (16
+ * bytes a referenced vertex on disk), runs in about `memory` bytes. Every
+ * rank does the same with the same (reduced) ranges. */
+static mr_status join_coincident(job *j, uint64_t memory, mr_error *err)
+{
+    const size_t run = (size_t)(memory < ((uint64_t)16 << 20) ? (uint64_t)8 << 20 : memory / 2);
+    ooc_extsort x;
+    memset(&x, 0, sizeof x);
+    x.file.fd = -1;
+    mr_mesh b;
+    mr_mesh_init(&b);
+    mr_status st = ooc_extsort_init(&x, &j->temp, sizeof(at_point), run, at_point_key, 64,
+                                    at_point_cmp, j->threads, err);
+    if (st == MR_OK)
+        st = mr_mesh_alloc(&b, VERTEX_BLOCK, 0, 0, err);
+    for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += VERTEX_BLOCK) {
+        const size_t m = j->nv - v0 < VERTEX_BLOCK ? j->nv - v0 : VERTEX_BLOCK;
+        b.vertex_count = m;
+        if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
+            break;
+        for (size_t i = 0; i < m && st == MR_OK; i++) {
+            if (j->range[v0 + i] == RANGE_NONE)
+                continue;
+            at_point r;
+            memcpy(r.bits, b.positions + 3 * i, 12);
+            r.v = (uint32_t)(v0 + i);
+            st = ooc_extsort_add(&x, &r, err);
+        }
+    }
+    b.vertex_count = VERTEX_BLOCK;
+    mr_mesh_free(&b);
+    j->src.release(j->src.impl);
+    if (st == MR_OK)
+        st = ooc_extsort_finish(&x, run, err);
+    /* each run of one position: its members' leaves joined */
+    uint32_t *group = NULL;
+    size_t n = 0, cap = 0;
+    uint32_t bits[3] = {0, 0, 0};
+    for (;;) {
+        const void *rec = NULL;
+        if (st == MR_OK)
+            st = ooc_extsort_next(&x, &rec, err);
+        const at_point *r = rec;
+        if (n && (!r || memcmp(r->bits, bits, 12) != 0)) {
+            if (n > 1) {
+                uint32_t first = RANGE_NONE & 0xFFFFu, last = 0;
+                for (size_t i = 0; i < n; i++) {
+                    const uint32_t g = j->range[group[i]];
+                    first = range_first(g) < first ? range_first(g) : first;
+                    last = range_last(g) > last ? range_last(g) : last;
+                }
+                for (size_t i = 0; i < n; i++)
+                    j->range[group[i]] = first | last << 16;
+            }
+            j->points++;
+            n = 0;
+        }
+        if (!r)
+            break;
+        if (n == cap) {
+            cap = cap ? 2 * cap : 16;
+            uint32_t *g = realloc(group, cap * sizeof *g);
+            if (!g) {
+                st = mr_fail_nomem(err, NULL, cap * sizeof *g);
+                break;
+            }
+            group = g;
+        }
+        memcpy(bits, r->bits, 12);
+        group[n++] = r->v;
+    }
+    free(group);
+    ooc_extsort_free(&x);
+    return st;
+}
+
 /* ---- pieces on disk ---------------------------------------------------------- */
 
 static mr_status piece_store(job *j, piece *p, mr_error *err)
@@ -524,9 +664,14 @@ static mr_status piece_store(job *j, piece *p, mr_error *err)
     const struct {
         const void *data;
         size_t bytes;
-    } parts[4] = {{p->gid, 4 * p->nv}, {p->pos, 12 * p->nv}, {p->q, sizeof *p->q * p->nv},
-                  {p->idx, 12 * p->nt}};
-    for (int i = 0; i < 4 && st == MR_OK; i++) {
+    } parts[7] = {{p->gid, 4 * p->nv},
+                  {p->pos, 12 * p->nv},
+                  {p->q, sizeof *p->q * p->nv},
+                  {p->idx, 12 * p->nt},
+                  {p->normals, p->normals ? 12 * p->nv : 0},
+                  {p->texcoords, p->texcoords ? 8 * p->nv : 0},
+                  {p->colors, p->colors ? 16 * p->nv : 0}};
+    for (int i = 0; i < 7 && st == MR_OK; i++) {
         st = ooc_file_write(&j->temp, &p->file, at, parts[i].data, parts[i].bytes, err);
         at += parts[i].bytes;
     }
@@ -548,15 +693,25 @@ static mr_status piece_read(job *j, piece *p, bool keep, mr_error *err)
     p->pos = mr_alloc_array(p->nv + 1, 3 * sizeof *p->pos);
     p->q = mr_alloc_array(p->nv + 1, sizeof *p->q);
     p->idx = mr_alloc_array(p->nt + 1, 3 * sizeof *p->idx);
-    if (!p->gid || !p->pos || !p->q || !p->idx) {
+    bool fail = !p->gid || !p->pos || !p->q || !p->idx;
+    for (int a = 0; a < 3; a++)
+        if (j->attrs & attr_bit[a])
+            fail |= !(*piece_attr(p, a) = mr_alloc_array(p->nv + 1, 4 * attr_floats[a]));
+    if (fail) {
         piece_free(p);
-        return mr_fail_nomem(err, NULL, p->nv * 60 + p->nt * 12);
+        return mr_fail_nomem(err, NULL, p->nv * (60 + attr_bytes(j->attrs)) + p->nt * 12);
     }
     uint64_t at = 0;
     mr_status st = MR_OK;
-    void *data[4] = {p->gid, p->pos, p->q, p->idx};
-    const size_t bytes[4] = {4 * p->nv, 12 * p->nv, sizeof *p->q * p->nv, 12 * p->nt};
-    for (int i = 0; i < 4 && st == MR_OK; i++) {
+    void *data[7] = {p->gid, p->pos, p->q, p->idx, p->normals, p->texcoords, p->colors};
+    const size_t bytes[7] = {4 * p->nv,
+                             12 * p->nv,
+                             sizeof *p->q * p->nv,
+                             12 * p->nt,
+                             p->normals ? 12 * p->nv : 0,
+                             p->texcoords ? 8 * p->nv : 0,
+                             p->colors ? 16 * p->nv : 0};
+    for (int i = 0; i < 7 && st == MR_OK; i++) {
         st = ooc_file_read(&j->temp, &p->file, at, data[i], bytes[i], err);
         at += bytes[i];
     }
@@ -685,9 +840,13 @@ static mr_status keep_result(job *j, piece *p, mr_chunk_result *rp, const uint32
     p->pos = r.mesh.positions;
     p->idx = r.mesh.indices;
     p->q = r.quadrics;
+    p->normals = r.normals;
+    p->texcoords = r.texcoords;
+    p->colors = r.colors;
     r.mesh.positions = NULL;
     r.mesh.indices = NULL;
     r.quadrics = NULL;
+    r.normals = r.texcoords = r.colors = NULL;
     mr_chunk_result_free(&r);
     return piece_store(j, p, err);
 }
@@ -736,8 +895,13 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
     float *pos = st == MR_OK ? mr_alloc_array(nv, 3 * sizeof *pos) : NULL;
     uint8_t *cut = st == MR_OK ? mr_alloc_array(nv, 1) : NULL;
     uint8_t *lock = st == MR_OK && j->o->vertex_lock ? mr_alloc_array(nv, 1) : NULL;
-    if (st == MR_OK && (!pos || !cut || (j->o->vertex_lock && !lock)))
-        st = mr_fail_nomem(err, NULL, nv * 14);
+    float *attr[3] = {NULL, NULL, NULL};
+    bool fail = !pos || !cut || (j->o->vertex_lock && !lock);
+    for (int a = 0; a < 3 && st == MR_OK; a++)
+        if (j->attrs & attr_bit[a])
+            fail |= !(attr[a] = mr_alloc_array(nv, 4 * attr_floats[a]));
+    if (st == MR_OK && fail)
+        st = mr_fail_nomem(err, NULL, nv * (14 + attr_bytes(j->attrs)));
     if (st == MR_OK) {
         const uint32_t *gid = key;
         /* mapped ahead only where the leaf's vertices fill most of their
@@ -747,13 +911,31 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
         const ptrdiff_t n3 = (ptrdiff_t)nv;
 #pragma omp parallel for schedule(static) num_threads(j->threads) if (n3 > 16384)
         for (ptrdiff_t v = 0; v < n3; v++) {
-            j->src.position(j->src.impl, gid[v], pos + 3 * v);
+            if (j->attrs) {
+                const mr_mesh one = {.vertex_count = 1,
+                                     .positions = pos + 3 * v,
+                                     .normals = attr[0] ? attr[0] + 3 * v : NULL,
+                                     .texcoords = attr[1] ? attr[1] + 2 * v : NULL,
+                                     .colors = attr[2] ? attr[2] + 4 * v : NULL};
+                j->src.vertex(j->src.impl, gid[v], &one);
+            } else {
+                j->src.position(j->src.impl, gid[v], pos + 3 * v);
+            }
             cut[v] = range_outside(j->range[gid[v]], l, l);
             if (lock)
                 lock[v] = j->o->vertex_lock[gid[v]] != 0;
         }
         j->src.release(j->src.impl);
-        const mr_chunk c = {pos, nv, idx, nt, cut, lock, NULL, NULL, j->diagonal};
+        const mr_chunk c = {.positions = pos,
+                            .vertex_count = nv,
+                            .indices = idx,
+                            .triangle_count = nt,
+                            .cut = cut,
+                            .locked = lock,
+                            .unit = j->diagonal,
+                            .normals = attr[0],
+                            .texcoords = attr[1],
+                            .colors = attr[2]};
         st = run_chunk(j, i, &c, gid, root, err);
     }
     free(idx);
@@ -761,6 +943,8 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
     free(pos);
     free(cut);
     free(lock);
+    for (int a = 0; a < 3; a++)
+        free(attr[a]);
     return st;
 }
 
@@ -806,9 +990,14 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
     uint8_t *lock = j->o->vertex_lock ? mr_alloc_array(nv_max + 1, 1) : NULL;
     uint32_t *idx = mr_alloc_array(nt, 3 * sizeof *idx);
     uint32_t *bmap = mr_alloc_array(b->nv + 1, sizeof *bmap);
-    if (!table || !gid || !pos || !q || !cut || !was || (j->o->vertex_lock && !lock) || !idx ||
-        !bmap) {
-        st = mr_fail_nomem(err, NULL, nv_max * 70 + nt * 12);
+    float *attr[3] = {NULL, NULL, NULL};
+    bool fail = !table || !gid || !pos || !q || !cut || !was || (j->o->vertex_lock && !lock) ||
+                !idx || !bmap;
+    for (int k = 0; k < 3; k++)
+        if (j->attrs & attr_bit[k])
+            fail |= !(attr[k] = mr_alloc_array(nv_max + 1, 4 * attr_floats[k]));
+    if (fail) {
+        st = mr_fail_nomem(err, NULL, nv_max * (70 + attr_bytes(j->attrs)) + nt * 12);
         goto done;
     }
     for (size_t s = 0; s <= mask; s++)
@@ -817,6 +1006,10 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
     for (size_t v = 0; v < a->nv; v++, nv++) {
         gid[nv] = a->gid[v];
         memcpy(pos + 3 * nv, a->pos + 3 * v, 12);
+        for (int k = 0; k < 3; k++)
+            if (attr[k])
+                memcpy(attr[k] + attr_floats[k] * nv, *piece_attr(a, k) + attr_floats[k] * v,
+                       4 * attr_floats[k]);
         q[nv] = a->q[v];
         was[nv] = range_outside(j->range[a->gid[v]], na->first_leaf, na->last_leaf);
         if (was[nv]) {
@@ -849,6 +1042,10 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
         bmap[v] = (uint32_t)nv;
         gid[nv] = g;
         memcpy(pos + 3 * nv, b->pos + 3 * v, 12);
+        for (int k = 0; k < 3; k++)
+            if (attr[k])
+                memcpy(attr[k] + attr_floats[k] * nv, *piece_attr(b, k) + attr_floats[k] * v,
+                       4 * attr_floats[k]);
         q[nv] = b->q[v];
         was[nv] = on_cut;
         nv++;
@@ -867,9 +1064,22 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
     bmap = NULL;
     free(table);
     table = NULL;
-    const mr_chunk c = {pos, nv, idx, nt, cut, lock, q, was, j->diagonal};
+    const mr_chunk c = {.positions = pos,
+                        .vertex_count = nv,
+                        .indices = idx,
+                        .triangle_count = nt,
+                        .cut = cut,
+                        .locked = lock,
+                        .quadrics = q,
+                        .was_cut = was,
+                        .unit = j->diagonal,
+                        .normals = attr[0],
+                        .texcoords = attr[1],
+                        .colors = attr[2]};
     st = run_chunk(j, i, &c, gid, root, err);
 done:
+    for (int k = 0; k < 3; k++)
+        free(attr[k]);
     piece_free(a);
     piece_free(b);
     free(table);
@@ -1014,7 +1224,10 @@ static mr_status recv_piece(job *j, uint32_t i, int from, mr_error *err)
         return st;
     p->nv = (size_t)head[0];
     p->nt = (size_t)head[1];
-    const uint64_t bytes = p->nt ? (uint64_t)p->nv * (16 + sizeof(mr_quadricf)) + 12 * (uint64_t)p->nt : 0;
+    const uint64_t bytes =
+        p->nt ? (uint64_t)p->nv * (16 + sizeof(mr_quadricf) + attr_bytes(j->attrs)) +
+                    12 * (uint64_t)p->nt
+              : 0;
     char *buf = bytes ? mr_alloc_array(MESSAGE_BYTES, 1) : NULL;
     mr_status local = bytes && !buf ? mr_fail_nomem(err, NULL, MESSAGE_BYTES) : MR_OK;
     if (bytes && local == MR_OK)
@@ -1525,7 +1738,15 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
         }
         mr_chunk_result root;
         memset(&root, 0, sizeof root);
-        const mr_chunk c = {bpos, bnv, bidx, bnt, bcut, block, bq, bwas, j->diagonal};
+        const mr_chunk c = {.positions = bpos,
+                            .vertex_count = bnv,
+                            .indices = bidx,
+                            .triangle_count = bnt,
+                            .cut = bcut,
+                            .locked = block,
+                            .quadrics = bq,
+                            .was_cut = bwas,
+                            .unit = j->diagonal};
         if (st == MR_OK)
             st = run_chunk(j, N, &c, bgid, &root, err);
         piece *p = &j->seg[j->nseg];
@@ -1799,11 +2020,22 @@ static mr_status output_fits(const job *j, uint64_t memory, const char *out_path
     /* a forest, written as a PLY stream */
     const mr_format fmt = write && write->format != MR_FORMAT_AUTO ? write->format
                                                                    : mr_format_from_path(out_path);
+    char a[32], b[32];
+    if (fmt == MR_FORMAT_PLY && j->attrs)
+        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
+                             "the output (about %.0f triangles) does not fit the memory budget "
+                             "of %s, and an output written as several chunks' results carries "
+                             "no attributes yet: give at least %s, or drop the attributes "
+                             "(--no-normals, --no-texcoords, --no-colors)",
+                             j->share_triangles, size_text(a, sizeof a, memory),
+                             size_up(b, sizeof b,
+                                     memory + (uint64_t)ceil(4 * j->share_triangles / 3 -
+                                                             (double)j->capacity) *
+                                                  CHUNK_BYTES_PER_TRIANGLE));
     if (fmt == MR_FORMAT_PLY) {
         *forest = true;
         return MR_OK;
     }
-    char a[32], b[32];
     const uint64_t need =
         memory +
         (uint64_t)ceil(4 * j->share_triangles / 3 - (double)j->capacity) * CHUNK_BYTES_PER_TRIANGLE;
@@ -1826,15 +2058,19 @@ static mr_status write_root(job *j, const char *out_path, mr_chunk_result *r,
     m.triangle_count = r->mesh.triangle_count;
     m.positions = r->mesh.positions;
     m.indices = r->mesh.indices;
+    m.normals = r->normals;
+    m.texcoords = r->texcoords;
+    m.colors = r->colors;
     const double t0 = mr_now_seconds();
     mr_status st = mr_mesh_write(out_path, &m, write, err);
     j->st->seconds_write = mr_now_seconds() - t0;
     return st;
 }
 
-/* The input's attributes that the output would keep: the out-of-core path
- * carries none (the write options may drop them: then it goes on). */
-static mr_status check_attributes(const job *j, const mr_write_options *write, mr_error *err)
+/* The input's attributes that the output would keep (the write options
+ * may drop them): carried through the chunks where the source reads a
+ * vertex whole (binary PLY), else refused. */
+static unsigned kept_attributes(const job *j, const mr_write_options *write)
 {
     unsigned dropped = 0;
     if (write) {
@@ -1842,9 +2078,16 @@ static mr_status check_attributes(const job *j, const mr_write_options *write, m
         dropped |= write->write_texcoords ? 0 : MR_ATTR_TEXCOORDS;
         dropped |= write->write_colors ? 0 : MR_ATTR_COLORS;
     }
-    const unsigned kept = j->src.attributes & ~dropped;
-    if (!kept)
+    return j->src.attributes & ~dropped;
+}
+
+static mr_status check_attributes(job *j, const mr_write_options *write, mr_error *err)
+{
+    const unsigned kept = kept_attributes(j, write);
+    if (!kept || j->src.vertex) {
+        j->attrs = kept; /* carried through the chunks */
         return MR_OK;
+    }
     char a[32], what[64] = "";
     const char *names[3] = {"normals", "texture coordinates", "colors"};
     const unsigned bits[3] = {MR_ATTR_NORMALS, MR_ATTR_TEXCOORDS, MR_ATTR_COLORS};
@@ -1853,8 +2096,8 @@ static mr_status check_attributes(const job *j, const mr_write_options *write, m
             snprintf(what + strlen(what), sizeof what - strlen(what), "%s%s",
                      what[0] ? " and " : "", names[i]);
     return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
-                         "its vertices have %s, which the out-of-core path does not carry: "
-                         "drop them from the output (--no-normals, --no-texcoords, "
+                         "its vertices have %s, which the out-of-core path carries for "
+                         "binary PLY inputs only: drop them from the output (--no-normals, --no-texcoords, "
                          "--no-colors) for a simplification of the geometry, or give a "
                          "memory budget of %s for the in-memory path",
                          what, size_up(a, sizeof a, (uint64_t)j->nt * INCORE_BYTES_PER_TRIANGLE));
@@ -1891,7 +2134,10 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     const uint64_t fixed = 4 * (uint64_t)j->nv + (j->o->vertex_lock ? (uint64_t)j->nv : 0) +
                            4 * (uint64_t)grid_bins * grid_bins * grid_bins + buffers +
                            (uint64_t)j->batch * 40;
-    const uint64_t capacity = memory > fixed ? (memory - fixed) / CHUNK_BYTES_PER_TRIANGLE : 0;
+    const uint64_t per_triangle =
+        CHUNK_BYTES_PER_TRIANGLE +
+        (kept_attributes(j, write) && j->src.vertex ? ATTR_BYTES_PER_TRIANGLE : 0);
+    const uint64_t capacity = memory > fixed ? (memory - fixed) / per_triangle : 0;
     /* a chunk well above its cut: 16 sqrt(T) (a cut of a chunk high in
      * the tree is about that long, at the input's resolution) */
     uint64_t least = (uint64_t)ceil(16 * sqrt((double)j->nt));
@@ -1904,7 +2150,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                              "a memory budget of %s is too small for %zu vertices and %zu "
                              "triangles out of core: give at least %s",
                              size_text(a, sizeof a, memory), j->nv, j->nt,
-                             size_up(b, sizeof b, fixed + CHUNK_BYTES_PER_TRIANGLE * least));
+                             size_up(b, sizeof b, fixed + per_triangle * least));
     }
     j->capacity = capacity;
     fs->chunk_capacity = (size_t)capacity;
@@ -2006,10 +2252,14 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                                "the faces changed between two passes over the file");
     if ((st = agree(j, st, err)) != MR_OK)
         return st;
+    if (j->attrs && (st = agree(j, join_coincident(j, memory, err), err)) != MR_OK)
+        return st;
     j->referenced = 0;
     for (size_t v = 0; v < j->nv; v++)
         j->referenced += j->range[v] != RANGE_NONE;
     fs->simplify.input_vertices = j->referenced;
+    if (j->attrs)
+        j->referenced = j->points;
     if ((st = resolve_targets(j, err)) != MR_OK ||
         (st = output_fits(j, memory, out_path, write, &forest, err)) != MR_OK)
         return st;
@@ -2039,7 +2289,8 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
             s->max_error /= j->diagonal;
     } else if (st == MR_OK && j->rank == 0) {
         mr_simplify_stats *s = &fs->simplify;
-        s->output_vertices = s->output_points = root.mesh.vertex_count;
+        s->output_vertices = root.mesh.vertex_count;
+        s->output_points = j->attrs ? root.mesh.stats.output_points : root.mesh.vertex_count;
         s->output_triangles = root.mesh.triangle_count;
         s->stop = root.mesh.stats.stop;
         s->target_reached = root.mesh.stats.target_reached;

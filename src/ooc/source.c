@@ -21,6 +21,11 @@ static void ply_position(const void *impl, uint32_t v, float p[3])
     mr_ply_source_position(impl, v, p);
 }
 
+static void ply_vertex(const void *impl, uint32_t v, const mr_mesh *one)
+{
+    mr_ply_source_vertex(impl, v, one);
+}
+
 static void ply_prefetch(const void *impl, uint32_t first, uint32_t last)
 {
     mr_ply_source_prefetch(impl, first, last);
@@ -489,6 +494,7 @@ mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error
     s->face_chunks = mr_ply_source_face_chunks(p);
     s->vertices = ply_vertices;
     s->position = ply_position;
+    s->vertex = ply_vertex;
     s->prefetch = ply_prefetch;
     s->rewind = ply_rewind;
     s->seek = ply_seek;

@@ -22,6 +22,10 @@ typedef struct ooc_source {
     mr_status (*vertices)(void *impl, size_t first, size_t count, const mr_mesh *block,
                           mr_error *err);
     void (*position)(const void *impl, uint32_t v, float p[3]);
+    /* vertex v's attributes at random into the arrays of `one` (a mesh of
+     * one vertex, positions included), or NULL: the format's attributes
+     * are not carried out of core */
+    void (*vertex)(const void *impl, uint32_t v, const mr_mesh *one);
     void (*prefetch)(const void *impl, uint32_t first, uint32_t last);
     size_t face_chunks;   /* next_faces calls from the first to the last */
     void (*rewind)(void *impl);

@@ -17,7 +17,11 @@ void mr_chunk_result_free(mr_chunk_result *r)
         return;
     mr_simplified_free(&r->mesh);
     free(r->quadrics);
+    free(r->normals);
+    free(r->texcoords);
+    free(r->colors);
     r->quadrics = NULL;
+    r->normals = r->texcoords = r->colors = NULL;
 }
 
 /* The output vertices' quadrics: each survivor's, moved from where the
@@ -30,24 +34,9 @@ static mr_status out_quadrics(const mr_simplifier *s, const float *pos, double u
     out->quadrics = mr_alloc_array(o->vertex_count ? o->vertex_count : 1, sizeof *out->quadrics);
     if (!out->quadrics)
         return mr_fail_nomem(err, NULL, o->vertex_count * sizeof *out->quadrics);
-    /* to the unit: lengths times f (the inverse of the set-up's scaling) */
-    const double f = 1.0 / (unit * s->scale), f2 = f * f;
-    for (size_t i = 0; i < o->vertex_count; i++) {
-        const uint32_t v = o->origin[i];
-        mr_quadric q;
-        mr_quadric_load(&q, &s->q[v]);
-        double d[3];
-        for (int k = 0; k < 3; k++)
-            d[k] = ((double)o->positions[3 * i + k] - s->centre[k]) * s->scale -
-                   pos[3 * (size_t)v + k];
-        if (d[0] != 0 || d[1] != 0 || d[2] != 0)
-            mr_quadric_shift(&q, d);
-        q.a00 *= f2, q.a01 *= f2, q.a02 *= f2, q.a11 *= f2, q.a12 *= f2, q.a22 *= f2;
-        q.b0 *= f2 * f, q.b1 *= f2 * f, q.b2 *= f2 * f;
-        q.c *= f2 * f2;
-        q.w *= f2;
-        mr_quadric_store(&out->quadrics[i], &q);
-    }
+    for (size_t i = 0; i < o->vertex_count; i++)
+        mr_simplifier_quadric_out(s, o->origin[i], pos, o->positions + 3 * i, unit,
+                                  &out->quadrics[i]);
     return MR_OK;
 }
 
@@ -137,6 +126,43 @@ static mr_status simplify_chunk(const mr_chunk *c, const mr_simplify_options *op
     return MR_OK;
 }
 
+/* A chunk of wedges: mr_mesh_simplify's path with the chunk's marks. */
+static mr_status simplify_attributed(const mr_chunk *c, const mr_simplify_options *options,
+                                     mr_chunk_result *out, mr_error *err)
+{
+    const mr_mesh in = {.vertex_count = c->vertex_count,
+                        .triangle_count = c->triangle_count,
+                        .positions = (float *)c->positions,
+                        .normals = (float *)c->normals,
+                        .texcoords = (float *)c->texcoords,
+                        .colors = (float *)c->colors,
+                        .indices = (uint32_t *)c->indices};
+    mr_simplify_options o = *options;
+    o.vertex_lock = NULL;
+    const mr_mesh_chunk_marks marks = {.cut = c->cut,
+                                       .locked = c->locked,
+                                       .quadrics = c->quadrics,
+                                       .was_cut = c->was_cut,
+                                       .unit = c->unit,
+                                       .quadrics_out = &out->quadrics};
+    mr_mesh m;
+    uint32_t *origin = NULL;
+    mr_simplify_stats stats;
+    const mr_status st = mr_mesh_simplify_chunk(&in, &o, &marks, &m, &origin, &stats, err);
+    if (st != MR_OK)
+        return st;
+    out->mesh.vertex_count = m.vertex_count;
+    out->mesh.triangle_count = m.triangle_count;
+    out->mesh.positions = m.positions;
+    out->mesh.indices = m.indices;
+    out->mesh.origin = origin;
+    out->mesh.stats = stats;
+    out->normals = m.normals;
+    out->texcoords = m.texcoords;
+    out->colors = m.colors;
+    return MR_OK;
+}
+
 mr_status mr_simplify_chunk(const mr_chunk *chunk, const mr_simplify_options *options,
                             mr_chunk_result *out, mr_error *err)
 {
@@ -149,6 +175,8 @@ mr_status mr_simplify_chunk(const mr_chunk *chunk, const mr_simplify_options *op
     if (!(chunk->unit > 0))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: a chunk's quadric unit must be > 0");
+    if (chunk->normals || chunk->texcoords || chunk->colors)
+        return simplify_attributed(chunk, options, out, err);
     const int dynamic = mr_omp_fixed_teams();
     const mr_status st = simplify_chunk(chunk, options, out, err);
     mr_omp_restore_teams(dynamic);

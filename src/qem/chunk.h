@@ -29,6 +29,14 @@ typedef struct mr_chunk {
                                      from the triangles) */
     const uint8_t *was_cut;       /* with quadrics: cut where they were made */
     double unit;                  /* the quadrics' length unit, in and out */
+    /* Attributes per vertex, or NULL. With any, the vertices are wedges:
+     * those that are one surface point (mr_surface_points) are one
+     * geometric vertex, simplified as mr_mesh_simplify does (seams kept,
+     * attributes interpolated), cut or locked when one of its wedges is,
+     * with the sum of its wedges' quadrics (mr_mesh_chunk_marks). */
+    const float *normals;         /* 3 * vertex_count */
+    const float *texcoords;       /* 2 * vertex_count */
+    const float *colors;          /* 4 * vertex_count */
 } mr_chunk;
 
 /* The simplified chunk: positions, triangles and each output vertex's
@@ -37,6 +45,10 @@ typedef struct mr_chunk {
 typedef struct mr_chunk_result {
     mr_simplified mesh;
     mr_quadricf *quadrics;
+    /* with the chunk's attributes: the output vertices' (mesh.origin: the
+     * chunk vertex, a wedge), and the quadrics per geometric vertex on
+     * the first of its output vertices, zero on its others */
+    float *normals, *texcoords, *colors;
 } mr_chunk_result;
 
 void mr_chunk_result_free(mr_chunk_result *r);

@@ -33,4 +33,24 @@ void mr_simplify_release_run(mr_simplifier *s);
 /* Free everything: the strategy's state, then the core's. */
 void mr_simplify_discard(mr_simplifier *s);
 
+/* mr_mesh_simplify on one chunk of a larger mesh (chunk.c, for a chunk
+ * whose vertices carry attributes): per input vertex (wedge) its cut and
+ * lock, and the quadrics carried in; a geometric vertex (the wedges that
+ * are one surface point) is cut, locked or was cut when one of its wedges
+ * is, and carries the sum of its wedges' quadrics. Out: per output vertex
+ * a quadric in the unit -- its geometric vertex's on the first of that
+ * vertex's output vertices, zero on the others -- so that a join of
+ * chunks sums each surface point's once whatever wedges meet there. */
+typedef struct mr_mesh_chunk_marks {
+    const uint8_t *cut;           /* per vertex */
+    const uint8_t *locked;        /* per vertex, or NULL */
+    const mr_quadricf *quadrics;  /* per vertex, or NULL */
+    const uint8_t *was_cut;       /* with quadrics */
+    double unit;
+    mr_quadricf **quadrics_out;   /* filled: output vertex_count of them */
+} mr_mesh_chunk_marks;
+mr_status mr_mesh_simplify_chunk(const mr_mesh *in, const mr_simplify_options *options,
+                                 const mr_mesh_chunk_marks *marks, mr_mesh *out,
+                                 uint32_t **origin, mr_simplify_stats *stats, mr_error *err);
+
 #endif

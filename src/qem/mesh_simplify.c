@@ -242,9 +242,77 @@ static float *dup_floats(const float *src, size_t n)
     return d;
 }
 
+/* The chunk's marks by geometric vertex (mr_mesh_chunk_marks): a wedge's
+ * cut, lock and carried quadric go to its surface point. */
+typedef struct geo_marks {
+    uint8_t *cut, *was;
+    mr_quadricf *q;
+} geo_marks;
+
+static void geo_marks_free(geo_marks *g)
+{
+    free(g->cut);
+    free(g->was);
+    free(g->q);
+    memset(g, 0, sizeof *g);
+}
+
+static mr_status geo_marks_make(const mr_mesh_chunk_marks *cm, const uint32_t *geo, size_t vc,
+                                uint8_t *lock, geo_marks *g, mr_error *err)
+{
+    memset(g, 0, sizeof *g);
+    g->cut = mr_calloc_array(vc ? vc : 1, 1);
+    g->was = cm->quadrics ? mr_calloc_array(vc ? vc : 1, 1) : NULL;
+    g->q = cm->quadrics ? mr_calloc_array(vc ? vc : 1, sizeof *g->q) : NULL;
+    if (!g->cut || (cm->quadrics && (!g->was || !g->q))) {
+        geo_marks_free(g);
+        return mr_fail_nomem(err, NULL, vc * (2 + sizeof *g->q));
+    }
+    for (size_t v = 0; v < vc; v++) {
+        const uint32_t p = geo[v];
+        g->cut[p] |= cm->cut[v] != 0;
+        if (cm->cut[v] || (cm->locked && cm->locked[v]))
+            lock[p] = MR_VF_LOCKED;
+        if (cm->quadrics) {
+            g->was[p] |= cm->was_cut[v] != 0;
+            mr_quadric a, b;
+            mr_quadric_load(&a, &g->q[p]);
+            mr_quadric_load(&b, &cm->quadrics[v]);
+            mr_quadric_add(&a, &b);
+            mr_quadric_store(&g->q[p], &a);
+        }
+    }
+    return MR_OK;
+}
+
+/* A chunk's output quadrics (mr_mesh_chunk_marks): each geometric
+ * vertex's on its first output vertex. */
+static mr_status chunk_quadrics_out(const mr_simplifier *s, const mr_mesh_chunk_marks *cm,
+                                    const float *run_pos, const uint32_t *gof, const mr_mesh *out,
+                                    mr_error *err)
+{
+    const size_t nv = out->vertex_count;
+    mr_quadricf *q = mr_calloc_array(nv ? nv : 1, sizeof *q);
+    uint8_t *seen = mr_calloc_array(s->m.vertex_count ? s->m.vertex_count : 1, 1);
+    if (!q || !seen) {
+        free(q);
+        free(seen);
+        return mr_fail_nomem(err, NULL, nv * sizeof *q);
+    }
+    for (size_t i = 0; i < nv; i++) {
+        if (seen[gof[i]])
+            continue;
+        seen[gof[i]] = 1;
+        mr_simplifier_quadric_out(s, gof[i], run_pos, out->positions + 3 * i, cm->unit, &q[i]);
+    }
+    free(seen);
+    *cm->quadrics_out = q;
+    return MR_OK;
+}
+
 static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *options,
-                               mr_mesh *out, uint32_t **origin, mr_simplify_stats *stats,
-                               mr_error *err)
+                               const mr_mesh_chunk_marks *cm, mr_mesh *out, uint32_t **origin,
+                               mr_simplify_stats *stats, mr_error *err)
 {
     if (origin)
         *origin = NULL;
@@ -294,7 +362,8 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     if (options)
         o = *options;
     uint8_t *lock = NULL;
-    if (options && options->vertex_lock) {
+    geo_marks gm = {0};
+    if ((options && options->vertex_lock) || cm) {
         lock = mr_calloc_array(vc, 1);
         if (!lock) {
             free(geo);
@@ -302,15 +371,32 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
             free_ctx(&a);
             return mr_fail_nomem(err, NULL, vc);
         }
-        for (size_t v = 0; v < vc; v++)
-            if (options->vertex_lock[v])
-                lock[geo[v]] = MR_VF_LOCKED;
+        if (options && options->vertex_lock)
+            for (size_t v = 0; v < vc; v++)
+                if (options->vertex_lock[v])
+                    lock[geo[v]] = MR_VF_LOCKED;
         o.vertex_lock = NULL;
+        if (cm && (st = geo_marks_make(cm, geo, vc, lock, &gm, err)) != MR_OK) {
+            free(lock);
+            free(geo);
+            free(gidx);
+            free_ctx(&a);
+            return st;
+        }
     }
     mr_simplifier s;
-    const mr_vertex_marks marks = {.flags = lock};
+    const mr_vertex_marks marks = {.flags = lock,
+                                   .cut = gm.cut,
+                                   .quadrics = gm.q,
+                                   .was_cut = gm.was,
+                                   .unit = cm ? cm->unit : 0};
     st = mr_simplify_setup(&s, in->positions, 0, vc, gidx, tc, options ? &o : NULL, &marks, err);
     free(lock);
+    /* the set-up took the quadrics; the cut stays with the run */
+    free(gm.q);
+    free(gm.was);
+    gm.q = NULL;
+    gm.was = NULL;
     if (st != MR_OK || o.quality != MR_QUALITY_BEST) {
         free(gidx); /* else the last step's samples come from it */
         gidx = NULL;
@@ -318,6 +404,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     if (st != MR_OK) {
         free(geo);
         free_ctx(&a);
+        geo_marks_free(&gm);
         return st;
     }
     if (s.order) {
@@ -328,6 +415,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
             free(geo);
             free(gidx);
             free_ctx(&a);
+        geo_marks_free(&gm);
             return mr_fail_nomem(err, NULL, 3 * tc * sizeof *corner);
         }
 #pragma omp parallel for schedule(static) num_threads(nth) if (par)
@@ -363,21 +451,35 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         free(geo);
         free(gidx);
         free_ctx(&a);
+        geo_marks_free(&gm);
         return st;
     }
     const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplify_run(&s, &max_error);
+    float *before = NULL; /* a chunk's: where the collapses left the vertices */
     if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
-        mr_simplify_release_run(&s);
-        st = mr_simplifier_refine(&s, in->positions, 0, gidx, tc, err);
+        if (cm) {
+            /* the quadrics stay for the output's */
+            mr_simplify_strategy(&s)->release(&s);
+            before = mr_alloc_array(3 * vc, sizeof *before);
+            if (before)
+                memcpy(before, s.m.pos, 12 * vc);
+            else
+                st = mr_fail_nomem(err, NULL, 12 * vc);
+        } else {
+            mr_simplify_release_run(&s);
+        }
+        if (st == MR_OK)
+            st = mr_simplifier_refine(&s, in->positions, 0, gidx, tc, err);
         free(gidx);
         gidx = NULL;
         if (st != MR_OK) {
             mr_simplify_discard(&s);
             free(geo);
-            free(gidx);
+            free(before);
             free_ctx(&a);
+            geo_marks_free(&gm);
             return st;
         }
     }
@@ -385,7 +487,9 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     if (s.cancelled) {
         mr_simplify_discard(&s);
         free(geo);
+        free(before);
         free_ctx(&a);
+        geo_marks_free(&gm);
         return mr_simplifier_cancelled(err);
     }
 
@@ -423,6 +527,17 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
             st = mr_fail_nomem(err, NULL, nv * 4);
         }
     }
+    /* a chunk's: each output vertex's geometric vertex, for its quadric */
+    uint32_t *gof = NULL;
+    if (st == MR_OK && cm) {
+        gof = mr_alloc_array(nv ? nv : 1, sizeof *gof);
+        if (!gof) {
+            mr_mesh_free(out);
+            free(org);
+            org = NULL;
+            st = mr_fail_nomem(err, NULL, nv * 4);
+        }
+    }
     if (st == MR_OK) {
         size_t t2i = 0;
         for (size_t t = 0; t < tc; t++) {
@@ -447,10 +562,16 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
                     memcpy(out->colors + 4 * (size_t)o_, a.colors + 4 * (size_t)w, 16);
                 if (org)
                     org[o_] = w;
+                if (gof)
+                    gof[o_] = g;
             }
             t2i++;
         }
     }
+    if (st == MR_OK && cm)
+        st = chunk_quadrics_out(&s, cm, before ? before : s.m.pos, gof, out, err);
+    free(gof);
+    free(before);
     const size_t input_vertices = s.input_vertices, blocked = s.blocked_vertices;
     const size_t output_points = s.m.live_vertices;
     const mr_simplify_stop stop = s.stop;
@@ -459,8 +580,13 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     mr_simplify_discard(&s);
     free(geo);
     free_ctx(&a);
-    if (st != MR_OK)
+    geo_marks_free(&gm);
+    if (st != MR_OK) {
+        free(org);
+        if (cm)
+            mr_mesh_free(out);
         return st;
+    }
     if (origin)
         *origin = org;
     if (stats) {
@@ -487,7 +613,23 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
                            uint32_t **origin, mr_simplify_stats *stats, mr_error *err)
 {
     const int dynamic = mr_omp_fixed_teams(); /* teams as asked for */
-    const mr_status st = mesh_simplify(in, options, out, origin, stats, err);
+    const mr_status st = mesh_simplify(in, options, NULL, out, origin, stats, err);
+    mr_omp_restore_teams(dynamic);
+    return st;
+}
+
+mr_status mr_mesh_simplify_chunk(const mr_mesh *in, const mr_simplify_options *options,
+                                 const mr_mesh_chunk_marks *marks, mr_mesh *out,
+                                 uint32_t **origin, mr_simplify_stats *stats, mr_error *err)
+{
+    if (!marks || !marks->cut || !marks->quadrics_out || !(marks->unit > 0) ||
+        (marks->quadrics && !marks->was_cut))
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                             "simplify: a chunk needs its cut, a unit > 0, and was_cut with "
+                             "carried quadrics");
+    *marks->quadrics_out = NULL;
+    const int dynamic = mr_omp_fixed_teams();
+    const mr_status st = mesh_simplify(in, options, marks, out, origin, stats, err);
     mr_omp_restore_teams(dynamic);
     return st;
 }

@@ -286,3 +286,22 @@ mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, s
     out->triangle_count = t;
     return MR_OK;
 }
+
+void mr_simplifier_quadric_out(const mr_simplifier *s, uint32_t v, const float *run_pos,
+                               const float out_pos[3], double unit, mr_quadricf *dst)
+{
+    /* to the unit: lengths times f (the inverse of the set-up's scaling) */
+    const double f = 1.0 / (unit * s->scale), f2 = f * f;
+    mr_quadric q;
+    mr_quadric_load(&q, &s->q[v]);
+    double d[3];
+    for (int k = 0; k < 3; k++)
+        d[k] = ((double)out_pos[k] - s->centre[k]) * s->scale - run_pos[3 * (size_t)v + k];
+    if (d[0] != 0 || d[1] != 0 || d[2] != 0)
+        mr_quadric_shift(&q, d);
+    q.a00 *= f2, q.a01 *= f2, q.a02 *= f2, q.a11 *= f2, q.a12 *= f2, q.a22 *= f2;
+    q.b0 *= f2 * f, q.b1 *= f2 * f, q.b2 *= f2 * f;
+    q.c *= f2 * f2;
+    q.w *= f2;
+    mr_quadric_store(dst, &q);
+}

@@ -278,6 +278,11 @@ unsigned mr_simplifier_collapse_at(mr_simplifier *s, uint32_t r, uint32_t k,
 void mr_simplifier_finish(mr_simplifier *s, double max_error);
 mr_status mr_simplifier_output(const mr_simplifier *s, const float *positions, size_t stride,
                                mr_simplified *out, mr_error *err);
+/* Vertex v's quadric for the next run of a chunked job (qem/chunk.h):
+ * moved from where the run left v (run_pos: 3 * vertex_count normalised
+ * positions) to out_pos (model units), in the job's length unit. */
+void mr_simplifier_quadric_out(const mr_simplifier *s, uint32_t v, const float *run_pos,
+                               const float out_pos[3], double unit, mr_quadricf *dst);
 
 /* Report `fraction` of the whole call done (plan.progress, when set)
  * from the calling thread; true when the callback asked to stop
