@@ -963,7 +963,7 @@ PyDoc_STRVAR(simplify_file_doc,
 "(memory, bytes: default 4 GiB; about 160 bytes a triangle) is read whole and\n"
 "simplified as simplify() does (the same bytes); a larger binary PLY is\n"
 "simplified out of core, in chunks that fit, merged up a tree to the target\n"
-"(geometry only). temp_dir: where the temporary files go (they have no name);\n"
+"(its normals, texture coordinates and colors carried). temp_dir: where the temporary files go (they have no name);\n"
 "temp_budget: bytes of them at most. The targets and options as simplify()'s;\n"
 "locked: a boolean mask of the input's vertices or their indices. Returns the\n"
 "statistics: those of simplify(), and out_of_core, chunks, chunk_capacity,\n"

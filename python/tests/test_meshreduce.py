@@ -21,6 +21,9 @@ import meshreduce
 CLI = os.environ.get("MR_CLI", "")
 DATA = os.environ.get("MR_SHARED_DATA", "/work/shared/data")
 BUNNY = os.path.join(DATA, "stanford-bunny.obj")
+# tests/make_seamed.py: a seamed copy of a generated PLY (standard library only)
+MAKE_SEAMED = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests",
+                           "make_seamed.py")
 
 needs_cli = pytest.mark.skipif(not (CLI and os.access(CLI, os.X_OK)),
                                reason="MR_CLI (the meshreduce executable) not given")
@@ -740,6 +743,17 @@ def test_simplify_file_matches_cli(tmp_path):
     st = meshreduce.simplify_file(src, tmp_path / "py.ply", ratio=0.6, memory=2 << 20)
     assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
     assert st["top_chunks"] == out["top_chunks"] >= 2
+    # texture coordinates and colors travel through the chunks (a seamed copy
+    # of the scan): the CLI's bytes, the attributes in the output
+    seamed = tmp_path / "seamed.ply"
+    subprocess.run([sys.executable, MAKE_SEAMED, str(src), str(seamed)], check=True)
+    out = json.loads(cli("simplify", seamed, "-o", tmp_path / "cli.ply", "--ratio", "5%",
+                         "--memory", "6M", "--json", "-q"))
+    st = meshreduce.simplify_file(seamed, tmp_path / "py.ply", ratio=0.05, memory=6 << 20)
+    assert (tmp_path / "cli.ply").read_bytes() == (tmp_path / "py.ply").read_bytes()
+    assert st["out_of_core"] and st["chunks"] == out["chunks"] >= 2
+    got = meshreduce.read(tmp_path / "py.ply")
+    assert got.texcoords is not None and got.colors is not None
     # the locked vertices stay; a budget too small is an error, no output left
     m = meshreduce.read(src)
     st = meshreduce.simplify_file(src, tmp_path / "lk.ply", ratio=0.02, memory=2 << 20,
