@@ -48,6 +48,8 @@ same_at_ranks "the forest" scan.ply --ratio 60% --memory 6M
 # the cuts)
 /usr/bin/python3 "$(dirname "$0")/make_seamed.py" "$W/scan.ply" "$W/seamed.ply" || fail "seamed input"
 same_at_ranks "attributes" seamed.ply --ratio 2% --memory 8M --temp-dir "$W/tmp"
+"$MR" convert "$W/seamed.ply" "$W/seamed.obj" -q || fail "convert seamed"
+same_at_ranks "an OBJ's attributes" seamed.obj --ratio 2% --memory 8M --temp-dir "$W/tmp"
 # cluster: the passes shared out over 1-4 ranks give the single process's
 # bytes (binary PLY in place; OBJ and binary STL through temporary files
 # under a small budget; a cell and a target count)

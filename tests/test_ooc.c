@@ -380,26 +380,6 @@ static void test_targets_and_locks(void **state)
     mr_mesh_free(&m);
 }
 
-static void expect_failure_write(const char *in, const char *out, const mr_simplify_options *o,
-                                 uint64_t kib, const char *tmp, const mr_write_options *w,
-                                 mr_status want, const char *says)
-{
-    mr_out_of_core_options c;
-    mr_out_of_core_options_default(&c);
-    c.memory = kib << 10;
-    c.temp_dir = tmp;
-    mr_error err;
-    unlink(out);
-    const mr_status st = mr_simplify_file(in, out, o, &c, w, NULL, &err);
-    if (st != want) {
-        print_error("status %d, wanted %d: %s\n", (int)st, (int)want,
-                    st == MR_OK ? "(ok)" : err.message);
-        fail();
-    }
-    tu_assert_contains(err.message, says);
-    assert_false(tu_file_exists(out));
-}
-
 /* An OBJ input, parsed in windows into temporary files: the bytes of the
  * same mesh as binary PLY; with texture coordinates, an error unless the
  * output drops them. */
@@ -432,7 +412,14 @@ static void test_obj_input(void **state)
         m.texcoords[2 * v + 1] = m.positions[3 * v + 1] * 0.01f;
     }
     write_mesh(&m, uv);
-    expect_failure_write(uv, b, &o, 2048, tmp, NULL, MR_ERR_UNSUPPORTED, "texture coordinates");
+    /* kept: carried through the chunks (test_attributes), into the output */
+    run_ok(uv, b, &o, 3072, tmp, &st);
+    assert_true(st.out_of_core && st.chunks >= 4);
+    mr_mesh got;
+    read_mesh(b, &got);
+    assert_non_null(got.texcoords);
+    mr_mesh_free(&got);
+    /* dropped: the geometry alone, the PLY's bytes */
     mr_write_options w;
     mr_write_options_default(&w);
     w.write_texcoords = 0;
@@ -467,8 +454,10 @@ static void ideal_color(const float *p, float c[4])
 
 /* A scan whose vertices are split four ways by quadrant of their
  * triangles (texture seams crossing each other and the chunks' cuts),
- * with texture coordinates and colors. */
-static void make_seamed(const char *path, size_t n, mr_mesh *out)
+ * with texture coordinates and colors, as binary PLY at path; and as OBJ
+ * at obj_path, where the split is the faces' (one v line a position, with
+ * its color, a vt line each split vertex, faces v/vt). */
+static void make_seamed(const char *path, const char *obj_path, size_t n, mr_mesh *out)
 {
     mr_mesh g;
     mr_error err;
@@ -506,9 +495,26 @@ static void make_seamed(const char *path, size_t n, mr_mesh *out)
         }
     }
     out->vertex_count = nv;
+    write_mesh(out, path);
+    FILE *f = fopen(obj_path, "w");
+    assert_non_null(f);
+    for (size_t v = 0; v < g.vertex_count; v++) {
+        const float *p = g.positions + 3 * v;
+        float rgba[4];
+        ideal_color(p, rgba);
+        fprintf(f, "v %.9g %.9g %.9g %.9g %.9g %.9g\n", p[0], p[1], p[2], rgba[0], rgba[1],
+                rgba[2]);
+    }
+    for (size_t v = 0; v < nv; v++)
+        fprintf(f, "vt %.9g %.9g\n", out->texcoords[2 * v], out->texcoords[2 * v + 1]);
+    for (size_t t = 0; t < g.triangle_count; t++) {
+        const uint32_t *tri = g.indices + 3 * t, *w = out->indices + 3 * t;
+        fprintf(f, "f %u/%u %u/%u %u/%u\n", tri[0] + 1, w[0] + 1, tri[1] + 1, w[1] + 1,
+                tri[2] + 1, w[2] + 1);
+    }
+    assert_int_equal(fclose(f), 0);
     free(id);
     mr_mesh_free(&g);
-    write_mesh(out, path);
 }
 
 /* RMS and largest distance of the output's texture coordinates from the
@@ -539,24 +545,19 @@ static void attribute_error(const mr_mesh *m, double uv[2], double col[2])
     col[0] = sqrt(col[0] / (double)m->vertex_count);
 }
 
-/* Texture coordinates and colors carried through the chunks: the seams
- * between the quadrants (wedges at one position in different chunks) are
- * joined back without a crack, the vertex target counts surface points as
- * in memory, the attribute error is near the in-memory one, the same bytes
- * at 1, 2, 3 and 8 threads; an output that needs the forest is refused. */
-static void test_attributes(void **state)
+/* Texture coordinates and colors of `in` carried through the chunks: the
+ * seams between the quadrants (wedges at one position in different
+ * chunks) are joined back without a crack, the vertex target counts
+ * surface points as in memory, the attribute error is near the in-memory
+ * one, the same bytes at 1, 2, 3 and 8 threads. */
+static void check_attributed(const char *in, const char *tag)
 {
-    (void)state;
-    char in[1024], out[1024], ref[1024], tmp[1024];
-    tmp_path(in, "ooc-a-seamed.ply");
+    char out[1024], ref[1024], tmp[1024];
     tmp_path(out, "ooc-a-out.ply");
     tmp_path(ref, "ooc-a-ref.ply");
     temp_dir(tmp, "ooc-a-tmp");
     mr_mesh m;
-    mr_mesh_init(&m);
-    make_seamed(in, 100000, &m);
-    mr_mesh_free(&m);
-    read_mesh(in, &m); /* as the file holds it (colors in bytes) */
+    read_mesh(in, &m); /* as the file holds it (a PLY's colors in bytes) */
     mr_stats sin;
     stats_of(&m, &sin);
     assert_true(sin.surface_vertices < m.vertex_count); /* seams */
@@ -569,6 +570,10 @@ static void test_attributes(void **state)
         mr_error err;
         mr_simplify_stats ist;
         assert_int_equal(mr_mesh_simplify(&m, &o, &inmem, NULL, &ist, &err), MR_OK);
+        /* through a PLY file as the output is (colors in bytes) */
+        write_mesh(&inmem, ref);
+        mr_mesh_free(&inmem);
+        read_mesh(ref, &inmem);
         mr_simplify_file_stats st;
         char *first = NULL;
         size_t nfirst = 0;
@@ -577,7 +582,7 @@ static void test_attributes(void **state)
             o.threads = threads[t];
             run_ok(in, out, &o, 6000, tmp, &st);
             if (!st.out_of_core || st.chunks < 8)
-                fail_msg("%zu chunks, wanted 8 or more", st.chunks);
+                fail_msg("%s: %zu chunks, wanted 8 or more", tag, st.chunks);
             assert_int_equal(entries(tmp), 0);
             size_t n;
             char *d = tu_read_file(out, &n);
@@ -586,7 +591,7 @@ static void test_attributes(void **state)
                 continue;
             }
             if (n != nfirst || memcmp(d, first, n) != 0)
-                fail_msg("%d threads gave other bytes than 1", threads[t]);
+                fail_msg("%s: %d threads gave other bytes than 1", tag, threads[t]);
             free(d);
         }
         free(first);
@@ -600,37 +605,56 @@ static void test_attributes(void **state)
         assert_int_equal(s.nonmanifold_edges, 0);
         assert_int_equal(s.nonmanifold_vertices, 0);
         if (s.boundary_loops > sin.boundary_loops)
-            fail_msg("at %g: %zu boundary loops from %zu (a crack)", ratios[r],
+            fail_msg("%s at %g: %zu boundary loops from %zu (a crack)", tag, ratios[r],
                      s.boundary_loops, sin.boundary_loops);
         double uv[2], col[2], iuv[2], icol[2];
         attribute_error(&got, uv, col);
         attribute_error(&inmem, iuv, icol);
         const mr_compare_result a = distance(&m, &inmem), b = distance(&m, &got);
-        print_message("seamed at %g: %zu chunks; RMS %.4g%% (in memory %.4g%%); UV RMS %.3g "
+        print_message("%s at %g: %zu chunks; RMS %.4g%% (in memory %.4g%%); UV RMS %.3g "
                       "max %.3g (%.3g, %.3g); color RMS %.3g max %.3g (%.3g, %.3g)\n",
-                      ratios[r], st.chunks, 100 * b.rms_rel, 100 * a.rms_rel, uv[0], uv[1],
+                      tag, ratios[r], st.chunks, 100 * b.rms_rel, 100 * a.rms_rel, uv[0], uv[1],
                       iuv[0], iuv[1], col[0], col[1], icol[0], icol[1]);
         /* the seams cross the cuts: more is locked below the root than on
          * the plain scan (8.2 % over at 2 %, measured) */
         if (b.rms_rel > 1.12 * a.rms_rel)
-            fail_msg("at %g: RMS %g vs %g in memory", ratios[r], b.rms_rel, a.rms_rel);
+            fail_msg("%s at %g: RMS %g vs %g in memory", tag, ratios[r], b.rms_rel, a.rms_rel);
         /* no seam smeared (the quadrants are 0.5 apart), the field kept */
         if (uv[1] > 0.05 || uv[0] > 1.5 * iuv[0] + 1e-4 || col[0] > 1.5 * icol[0] + 1e-4)
-            fail_msg("at %g: UV RMS %g max %g (in memory %g %g), color RMS %g (%g)", ratios[r],
-                     uv[0], uv[1], iuv[0], iuv[1], col[0], icol[0]);
+            fail_msg("%s at %g: UV RMS %g max %g (in memory %g %g), color RMS %g (%g)", tag,
+                     ratios[r], uv[0], uv[1], iuv[0], iuv[1], col[0], icol[0]);
         mr_mesh_free(&got);
         mr_mesh_free(&inmem);
     }
+    mr_mesh_free(&m);
+}
+
+/* The seamed scan as binary PLY (attributes per vertex) and as OBJ (the
+ * faces' v/vt tuples split the vertices); an output that needs the forest
+ * is refused with attributes. */
+static void test_attributes(void **state)
+{
+    (void)state;
+    char ply[1024], obj[1024], out[1024], tmp[1024];
+    tmp_path(ply, "ooc-a-seamed.ply");
+    tmp_path(obj, "ooc-a-seamed.obj");
+    tmp_path(out, "ooc-a-out.ply");
+    temp_dir(tmp, "ooc-a-tmp");
+    mr_mesh m;
+    mr_mesh_init(&m);
+    make_seamed(ply, obj, 100000, &m);
+    mr_mesh_free(&m);
+    check_attributed(ply, "seamed PLY");
+    check_attributed(obj, "seamed OBJ");
     /* an output larger than a chunk would be several chunks' results */
     mr_simplify_options o;
     mr_simplify_options_default(&o);
     o.target_ratio = 0.9;
     mr_simplify_file_stats st;
     mr_error err;
-    assert_int_not_equal(run(in, out, &o, 6000, tmp, &st, &err), MR_OK);
+    assert_int_not_equal(run(ply, out, &o, 6000, tmp, &st, &err), MR_OK);
     assert_non_null(strstr(err.message, "attributes"));
     assert_int_equal(entries(tmp), 0);
-    mr_mesh_free(&m);
 }
 
 /* ---- failures ---------------------------------------------------------------- */

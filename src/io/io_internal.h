@@ -152,6 +152,16 @@ typedef struct mr_obj_window {
     const float *positions;                /* 3 * vertex_count */
     size_t first_triangle, triangle_count;
     const uint32_t *indices;               /* 3 * triangle_count */
+    /* with mr_obj_stream_keep's attributes, else NULL: */
+    const float *colors;                   /* 4 * vertex_count (white where a
+                                              v line has none) */
+    const uint32_t *corner_texcoords;      /* 3 * triangle_count: vt index
+                                              (global), UINT32_MAX: none */
+    const uint32_t *corner_normals;        /* 3 * triangle_count: vn index */
+    size_t first_texcoord, texcoord_count; /* the window's vt lines */
+    const float *texcoords;                /* 2 * texcoord_count */
+    size_t first_normal, normal_count;     /* its vn lines */
+    const float *normals;                  /* 3 * normal_count */
 } mr_obj_window;
 mr_status mr_obj_stream_open(const char *path, int threads, size_t window,
                              mr_obj_stream **out, mr_error *err);
@@ -161,7 +171,14 @@ size_t mr_obj_stream_triangle_count(const mr_obj_stream *s);
 size_t mr_obj_stream_max_vertices(const mr_obj_stream *s);  /* a window's most */
 size_t mr_obj_stream_max_triangles(const mr_obj_stream *s);
 unsigned mr_obj_stream_attributes(const mr_obj_stream *s);
+/* Before the windows, from the counts: the attributes the file may have
+ * (vt or vn lines; a color on the first v line of a counted chunk). */
+unsigned mr_obj_stream_may_have(const mr_obj_stream *s);
 mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err);
+/* Before the first window: keep these attributes (MR_ATTR_*) of the
+ * windows too -- the v lines' colors, the vt and vn lines, and each
+ * corner's vt and vn index. */
+mr_status mr_obj_stream_keep(mr_obj_stream *s, unsigned attributes, mr_error *err);
 
 /* Check that every coordinate of the mesh's positions is finite and every
  * index is below vertex_count; on failure report the first bad element.

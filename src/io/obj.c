@@ -135,8 +135,9 @@ typedef struct obj_dest {
     float *vt, *vn;            /* 2 per vt, 3 per vn line, or NULL */
     uint32_t *idx;             /* 3 per triangle: v index */
     uint32_t *cvt, *cvn;       /* 3 per triangle: vt / vn index, or NULL */
-    size_t base_v, base_tri;   /* pos, col and idx start at these (a window
-                                  of the file: mr_obj_stream; else 0) */
+    size_t base_v, base_tri;   /* pos, col and idx (cvt, cvn) start at these
+                                  (a window of the file: mr_obj_stream; else 0) */
+    size_t base_vt, base_vn;   /* and vt, vn */
 } obj_dest;
 
 static bool chunk_fail(obj_chunk *c, const char *pos, mr_status st, const char *fmt, ...)
@@ -367,8 +368,8 @@ static bool parse_vt(const char **p, const char *end, obj_chunk *c, const obj_de
     if (!isfinite(u) || !isfinite(w) || !isfinite(x[2]))
         return chunk_fail(c, line, MR_ERR_PARSE, "texture coordinate is not finite");
     if (d->vt) {
-        d->vt[2 * t] = u;
-        d->vt[2 * t + 1] = w;
+        d->vt[2 * (t - d->base_vt)] = u;
+        d->vt[2 * (t - d->base_vt) + 1] = w;
     }
     return true;
 }
@@ -392,7 +393,7 @@ static bool parse_vn(const char **p, const char *end, obj_chunk *c, const obj_de
             return chunk_fail(c, line, MR_ERR_PARSE, "normal is not finite");
     }
     if (d->vn)
-        memcpy(d->vn + 3 * t, f, sizeof f);
+        memcpy(d->vn + 3 * (t - d->base_vn), f, sizeof f);
     return true;
 }
 
@@ -476,11 +477,12 @@ static inline bool parse_corner(const char **p, const char *end, obj_chunk *c,
 
 static inline void put_corner(const obj_dest *d, size_t at, const obj_corner *k)
 {
-    d->idx[at - 3 * d->base_tri] = k->v;
+    const size_t i = at - 3 * d->base_tri;
+    d->idx[i] = k->v;
     if (d->cvt)
-        d->cvt[at] = k->vt;
+        d->cvt[i] = k->vt;
     if (d->cvn)
-        d->cvn[at] = k->vn;
+        d->cvn[i] = k->vn;
 }
 
 /* Parse a face and fan it into triangles (a,b,c), (a,c,d), ... at *tri. */
@@ -1064,7 +1066,12 @@ struct mr_obj_stream {
     obj_chunk *chunks;
     float *pos;
     uint32_t *idx;
-    bool used_vt, used_vn, saw_color;
+    /* mr_obj_stream_keep: the windows' attributes too */
+    unsigned keep;
+    float *col, *vt, *vn;
+    uint32_t *cvt, *cvn;
+    size_t most_vt, most_vn;
+    bool used_vt, used_vn, saw_color, color_hint;
 };
 
 /* Count a window's chunks and give them their starting counts. */
@@ -1134,9 +1141,13 @@ mr_status mr_obj_stream_open(const char *path, int threads, size_t window,
             s->counts.nv += c->nv, s->counts.nvt += c->nvt, s->counts.nvn += c->nvn;
             s->counts.ntri += c->ntri;
             slash |= c->slash;
+            s->color_hint |= c->color_hint;
         }
         w->nv = s->counts.nv - w->v0;
         w->ntri = s->counts.ntri - w->tri0;
+        const size_t nvt = s->counts.nvt - w->vt0, nvn = s->counts.nvn - w->vn0;
+        s->most_vt = nvt > s->most_vt ? nvt : s->most_vt;
+        s->most_vn = nvn > s->most_vn ? nvn : s->most_vn;
         s->most_v = w->nv > s->most_v ? w->nv : s->most_v;
         s->most_tri = w->ntri > s->most_tri ? w->ntri : s->most_tri;
         mr_release_mapped(&s->file, (size_t)(s->begin - s->data) + w->off,
@@ -1171,13 +1182,40 @@ void mr_obj_stream_close(mr_obj_stream *s)
     free(s->chunks);
     free(s->pos);
     free(s->idx);
+    free(s->col);
+    free(s->vt);
+    free(s->vn);
+    free(s->cvt);
+    free(s->cvn);
     free(s);
+}
+
+mr_status mr_obj_stream_keep(mr_obj_stream *s, unsigned attributes, mr_error *err)
+{
+    const size_t corners = 3 * (s->most_tri + 1);
+    s->keep = attributes;
+    if (((attributes & MR_ATTR_COLORS) &&
+         !(s->col = mr_alloc_array(s->most_v + 1, 4 * sizeof *s->col))) ||
+        ((attributes & MR_ATTR_TEXCOORDS) &&
+         (!(s->vt = mr_alloc_array(s->most_vt + 1, 2 * sizeof *s->vt)) ||
+          !(s->cvt = mr_alloc_array(corners, sizeof *s->cvt)))) ||
+        ((attributes & MR_ATTR_NORMALS) &&
+         (!(s->vn = mr_alloc_array(s->most_vn + 1, 3 * sizeof *s->vn)) ||
+          !(s->cvn = mr_alloc_array(corners, sizeof *s->cvn)))))
+        return mr_fail_nomem(err, s->name, s->most_v * 16 + corners * 8);
+    return MR_OK;
 }
 
 size_t mr_obj_stream_vertex_count(const mr_obj_stream *s) { return s->counts.nv; }
 size_t mr_obj_stream_triangle_count(const mr_obj_stream *s) { return s->counts.ntri; }
 size_t mr_obj_stream_max_vertices(const mr_obj_stream *s) { return s->most_v; }
 size_t mr_obj_stream_max_triangles(const mr_obj_stream *s) { return s->most_tri; }
+
+unsigned mr_obj_stream_may_have(const mr_obj_stream *s)
+{
+    return (s->color_hint ? MR_ATTR_COLORS : 0) | (s->counts.nvt ? MR_ATTR_TEXCOORDS : 0) |
+           (s->counts.nvn ? MR_ATTR_NORMALS : 0);
+}
 
 unsigned mr_obj_stream_attributes(const mr_obj_stream *s)
 {
@@ -1194,12 +1232,16 @@ mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err)
     const size_t n = window_chunks(s, win);
     obj_dest d = s->counts;
     d.pos = s->pos;
-    d.col = NULL;
-    d.vt = d.vn = NULL;
+    d.col = s->col;
+    d.vt = s->vt;
+    d.vn = s->vn;
     d.idx = s->idx;
-    d.cvt = d.cvn = NULL;
+    d.cvt = s->cvt;
+    d.cvn = s->cvn;
     d.base_v = win->v0;
     d.base_tri = win->tri0;
+    d.base_vt = win->vt0;
+    d.base_vn = win->vn0;
     run_chunks(s->chunks, n, parse_chunk, &d);
     mr_status st = first_error(s->chunks, n, s->data, s->name, err);
     for (size_t i = 0; i < n; i++) {
@@ -1217,5 +1259,14 @@ mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err)
     w->first_triangle = win->tri0;
     w->triangle_count = win->ntri;
     w->indices = s->idx;
+    w->colors = s->col;
+    w->corner_texcoords = s->cvt;
+    w->corner_normals = s->cvn;
+    w->first_texcoord = win->vt0;
+    w->texcoord_count = s->vt ? (win + 1 < s->win + s->nwin ? win[1].vt0 : s->counts.nvt) - win->vt0 : 0;
+    w->texcoords = s->vt;
+    w->first_normal = win->vn0;
+    w->normal_count = s->vn ? (win + 1 < s->win + s->nwin ? win[1].vn0 : s->counts.nvn) - win->vn0 : 0;
+    w->normals = s->vn;
     return MR_OK;
 }

@@ -993,7 +993,7 @@ mr_status ooc_cluster_file(const char *in_path, const char *out_path,
                 s = ooc_temp_init(&temp, ooc ? ooc->temp_dir : NULL, out_path,
                                   ooc ? ooc->temp_budget : 0, err);
                 if (s == MR_OK)
-                    s = ooc_source_from_obj(os, in_path, &temp, &src, err);
+                    s = ooc_source_from_obj(os, in_path, &temp, 0, 0, 1, &src, err);
                 else
                     mr_obj_stream_close(os);
                 if (s == MR_OK)

@@ -2070,7 +2070,8 @@ static mr_status write_root(job *j, const char *out_path, mr_chunk_result *r,
 /* The input's attributes that the output would keep (the write options
  * may drop them): carried through the chunks where the source reads a
  * vertex whole (binary PLY), else refused. */
-static unsigned kept_attributes(const job *j, const mr_write_options *write)
+/* The attributes the write options keep (MR_ATTR_*). */
+static unsigned written_attributes(const mr_write_options *write)
 {
     unsigned dropped = 0;
     if (write) {
@@ -2078,7 +2079,12 @@ static unsigned kept_attributes(const job *j, const mr_write_options *write)
         dropped |= write->write_texcoords ? 0 : MR_ATTR_TEXCOORDS;
         dropped |= write->write_colors ? 0 : MR_ATTR_COLORS;
     }
-    return j->src.attributes & ~dropped;
+    return (MR_ATTR_NORMALS | MR_ATTR_TEXCOORDS | MR_ATTR_COLORS) & ~dropped;
+}
+
+static unsigned kept_attributes(const job *j, const mr_write_options *write)
+{
+    return j->src.attributes & written_attributes(write);
 }
 
 static mr_status check_attributes(job *j, const mr_write_options *write, mr_error *err)
@@ -2134,9 +2140,11 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     const uint64_t fixed = 4 * (uint64_t)j->nv + (j->o->vertex_lock ? (uint64_t)j->nv : 0) +
                            4 * (uint64_t)grid_bins * grid_bins * grid_bins + buffers +
                            (uint64_t)j->batch * 40;
+    /* with attributes carried (an OBJ's, as far as its counts tell) */
+    const bool carried = (kept_attributes(j, write) && j->src.vertex) ||
+                         (os && (mr_obj_stream_may_have(os) & written_attributes(write)));
     const uint64_t per_triangle =
-        CHUNK_BYTES_PER_TRIANGLE +
-        (kept_attributes(j, write) && j->src.vertex ? ATTR_BYTES_PER_TRIANGLE : 0);
+        CHUNK_BYTES_PER_TRIANGLE + (carried ? ATTR_BYTES_PER_TRIANGLE : 0);
     const uint64_t capacity = memory > fixed ? (memory - fixed) / per_triangle : 0;
     /* a chunk well above its cut: 16 sqrt(T) (a cut of a chunk high in
      * the tree is about that long, at the input's resolution) */
@@ -2167,9 +2175,15 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     const double t0 = stl ? t_weld : mr_now_seconds();
     j->total = 0.1 * (double)j->nt * 4 + (double)j->nt * 2;
     if (os && st == MR_OK)
-        st = ooc_source_from_obj(os, j->in_path, &j->temp, &j->src, err);
-    else
+    {
+        st = ooc_source_from_obj(os, j->in_path, &j->temp, written_attributes(write), memory,
+                                 j->threads, &j->src, err);
+        /* with attributes its vertices are the corners' distinct (v, vt, vn) */
+        if (st == MR_OK)
+            j->nv = j->src.vertex_count;
+    } else {
         mr_obj_stream_close(os);
+    }
     if (st == MR_OK)
         st = check_attributes(j, write, err);
     if ((st = agree(j, st, err)) == MR_OK)

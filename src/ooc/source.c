@@ -60,6 +60,13 @@ typedef struct raw_source {
     const float *map; /* the positions, mapped */
     size_t map_bytes;
     size_t nt, next;  /* triangles; the next to read */
+    /* an OBJ file's attributes (MR_ATTR_*), each vertex's in a row of
+     * astride floats (normals, texture coordinates, colors), mapped */
+    unsigned attrs;
+    size_t astride;
+    ooc_file attr;
+    const float *amap;
+    size_t amap_bytes;
 } raw_source;
 
 static mr_status raw_vertices(void *impl, size_t first, size_t count, const mr_mesh *block,
@@ -81,6 +88,25 @@ static void raw_position(const void *impl, uint32_t v, float p[3])
 {
     const raw_source *r = impl;
     memcpy(p, r->map + 3 * (size_t)v, 12);
+}
+
+static void raw_vertex(const void *impl, uint32_t v, const mr_mesh *one)
+{
+    const raw_source *r = impl;
+    memcpy(one->positions, r->map + 3 * (size_t)v, 12);
+    const float *a = r->amap + r->astride * (size_t)v;
+    if (r->attrs & MR_ATTR_NORMALS) {
+        if (one->normals)
+            memcpy(one->normals, a, 12);
+        a += 3;
+    }
+    if (r->attrs & MR_ATTR_TEXCOORDS) {
+        if (one->texcoords)
+            memcpy(one->texcoords, a, 8);
+        a += 2;
+    }
+    if ((r->attrs & MR_ATTR_COLORS) && one->colors)
+        memcpy(one->colors, a, 16);
 }
 
 static void raw_prefetch(const void *impl, uint32_t first, uint32_t last)
@@ -143,6 +169,8 @@ static void raw_release(void *impl)
     const raw_source *r = impl;
     if (r->map_bytes)
         madvise((void *)r->map, r->map_bytes, MADV_DONTNEED);
+    if (r->amap_bytes)
+        madvise((void *)r->amap, r->amap_bytes, MADV_DONTNEED);
 }
 
 static void raw_close(void *impl)
@@ -150,15 +178,59 @@ static void raw_close(void *impl)
     raw_source *r = impl;
     if (r->map_bytes)
         munmap((void *)r->map, r->map_bytes);
+    if (r->amap_bytes)
+        munmap((void *)r->amap, r->amap_bytes);
     ooc_file_close(r->temp, &r->pos);
     ooc_file_close(r->temp, &r->tri);
+    ooc_file_close(r->temp, &r->attr);
     free(r);
 }
 
 static mr_status raw_finish(raw_source *r, size_t nv, ooc_source *s, mr_error *err);
 
-mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, ooc_source *s,
-                              mr_error *err)
+/* An OBJ file's attribute tables in temporary files while it streams:
+ * the v lines' colors, the vt and vn lines, each corner's vt and vn. */
+typedef struct obj_tables {
+    ooc_file col, vt, vn, cvt, cvn;
+} obj_tables;
+
+static void obj_tables_close(ooc_temp *t, obj_tables *x)
+{
+    ooc_file_close(t, &x->col);
+    ooc_file_close(t, &x->vt);
+    ooc_file_close(t, &x->vn);
+    ooc_file_close(t, &x->cvt);
+    ooc_file_close(t, &x->cvn);
+}
+
+static mr_status obj_tables_write(ooc_temp *t, obj_tables *x, const mr_obj_window *w,
+                                  mr_error *err)
+{
+    mr_status st = MR_OK;
+    if (w->colors && w->vertex_count)
+        st = ooc_file_write(t, &x->col, 16 * (uint64_t)w->first_vertex, w->colors,
+                            16 * w->vertex_count, err);
+    if (st == MR_OK && w->texcoords && w->texcoord_count)
+        st = ooc_file_write(t, &x->vt, 8 * (uint64_t)w->first_texcoord, w->texcoords,
+                            8 * w->texcoord_count, err);
+    if (st == MR_OK && w->normals && w->normal_count)
+        st = ooc_file_write(t, &x->vn, 12 * (uint64_t)w->first_normal, w->normals,
+                            12 * w->normal_count, err);
+    if (st == MR_OK && w->corner_texcoords && w->triangle_count)
+        st = ooc_file_write(t, &x->cvt, 12 * (uint64_t)w->first_triangle, w->corner_texcoords,
+                            12 * w->triangle_count, err);
+    if (st == MR_OK && w->corner_normals && w->triangle_count)
+        st = ooc_file_write(t, &x->cvn, 12 * (uint64_t)w->first_triangle, w->corner_normals,
+                            12 * w->triangle_count, err);
+    return st;
+}
+
+static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt, size_t nvn,
+                            unsigned attrs, uint64_t memory, int threads, const char *path,
+                            size_t *tuples, mr_error *err);
+
+mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, unsigned keep,
+                              uint64_t memory, int threads, ooc_source *s, mr_error *err)
 {
     memset(s, 0, sizeof *s);
     mr_status st;
@@ -168,12 +240,23 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
         return mr_fail_nomem(err, path, sizeof *r);
     }
     r->temp = t;
-    r->pos.fd = r->tri.fd = -1;
-    const size_t nv = mr_obj_stream_vertex_count(os);
+    r->pos.fd = r->tri.fd = r->attr.fd = -1;
+    obj_tables x;
+    x.col.fd = x.vt.fd = x.vn.fd = x.cvt.fd = x.cvn.fd = -1;
+    size_t nv = mr_obj_stream_vertex_count(os);
     r->nt = mr_obj_stream_triangle_count(os);
     st = ooc_file_open(t, &r->pos, err);
     if (st == MR_OK)
         st = ooc_file_open(t, &r->tri, err);
+    if (st == MR_OK && keep)
+        st = mr_obj_stream_keep(os, keep, err);
+    const ooc_file *tab[5] = {&x.col, &x.vt, &x.vn, &x.cvt, &x.cvn};
+    const unsigned need[5] = {MR_ATTR_COLORS, MR_ATTR_TEXCOORDS, MR_ATTR_NORMALS,
+                              MR_ATTR_TEXCOORDS, MR_ATTR_NORMALS};
+    for (int i = 0; i < 5 && st == MR_OK; i++)
+        if (keep & need[i])
+            st = ooc_file_open(t, (ooc_file *)tab[i], err);
+    size_t nvt = 0, nvn = 0;
     for (;;) {
         if (st != MR_OK)
             break;
@@ -188,16 +271,43 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
         if (st == MR_OK && w.triangle_count)
             st = ooc_file_write(t, &r->tri, 12 * (uint64_t)w.first_triangle, w.indices,
                                 12 * w.triangle_count, err);
+        if (st == MR_OK && keep)
+            st = obj_tables_write(t, &x, &w, err);
+        nvt = w.first_texcoord + w.texcoord_count > nvt ? w.first_texcoord + w.texcoord_count
+                                                         : nvt;
+        nvn = w.first_normal + w.normal_count > nvn ? w.first_normal + w.normal_count : nvn;
     }
     const unsigned attributes = st == MR_OK ? mr_obj_stream_attributes(os) : 0;
     mr_obj_stream_close(os);
+    /* the attributes kept that the file has: its vertices are then the
+     * distinct (v, vt, vn) of its corners, as the in-memory reader splits
+     * them (numbered otherwise: by v, then vt and vn) */
+    const unsigned carried = attributes & keep;
+    if (st == MR_OK && carried)
+        st = obj_tuples(r, &x, nv, nvt, nvn, carried, memory, threads, path, &nv, err);
+    obj_tables_close(t, &x);
     if (st != MR_OK) {
         raw_close(r);
         return st;
     }
     st = raw_finish(r, nv, s, err);
     s->attributes = attributes;
-    return st;
+    if (st != MR_OK || !carried)
+        return st;
+    /* the attribute rows, mapped */
+    r->amap_bytes = 4 * r->astride * nv;
+    if (r->amap_bytes) {
+        void *m = mmap(NULL, r->amap_bytes, PROT_READ, MAP_SHARED, r->attr.fd, 0);
+        if (m == MAP_FAILED) {
+            r->amap_bytes = 0;
+            ooc_source_close(s);
+            return mr_fail_plain(err, MR_ERR_IO, t->dir, "cannot map a temporary file: %s",
+                                 strerror(errno));
+        }
+        r->amap = m;
+    }
+    s->vertex = raw_vertex;
+    return MR_OK;
 }
 
 /* The source over r's two files, the positions mapped (nv vertices); on
@@ -295,6 +405,32 @@ static int vertex_of_cmp(const void *a, const void *b)
 {
     const stl_vertex_of *x = a, *y = b;
     return cmp_u64(join64(x->lo, x->hi), join64(y->lo, y->hi));
+}
+
+/* The corners' vertex ids from the merge of c, in corner order: the
+ * triangles, into f. */
+static mr_status write_corners(ooc_temp *t, ooc_extsort *c, ooc_file *f, mr_error *err)
+{
+    uint32_t tri[3 * 4096];
+    size_t tfill = 0;
+    uint64_t written = 0;
+    mr_status st = MR_OK;
+    for (;;) {
+        const void *rec;
+        if ((st = ooc_extsort_next(c, &rec, err)) != MR_OK || !rec)
+            break;
+        tri[tfill++] = ((const stl_vertex_of *)rec)->v;
+        if (tfill == 3 * 4096) {
+            st = ooc_file_write(t, f, 4 * written, tri, 4 * tfill, err);
+            written += tfill;
+            tfill = 0;
+            if (st != MR_OK)
+                break;
+        }
+    }
+    if (st == MR_OK && tfill)
+        st = ooc_file_write(t, f, 4 * written, tri, 4 * tfill, err);
+    return st;
 }
 
 static uint32_t le32(const unsigned char *p)
@@ -452,22 +588,8 @@ mr_status ooc_source_from_stl(const char *path, ooc_temp *t, uint64_t memory, in
     if (st == MR_OK)
         st = ooc_extsort_finish(&c, (size_t)(memory / 4), err);
     /* 4: the triangles, corner by corner */
-    uint32_t tri[3 * 4096];
-    size_t tfill = 0;
-    uint64_t written = 0;
-    for (;;) {
-        const void *rec;
-        if (st != MR_OK || (st = ooc_extsort_next(&c, &rec, err)) != MR_OK || !rec)
-            break;
-        tri[tfill++] = ((const stl_vertex_of *)rec)->v;
-        if (tfill == 3 * 4096) {
-            st = ooc_file_write(t, &r->tri, 4 * written, tri, 4 * tfill, err);
-            written += tfill;
-            tfill = 0;
-        }
-    }
-    if (st == MR_OK && tfill)
-        st = ooc_file_write(t, &r->tri, 4 * written, tri, 4 * tfill, err);
+    if (st == MR_OK)
+        st = write_corners(t, &c, &r->tri, err);
     ooc_extsort_free(&c);
     if (st != MR_OK) {
         raw_close(r);
@@ -510,4 +632,192 @@ void ooc_source_close(ooc_source *s)
     if (s->impl)
         s->close(s->impl);
     memset(s, 0, sizeof *s);
+}
+
+/* ---- an OBJ file's vertices: the distinct (v, vt, vn) of its corners ----------- */
+
+/* A corner: its v, vt and vn (UINT32_MAX: none, or not kept) and number. */
+typedef struct obj_corner_rec {
+    uint32_t v, vt, vn, lo, hi;
+} obj_corner_rec;
+
+static uint64_t obj_corner_key(const void *a)
+{
+    const obj_corner_rec *x = a;
+    return (uint64_t)x->v << 32 | (uint32_t)mr_mix64((uint64_t)x->vt << 32 | x->vn);
+}
+
+static int obj_corner_cmp(const void *a, const void *b)
+{
+    const obj_corner_rec *x = a, *y = b;
+    if (x->v != y->v)
+        return x->v < y->v ? -1 : 1;
+    if (x->vt != y->vt)
+        return x->vt < y->vt ? -1 : 1;
+    if (x->vn != y->vn)
+        return x->vn < y->vn ? -1 : 1;
+    return cmp_u64(join64(x->lo, x->hi), join64(y->lo, y->hi));
+}
+
+/* A read-only map of a temporary file's first `bytes` (NULL for none). */
+static mr_status map_temp(const ooc_temp *t, const ooc_file *f, size_t bytes, const void **out,
+                          mr_error *err)
+{
+    *out = NULL;
+    if (!bytes)
+        return MR_OK;
+    void *m = mmap(NULL, bytes, PROT_READ, MAP_SHARED, f->fd, 0);
+    if (m == MAP_FAILED)
+        return mr_fail_plain(err, MR_ERR_IO, t->dir, "cannot map a temporary file: %s",
+                             strerror(errno));
+    *out = m;
+    return MR_OK;
+}
+
+/* Each vertex (a distinct (v, vt, vn), in that order) gets its position
+ * and attribute row in new files, each corner its vertex, through two
+ * external sorts: the corners by (v, vt, vn), then their vertex ids by
+ * corner (the triangles, in order). r's files become the vertices' ones;
+ * *tuples their count. */
+static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt, size_t nvn,
+                            unsigned attrs, uint64_t memory, int threads, const char *path,
+                            size_t *tuples, mr_error *err)
+{
+    ooc_temp *t = r->temp;
+    const size_t run = (size_t)(memory / 2 < ((uint64_t)8 << 20) ? (uint64_t)8 << 20 : memory / 2);
+    const uint64_t corners = 3 * (uint64_t)r->nt;
+    unsigned index_bits = 1;
+    while (index_bits < 64 && (corners >> index_bits) != 0)
+        index_bits++;
+    const bool tex = attrs & MR_ATTR_TEXCOORDS, nrm = attrs & MR_ATTR_NORMALS,
+               col = attrs & MR_ATTR_COLORS;
+    r->attrs = attrs;
+    r->astride = (nrm ? 3 : 0) + (tex ? 2 : 0) + (col ? 4 : 0);
+    ooc_extsort a, c;
+    memset(&a, 0, sizeof a), memset(&c, 0, sizeof c);
+    a.file.fd = c.file.fd = -1;
+    ooc_file pos = {.fd = -1}, tri = {.fd = -1};
+    const void *mp = NULL, *mc = NULL, *mt = NULL, *mn = NULL;
+    uint32_t *blk = mr_alloc_array(3 * (size_t)RAW_FACES, 3 * sizeof *blk);
+    mr_status st = blk ? MR_OK : mr_fail_nomem(err, path, 36 * (size_t)RAW_FACES);
+    if (st == MR_OK)
+        st = ooc_extsort_init(&a, t, sizeof(obj_corner_rec), run, obj_corner_key, 64,
+                              obj_corner_cmp, threads, err);
+    /* 1: the corners by (v, vt, vn) */
+    for (uint64_t t0 = 0; t0 < r->nt && st == MR_OK; t0 += RAW_FACES) {
+        const size_t n = r->nt - t0 < RAW_FACES ? (size_t)(r->nt - t0) : RAW_FACES;
+        uint32_t *cv = blk, *ct = blk + 3 * (size_t)RAW_FACES, *cn = blk + 6 * (size_t)RAW_FACES;
+        st = ooc_file_read(t, &r->tri, 12 * t0, cv, 12 * n, err);
+        if (st == MR_OK && tex)
+            st = ooc_file_read(t, &x->cvt, 12 * t0, ct, 12 * n, err);
+        if (st == MR_OK && nrm)
+            st = ooc_file_read(t, &x->cvn, 12 * t0, cn, 12 * n, err);
+        for (size_t i = 0; i < 3 * n && st == MR_OK; i++) {
+            const uint64_t k = 3 * t0 + i;
+            const obj_corner_rec e = {cv[i], tex ? ct[i] : UINT32_MAX, nrm ? cn[i] : UINT32_MAX,
+                                      (uint32_t)k, (uint32_t)(k >> 32)};
+            st = ooc_extsort_add(&a, &e, err);
+        }
+    }
+    if (st == MR_OK)
+        st = ooc_extsort_finish(&a, run, err);
+    /* 2: each distinct (v, vt, vn) a vertex: its position and attribute
+     * row; each corner's vertex, to be sorted back by corner */
+    if (st == MR_OK && (st = ooc_file_open(t, &pos, err)) == MR_OK &&
+        (st = ooc_file_open(t, &r->attr, err)) == MR_OK &&
+        (st = map_temp(t, &r->pos, 12 * nv, &mp, err)) == MR_OK &&
+        (st = map_temp(t, &x->col, col ? 16 * nv : 0, &mc, err)) == MR_OK &&
+        (st = map_temp(t, &x->vt, tex ? 8 * nvt : 0, &mt, err)) == MR_OK &&
+        (st = map_temp(t, &x->vn, nrm ? 12 * nvn : 0, &mn, err)) == MR_OK)
+        st = ooc_extsort_init(&c, t, sizeof(stl_vertex_of), run, vertex_of_key, index_bits,
+                              vertex_of_cmp, threads, err);
+    enum { ROWS = 4096 };
+    float prow[3 * ROWS], arow[9 * ROWS];
+    size_t fill = 0;
+    uint64_t n = 0;
+    obj_corner_rec prev = {UINT32_MAX, 0, 0, 0, 0};
+    for (;;) {
+        const void *rec;
+        if (st != MR_OK || (st = ooc_extsort_next(&a, &rec, err)) != MR_OK || !rec)
+            break;
+        const obj_corner_rec *e = rec;
+        if (e->v != prev.v || e->vt != prev.vt || e->vn != prev.vn) {
+            prev = *e;
+            memcpy(prow + 3 * fill, (const float *)mp + 3 * (size_t)e->v, 12);
+            float *ar = arow + r->astride * fill;
+            if (nrm) {
+                if (e->vn != UINT32_MAX)
+                    memcpy(ar, (const float *)mn + 3 * (size_t)e->vn, 12);
+                else
+                    ar[0] = ar[1] = ar[2] = 0;
+                ar += 3;
+            }
+            if (tex) {
+                if (e->vt != UINT32_MAX)
+                    memcpy(ar, (const float *)mt + 2 * (size_t)e->vt, 8);
+                else
+                    ar[0] = ar[1] = 0;
+                ar += 2;
+            }
+            if (col)
+                memcpy(ar, (const float *)mc + 4 * (size_t)e->v, 16);
+            if (++fill == ROWS) {
+                st = ooc_file_write(t, &pos, 12 * (n + 1 - fill), prow, 12 * fill, err);
+                if (st == MR_OK)
+                    st = ooc_file_write(t, &r->attr, 4 * r->astride * (n + 1 - fill), arow,
+                                        4 * r->astride * fill, err);
+                fill = 0;
+            }
+            n++;
+            if (n >= UINT32_MAX) {
+                st = mr_fail_plain(err, MR_ERR_TOO_LARGE, path,
+                                   "more than %u distinct vertex/texture/normal combinations",
+                                   UINT32_MAX - 1);
+                break;
+            }
+            if (n % (1u << 22) == 0) {
+                /* read at random: the pages go (they count in the resident set) */
+                if (mt)
+                    madvise((void *)mt, 8 * nvt, MADV_DONTNEED);
+                if (mn)
+                    madvise((void *)mn, 12 * nvn, MADV_DONTNEED);
+            }
+        }
+        const stl_vertex_of o = {e->lo, e->hi, (uint32_t)(n - 1)};
+        if (st == MR_OK)
+            st = ooc_extsort_add(&c, &o, err);
+    }
+    if (st == MR_OK && fill) {
+        st = ooc_file_write(t, &pos, 12 * (n - fill), prow, 12 * fill, err);
+        if (st == MR_OK)
+            st = ooc_file_write(t, &r->attr, 4 * r->astride * (n - fill), arow,
+                                4 * r->astride * fill, err);
+    }
+    ooc_extsort_free(&a);
+    if (mp)
+        munmap((void *)mp, 12 * nv);
+    if (mc)
+        munmap((void *)mc, 16 * nv);
+    if (mt)
+        munmap((void *)mt, 8 * nvt);
+    if (mn)
+        munmap((void *)mn, 12 * nvn);
+    if (st == MR_OK)
+        st = ooc_extsort_finish(&c, run, err);
+    /* 3: the triangles, corner by corner */
+    if (st == MR_OK && (st = ooc_file_open(t, &tri, err)) == MR_OK)
+        st = write_corners(t, &c, &tri, err);
+    ooc_extsort_free(&c);
+    free(blk);
+    if (st != MR_OK) {
+        ooc_file_close(t, &pos);
+        ooc_file_close(t, &tri);
+        return st;
+    }
+    ooc_file_close(t, &r->pos);
+    ooc_file_close(t, &r->tri);
+    r->pos = pos;
+    r->tri = tri;
+    *tuples = (size_t)n;
+    return MR_OK;
 }

@@ -46,10 +46,15 @@ typedef struct ooc_source {
  * element, strips; another format). */
 mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error *err);
 /* An OBJ file as a source, from its opened stream (which this closes):
- * its windows parsed into temporary files in t. */
+ * its windows parsed into temporary files in t. The vertices are the v
+ * lines; but where the file has attributes among `keep` (MR_ATTR_*: the
+ * faces' vt and vn, the v lines' colors), they are the distinct (v, vt,
+ * vn) of the corners, as the in-memory reader splits them at seams
+ * (numbered by v, then vt and vn; through two external sorts in about
+ * `memory` bytes, on `threads`), read whole by the source's vertex(). */
 typedef struct mr_obj_stream mr_obj_stream;
-mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, ooc_source *s,
-                              mr_error *err);
+mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, unsigned keep,
+                              uint64_t memory, int threads, ooc_source *s, mr_error *err);
 /* A binary STL file as a source: its corners welded as mr_read_stl welds
  * them (bitwise equal positions, numbered by first use) through external
  * sorts in temporary files, in about `memory` bytes (the runs' radix
