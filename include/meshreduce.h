@@ -627,10 +627,9 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
  * An input whose in-memory simplification fits the budget (about 160
  * bytes a triangle) is simplified in memory as mr_mesh_simplify does,
  * with its bytes. On the out-of-core path the normals, texture
- * coordinates and colors of a binary PLY input travel through the chunks
- * (surface points, seams kept, also across the cuts; not into an output
- * larger than a chunk, which then fails saying so); an OBJ input's are
- * refused (MR_ERR_UNSUPPORTED) unless the write options drop them. A
+ * coordinates and colors of a binary PLY or OBJ input travel through the
+ * chunks (surface points, seams kept, also across the cuts; not into an
+ * output larger than a chunk, which then fails saying so). A
  * geometry-only input's vertices are taken as given (a split vertex is a
  * boundary). Indices stay 32-bit: at most 4,294,967,295 vertices and
  * triangles.

@@ -684,7 +684,9 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
                             size_t *tuples, mr_error *err)
 {
     ooc_temp *t = r->temp;
-    const size_t run = (size_t)(memory / 2 < ((uint64_t)8 << 20) ? (uint64_t)8 << 20 : memory / 2);
+    /* a sort's runs or its merge in a quarter of the budget each: one
+     * sort merges while the next fills its runs */
+    const size_t run = (size_t)(memory / 4 < ((uint64_t)4 << 20) ? (uint64_t)4 << 20 : memory / 4);
     const uint64_t corners = 3 * (uint64_t)r->nt;
     unsigned index_bits = 1;
     while (index_bits < 64 && (corners >> index_bits) != 0)
@@ -775,8 +777,11 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
                                    UINT32_MAX - 1);
                 break;
             }
-            if (n % (1u << 22) == 0) {
-                /* read at random: the pages go (they count in the resident set) */
+            if (n % (1u << 20) == 0) {
+                /* read: the pages go (they count in the resident set) */
+                madvise((void *)mp, 12 * nv, MADV_DONTNEED);
+                if (mc)
+                    madvise((void *)mc, 16 * nv, MADV_DONTNEED);
                 if (mt)
                     madvise((void *)mt, 8 * nvt, MADV_DONTNEED);
                 if (mn)
