@@ -3,7 +3,7 @@
  *
  *   bench_outofcore [--sizes 4M,20M] [--large 100M,300M] [--runs N]
  *                   [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC]
- *                   [--cluster]
+ *                   [--cluster | --cluster-only]
  *
  * For each generated scan (written once into DIR as binary PLY, streamed:
  * mr_generate_file), the whole process, as a user runs it: `meshreduce
@@ -31,7 +31,8 @@
  * written (mr_mesh_read, mr_mesh_cluster, mr_mesh_write: the bytes are the
  * same), both in a child process of this program (its peak RSS), at 1 and 2
  * threads, to a fixed cell (1/500 of the diagonal) and to a target count
- * (the ratio of the vertices), median of N alternating runs.
+ * (the ratio of the vertices), median of N alternating runs;
+ * --cluster-only: that alone.
  */
 #define _GNU_SOURCE
 #include "benchutil.h"
@@ -315,6 +316,18 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* The generated scan of T triangles at path, made once. */
+static void ensure_scan(size_t T, const char *in)
+{
+    struct stat sb;
+    if (stat(in, &sb) == 0)
+        return;
+    mr_error err;
+    const double g0 = bench_now();
+    bench_check(mr_generate_file(MR_GEN_SCAN, T, 1, in, NULL, NULL, NULL, &err), &err);
+    fprintf(stderr, "generated %s in %.1f s\n", in, bench_now() - g0);
+}
+
 /* --cluster: in passes against in memory, on each of the sizes. */
 static double cluster_section(const char *self, const char *dir, const size_t *sizes,
                               int nsizes, int runs, double ratio)
@@ -329,6 +342,7 @@ static double cluster_section(const char *self, const char *dir, const size_t *s
         char in[1024], label[32], out[2][1100], target[32];
         snprintf(label, sizeof label, "%zuM", sizes[si] / 1000000);
         snprintf(in, sizeof in, "%s/scan-%s.ply", dir, label);
+        ensure_scan(sizes[si], in);
         snprintf(out[0], sizeof out[0], "%s/cluster-file.ply", dir);
         snprintf(out[1], sizeof out[1], "%s/cluster-memory.ply", dir);
         /* the scan's vertices: about half its triangles */
@@ -377,7 +391,7 @@ int main(int argc, char **argv)
     if (argc == 8 && !strcmp(argv[1], "--cluster-child"))
         return cluster_child(argv + 2);
     size_t sizes[8], large[8];
-    bool cluster = false;
+    bool cluster = false, cluster_only = false;
     int nsizes = parse_list("4M,20M", sizes, 8), nlarge = 0, runs = 3;
     double ratio = 0.01;
     const char *dir = "bench/work", *csv = NULL, *mpiexec = NULL;
@@ -398,10 +412,12 @@ int main(int argc, char **argv)
             mpiexec = argv[++i];
         else if (!strcmp(argv[i], "--cluster"))
             cluster = true;
+        else if (!strcmp(argv[i], "--cluster-only"))
+            cluster = cluster_only = true;
         else {
             fprintf(stderr, "usage: bench_outofcore [--sizes 4M,20M] [--large 100M,300M] "
                             "[--runs N] [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC] "
-                            "[--cluster]\n");
+                            "[--cluster | --cluster-only]\n");
             return 2;
         }
     }
@@ -425,20 +441,14 @@ int main(int argc, char **argv)
     char ratio_s[32];
     snprintf(ratio_s, sizeof ratio_s, "%g", ratio);
     double bar_tp = -1, bar_mpi = -1;
-    for (int big = 0; big < 2; big++) {
+    for (int big = 0; big < 2 && !cluster_only; big++) {
         const int count = big ? nlarge : nsizes;
         for (int si = 0; si < count; si++) {
             const size_t T = big ? large[si] : sizes[si];
             char in[1024], label[32];
             snprintf(label, sizeof label, "%zuM", T / 1000000);
             snprintf(in, sizeof in, "%s/scan-%s.ply", dir, label);
-            struct stat sb;
-            if (stat(in, &sb) != 0) {
-                mr_error err;
-                const double g0 = bench_now();
-                bench_check(mr_generate_file(MR_GEN_SCAN, T, 1, in, NULL, NULL, NULL, &err), &err);
-                fprintf(stderr, "generated %s in %.1f s\n", in, bench_now() - g0);
-            }
+            ensure_scan(T, in);
             const char *ooc_mem = T <= 8000000 ? "256M" : "1G";
             config cfgs[8];
             int nc = 0;
