@@ -457,7 +457,8 @@ static void ideal_color(const float *p, float c[4])
  * with texture coordinates and colors, as binary PLY at path; and as OBJ
  * at obj_path, where the split is the faces' (one v line a position, with
  * its color, a vt line each split vertex, faces v/vt). */
-static void make_seamed(const char *path, const char *obj_path, size_t n, mr_mesh *out)
+static void make_seamed(const char *path, const char *obj_path, size_t n, mr_mesh *out,
+                        size_t *obj_vertices)
 {
     mr_mesh g;
     mr_error err;
@@ -513,6 +514,7 @@ static void make_seamed(const char *path, const char *obj_path, size_t n, mr_mes
                 tri[2] + 1, w[2] + 1);
     }
     assert_int_equal(fclose(f), 0);
+    *obj_vertices = g.vertex_count;
     free(id);
     mr_mesh_free(&g);
 }
@@ -642,15 +644,40 @@ static void test_attributes(void **state)
     temp_dir(tmp, "ooc-a-tmp");
     mr_mesh m;
     mr_mesh_init(&m);
-    make_seamed(ply, obj, 100000, &m);
+    size_t lines;
+    make_seamed(ply, obj, 100000, &m, &lines);
     mr_mesh_free(&m);
     check_attributed(ply, "seamed PLY");
     check_attributed(obj, "seamed OBJ");
-    /* an output larger than a chunk would be several chunks' results */
+    /* the caller's locks are by the OBJ's v lines (its vertices out of
+     * core are (v, vt) tuples): each locked one is in the output */
     mr_simplify_options o;
     mr_simplify_options_default(&o);
-    o.target_ratio = 0.9;
+    o.target_ratio = 0.02;
+    uint8_t *lock = calloc(lines, 1);
+    assert_non_null(lock);
+    for (size_t v = 0; v < lines; v += 211)
+        lock[v] = 1;
+    o.vertex_lock = lock;
     mr_simplify_file_stats st;
+    run_ok(obj, out, &o, 6000, tmp, &st);
+    assert_true(st.out_of_core && st.chunks >= 8);
+    mr_mesh got, in;
+    read_mesh(out, &got);
+    read_mesh(obj, &in); /* its first vertices are the v lines, in order */
+    for (size_t v = 0; v < lines; v += 211) {
+        bool found = false;
+        for (size_t u = 0; u < got.vertex_count && !found; u++)
+            found = !memcmp(got.positions + 3 * u, in.positions + 3 * v, 12);
+        if (!found)
+            fail_msg("locked v line %zu is not in the output", v);
+    }
+    mr_mesh_free(&got);
+    mr_mesh_free(&in);
+    o.vertex_lock = NULL;
+    free(lock);
+    /* an output larger than a chunk would be several chunks' results */
+    o.target_ratio = 0.9;
     mr_error err;
     assert_int_not_equal(run(ply, out, &o, 6000, tmp, &st, &err), MR_OK);
     assert_non_null(strstr(err.message, "attributes"));

@@ -172,7 +172,8 @@ size_t mr_obj_stream_max_vertices(const mr_obj_stream *s);  /* a window's most *
 size_t mr_obj_stream_max_triangles(const mr_obj_stream *s);
 unsigned mr_obj_stream_attributes(const mr_obj_stream *s);
 /* Before the windows, from the counts: the attributes the file may have
- * (vt or vn lines; a color on the first v line of a counted chunk). */
+ * (vt or vn lines; a color on the first v line of some window: the
+ * windows depend on the file and `window` only). */
 unsigned mr_obj_stream_may_have(const mr_obj_stream *s);
 mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err);
 /* Before the first window: keep these attributes (MR_ATTR_*) of the

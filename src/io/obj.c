@@ -1136,12 +1136,17 @@ mr_status mr_obj_stream_open(const char *path, int threads, size_t window,
         w->v0 = s->counts.nv, w->vt0 = s->counts.nvt, w->vn0 = s->counts.nvn;
         w->tri0 = s->counts.ntri;
         const size_t n = window_chunks(s, w);
+        bool first_v = true;
         for (size_t i = 0; i < n; i++) {
             const obj_chunk *c = &s->chunks[i];
             s->counts.nv += c->nv, s->counts.nvt += c->nvt, s->counts.nvn += c->nvn;
             s->counts.ntri += c->ntri;
             slash |= c->slash;
-            s->color_hint |= c->color_hint;
+            /* the window's first v line (whatever the chunks): a color? */
+            if (first_v && c->nv) {
+                s->color_hint |= c->color_hint;
+                first_v = false;
+            }
         }
         w->nv = s->counts.nv - w->v0;
         w->ntri = s->counts.ntri - w->tri0;

@@ -180,6 +180,13 @@ typedef struct job {
     size_t nseg;
 } job;
 
+/* The caller's lock of vertex v (options.vertex_lock is by the input's
+ * vertices: an OBJ's v lines where its vertices are (v, vt, vn)). */
+static inline bool input_locked(const job *j, uint32_t v)
+{
+    return j->o->vertex_lock[j->src.origin ? j->src.origin(j->src.impl, v) : v] != 0;
+}
+
 /* ---- the ranks ------------------------------------------------------------------ */
 
 /* Every rank's outcome (one rank: its own). */
@@ -923,7 +930,7 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
             }
             cut[v] = range_outside(j->range[gid[v]], l, l);
             if (lock)
-                lock[v] = j->o->vertex_lock[gid[v]] != 0;
+                lock[v] = input_locked(j, gid[v]);
         }
         j->src.release(j->src.impl);
         const mr_chunk c = {.positions = pos,
@@ -1056,7 +1063,7 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
     for (size_t v = 0; v < nv; v++) {
         cut[v] = range_outside(j->range[gid[v]], n->first_leaf, n->last_leaf);
         if (lock)
-            lock[v] = j->o->vertex_lock[gid[v]] != 0;
+            lock[v] = input_locked(j, gid[v]);
     }
     piece_free(a);
     piece_free(b);
@@ -1734,7 +1741,7 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
             if (!block)
                 st = mr_fail_nomem(err, NULL, bnv);
             for (size_t v = 0; st == MR_OK && v < bnv; v++)
-                block[v] = j->o->vertex_lock[bgid[v]] != 0;
+                block[v] = input_locked(j, bgid[v]);
         }
         mr_chunk_result root;
         memset(&root, 0, sizeof root);
@@ -2031,7 +2038,8 @@ static mr_status output_fits(const job *j, uint64_t memory, const char *out_path
                              size_up(b, sizeof b,
                                      memory + (uint64_t)ceil(4 * j->share_triangles / 3 -
                                                              (double)j->capacity) *
-                                                  CHUNK_BYTES_PER_TRIANGLE));
+                                                  (CHUNK_BYTES_PER_TRIANGLE +
+                                                   ATTR_BYTES_PER_TRIANGLE)));
     if (fmt == MR_FORMAT_PLY) {
         *forest = true;
         return MR_OK;
@@ -2090,7 +2098,7 @@ static unsigned kept_attributes(const job *j, const mr_write_options *write)
 static mr_status check_attributes(job *j, const mr_write_options *write, mr_error *err)
 {
     const unsigned kept = kept_attributes(j, write);
-    if (!kept || j->src.vertex) {
+    if (!(kept & ~j->src.carried)) {
         j->attrs = kept; /* carried through the chunks */
         return MR_OK;
     }
@@ -2102,11 +2110,47 @@ static mr_status check_attributes(job *j, const mr_write_options *write, mr_erro
             snprintf(what + strlen(what), sizeof what - strlen(what), "%s%s",
                      what[0] ? " and " : "", names[i]);
     return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
-                         "its vertices have %s, which the out-of-core path carries for "
-                         "binary PLY inputs only: drop them from the output (--no-normals, --no-texcoords, "
+                         "its vertices have %s, which the out-of-core path does not carry "
+                         "here (an OBJ's colors are kept where the first v line of a window of "
+                         "its parse has one): drop them from the output (--no-normals, --no-texcoords, "
                          "--no-colors) for a simplification of the geometry, or give a "
                          "memory budget of %s for the in-memory path",
                          what, size_up(a, sizeof a, (uint64_t)j->nt * INCORE_BYTES_PER_TRIANGLE));
+}
+
+/* The chunk's capacity C from the budget: what the vertex table, the
+ * tree's grid, the spill's buffers and a face batch leave, at
+ * CHUNK_BYTES_PER_TRIANGLE a triangle (and ATTR_BYTES_PER_TRIANGLE with
+ * attributes); an error where C is too small. */
+static mr_status size_chunks(job *j, uint64_t memory, uint32_t grid_bins, uint64_t buffers,
+                             mr_error *err)
+{
+    char a[32], b[32];
+    if (j->nv > UINT32_MAX)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, j->in_path,
+                             "%zu vertices exceed the 32-bit index limit", j->nv);
+    const uint64_t fixed = 4 * (uint64_t)j->nv + (j->o->vertex_lock ? (uint64_t)j->nv : 0) +
+                           4 * (uint64_t)grid_bins * grid_bins * grid_bins + buffers +
+                           (uint64_t)j->batch * 40;
+    const uint64_t per_triangle =
+        CHUNK_BYTES_PER_TRIANGLE + (j->attrs ? ATTR_BYTES_PER_TRIANGLE : 0);
+    const uint64_t capacity = memory > fixed ? (memory - fixed) / per_triangle : 0;
+    /* a chunk well above its cut: 16 sqrt(T) (a cut of a chunk high in
+     * the tree is about that long, at the input's resolution) */
+    uint64_t least = (uint64_t)ceil(16 * sqrt((double)j->nt));
+    least = least > MIN_CAPACITY ? least : MIN_CAPACITY;
+    if (2 * (uint64_t)j->nt / (MAX_LEAVES / 2) > least)
+        least = 2 * (uint64_t)j->nt / (MAX_LEAVES / 2);
+    if (capacity < least)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
+                             "a memory budget of %s is too small for %zu vertices and %zu "
+                             "triangles out of core%s: give at least %s",
+                             size_text(a, sizeof a, memory), j->nv, j->nt,
+                             j->attrs ? " with their attributes" : "",
+                             size_up(b, sizeof b, fixed + per_triangle * least));
+    j->capacity = capacity;
+    j->st->chunk_capacity = (size_t)capacity;
+    return MR_OK;
 }
 
 static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
@@ -2114,7 +2158,6 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                              mr_obj_stream *os, bool stl, mr_error *err)
 {
     mr_simplify_file_stats *fs = j->st;
-    char a[32], b[32];
     mr_status st;
     const double t_weld = mr_now_seconds();
     if (stl) {
@@ -2128,40 +2171,17 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
             return st;
         j->nv = j->src.vertex_count;
     }
-    if (j->nv > UINT32_MAX)
-        return mr_fail_plain(err, MR_ERR_TOO_LARGE, j->in_path,
-                             "%zu vertices exceed the 32-bit index limit", j->nv);
-    /* the budget: the vertex table, the tree's grid, the spill's buffers,
-     * a face batch; the rest for a chunk */
+    /* the budget's parts (a binary PLY's attributes known now; an OBJ's
+     * once it is parsed, when the chunks are sized again) */
     const uint32_t grid_bins = memory >= ((uint64_t)256 << 20) ? 64 : 32;
     const uint64_t buffers = memory / 16 < ((uint64_t)64 << 20) ? memory / 16 : (uint64_t)64 << 20;
     const uint64_t batch = memory / 640;
     j->batch = batch < 4096 ? 4096 : batch > FACE_BATCH ? FACE_BATCH : (size_t)batch;
-    const uint64_t fixed = 4 * (uint64_t)j->nv + (j->o->vertex_lock ? (uint64_t)j->nv : 0) +
-                           4 * (uint64_t)grid_bins * grid_bins * grid_bins + buffers +
-                           (uint64_t)j->batch * 40;
-    /* with attributes carried (an OBJ's, as far as its counts tell) */
-    const bool carried = (kept_attributes(j, write) && j->src.vertex) ||
-                         (os && (mr_obj_stream_may_have(os) & written_attributes(write)));
-    const uint64_t per_triangle =
-        CHUNK_BYTES_PER_TRIANGLE + (carried ? ATTR_BYTES_PER_TRIANGLE : 0);
-    const uint64_t capacity = memory > fixed ? (memory - fixed) / per_triangle : 0;
-    /* a chunk well above its cut: 16 sqrt(T) (a cut of a chunk high in
-     * the tree is about that long, at the input's resolution) */
-    uint64_t least = (uint64_t)ceil(16 * sqrt((double)j->nt));
-    least = least > MIN_CAPACITY ? least : MIN_CAPACITY;
-    if (2 * (uint64_t)j->nt / (MAX_LEAVES / 2) > least)
-        least = 2 * (uint64_t)j->nt / (MAX_LEAVES / 2);
-    if (capacity < least) {
+    j->attrs = kept_attributes(j, write) & j->src.carried;
+    if ((st = size_chunks(j, memory, grid_bins, buffers, err)) != MR_OK) {
         mr_obj_stream_close(os);
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
-                             "a memory budget of %s is too small for %zu vertices and %zu "
-                             "triangles out of core: give at least %s",
-                             size_text(a, sizeof a, memory), j->nv, j->nt,
-                             size_up(b, sizeof b, fixed + per_triangle * least));
+        return st;
     }
-    j->capacity = capacity;
-    fs->chunk_capacity = (size_t)capacity;
     /* the targets' triangles as far as the counts tell before the passes
      * (the vertex count's at least), to say early what does not fit */
     j->referenced = j->nv;
@@ -2176,11 +2196,16 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     j->total = 0.1 * (double)j->nt * 4 + (double)j->nt * 2;
     if (os && st == MR_OK)
     {
-        st = ooc_source_from_obj(os, j->in_path, &j->temp, written_attributes(write), memory,
+        st = ooc_source_from_obj(os, j->in_path, &j->temp,
+                                 written_attributes(write) & mr_obj_stream_may_have(os), memory,
                                  j->threads, &j->src, err);
-        /* with attributes its vertices are the corners' distinct (v, vt, vn) */
-        if (st == MR_OK)
+        /* with attributes its vertices are the corners' distinct (v, vt, vn),
+         * and its chunks take them */
+        if (st == MR_OK) {
             j->nv = j->src.vertex_count;
+            j->attrs = kept_attributes(j, write) & j->src.carried;
+            st = size_chunks(j, memory, grid_bins, buffers, err);
+        }
     } else {
         mr_obj_stream_close(os);
     }
@@ -2189,7 +2214,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     if ((st = agree(j, st, err)) == MR_OK)
         st = bounds_pass(j, err);
     if (st == MR_OK)
-        st = ooc_tree_init(&j->tree, j->lo, j->hi, grid_bins, capacity, err);
+        st = ooc_tree_init(&j->tree, j->lo, j->hi, grid_bins, j->capacity, err);
     for (int round = 0; st == MR_OK && ooc_tree_open(&j->tree); round++) {
         st = agree(j, face_pass(j, count_batch, NULL, err), err);
         /* every rank's counts: sums of integers, exact */

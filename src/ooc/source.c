@@ -67,6 +67,9 @@ typedef struct raw_source {
     ooc_file attr;
     const float *amap;
     size_t amap_bytes;
+    ooc_file org;          /* each vertex's v line */
+    const uint32_t *omap;
+    size_t omap_bytes;
 } raw_source;
 
 static mr_status raw_vertices(void *impl, size_t first, size_t count, const mr_mesh *block,
@@ -107,6 +110,11 @@ static void raw_vertex(const void *impl, uint32_t v, const mr_mesh *one)
     }
     if ((r->attrs & MR_ATTR_COLORS) && one->colors)
         memcpy(one->colors, a, 16);
+}
+
+static uint32_t raw_origin(const void *impl, uint32_t v)
+{
+    return ((const raw_source *)impl)->omap[v];
 }
 
 static void raw_prefetch(const void *impl, uint32_t first, uint32_t last)
@@ -171,6 +179,8 @@ static void raw_release(void *impl)
         madvise((void *)r->map, r->map_bytes, MADV_DONTNEED);
     if (r->amap_bytes)
         madvise((void *)r->amap, r->amap_bytes, MADV_DONTNEED);
+    if (r->omap_bytes)
+        madvise((void *)r->omap, r->omap_bytes, MADV_DONTNEED);
 }
 
 static void raw_close(void *impl)
@@ -180,9 +190,12 @@ static void raw_close(void *impl)
         munmap((void *)r->map, r->map_bytes);
     if (r->amap_bytes)
         munmap((void *)r->amap, r->amap_bytes);
+    if (r->omap_bytes)
+        munmap((void *)r->omap, r->omap_bytes);
     ooc_file_close(r->temp, &r->pos);
     ooc_file_close(r->temp, &r->tri);
     ooc_file_close(r->temp, &r->attr);
+    ooc_file_close(r->temp, &r->org);
     free(r);
 }
 
@@ -225,6 +238,8 @@ static mr_status obj_tables_write(ooc_temp *t, obj_tables *x, const mr_obj_windo
     return st;
 }
 
+static mr_status map_temp(const ooc_temp *t, const ooc_file *f, size_t bytes, const void **out,
+                          mr_error *err);
 static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt, size_t nvn,
                             unsigned attrs, uint64_t memory, int threads, const char *path,
                             size_t *tuples, mr_error *err);
@@ -240,7 +255,7 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
         return mr_fail_nomem(err, path, sizeof *r);
     }
     r->temp = t;
-    r->pos.fd = r->tri.fd = r->attr.fd = -1;
+    r->pos.fd = r->tri.fd = r->attr.fd = r->org.fd = -1;
     obj_tables x;
     x.col.fd = x.vt.fd = x.vn.fd = x.cvt.fd = x.cvn.fd = -1;
     size_t nv = mr_obj_stream_vertex_count(os);
@@ -294,19 +309,18 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
     s->attributes = attributes;
     if (st != MR_OK || !carried)
         return st;
-    /* the attribute rows, mapped */
-    r->amap_bytes = 4 * r->astride * nv;
-    if (r->amap_bytes) {
-        void *m = mmap(NULL, r->amap_bytes, PROT_READ, MAP_SHARED, r->attr.fd, 0);
-        if (m == MAP_FAILED) {
-            r->amap_bytes = 0;
-            ooc_source_close(s);
-            return mr_fail_plain(err, MR_ERR_IO, t->dir, "cannot map a temporary file: %s",
-                                 strerror(errno));
-        }
-        r->amap = m;
+    /* the attribute rows and the v lines, mapped */
+    const void *am, *om;
+    if ((st = map_temp(t, &r->attr, 4 * r->astride * nv, &am, err)) != MR_OK ||
+        (st = map_temp(t, &r->org, 4 * nv, &om, err)) != MR_OK) {
+        ooc_source_close(s);
+        return st;
     }
+    r->amap = am, r->amap_bytes = am ? 4 * r->astride * nv : 0;
+    r->omap = om, r->omap_bytes = om ? 4 * nv : 0;
     s->vertex = raw_vertex;
+    s->origin = raw_origin;
+    s->carried = carried;
     return MR_OK;
 }
 
@@ -617,6 +631,7 @@ mr_status ooc_source_open(const char *path, int threads, ooc_source *s, mr_error
     s->vertices = ply_vertices;
     s->position = ply_position;
     s->vertex = ply_vertex;
+    s->carried = s->attributes;
     s->prefetch = ply_prefetch;
     s->rewind = ply_rewind;
     s->seek = ply_seek;
@@ -674,6 +689,20 @@ static mr_status map_temp(const ooc_temp *t, const ooc_file *f, size_t bytes, co
     return MR_OK;
 }
 
+/* Vertices first..first+n: their positions, attribute rows (astride
+ * floats) and v lines. */
+static mr_status write_rows(ooc_temp *t, ooc_file *pos, ooc_file *attr, ooc_file *org,
+                            size_t astride, uint64_t first, size_t n, const float *prow,
+                            const float *arow, const uint32_t *orow, mr_error *err)
+{
+    mr_status st = ooc_file_write(t, pos, 12 * first, prow, 12 * n, err);
+    if (st == MR_OK)
+        st = ooc_file_write(t, attr, 4 * astride * first, arow, 4 * astride * n, err);
+    if (st == MR_OK)
+        st = ooc_file_write(t, org, 4 * first, orow, 4 * n, err);
+    return st;
+}
+
 /* Each vertex (a distinct (v, vt, vn), in that order) gets its position
  * and attribute row in new files, each corner its vertex, through two
  * external sorts: the corners by (v, vt, vn), then their vertex ids by
@@ -721,6 +750,10 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
             st = ooc_extsort_add(&a, &e, err);
         }
     }
+    /* the corners are in the sort: their files go (temporary disk) */
+    ooc_file_close(t, &r->tri);
+    ooc_file_close(t, &x->cvt);
+    ooc_file_close(t, &x->cvn);
     if (st == MR_OK)
         st = ooc_extsort_finish(&a, run, err);
     /* 2: each distinct (v, vt, vn) a vertex: its position and attribute
@@ -734,7 +767,13 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
         st = ooc_extsort_init(&c, t, sizeof(stl_vertex_of), run, vertex_of_key, index_bits,
                               vertex_of_cmp, threads, err);
     enum { ROWS = 4096 };
-    float prow[3 * ROWS], arow[9 * ROWS];
+    /* positions, attribute rows (9 floats at most), v lines */
+    float *prow = mr_alloc_array(13 * ROWS, sizeof *prow), *arow = prow ? prow + 3 * ROWS : NULL;
+    uint32_t *orow = prow ? (uint32_t *)(arow + 9 * ROWS) : NULL;
+    if (st == MR_OK && !prow)
+        st = mr_fail_nomem(err, path, 52 * ROWS);
+    if (st == MR_OK)
+        st = ooc_file_open(t, &r->org, err);
     size_t fill = 0;
     uint64_t n = 0;
     obj_corner_rec prev = {UINT32_MAX, 0, 0, 0, 0};
@@ -746,6 +785,7 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
         if (e->v != prev.v || e->vt != prev.vt || e->vn != prev.vn) {
             prev = *e;
             memcpy(prow + 3 * fill, (const float *)mp + 3 * (size_t)e->v, 12);
+            orow[fill] = e->v;
             float *ar = arow + r->astride * fill;
             if (nrm) {
                 if (e->vn != UINT32_MAX)
@@ -764,10 +804,8 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
             if (col)
                 memcpy(ar, (const float *)mc + 4 * (size_t)e->v, 16);
             if (++fill == ROWS) {
-                st = ooc_file_write(t, &pos, 12 * (n + 1 - fill), prow, 12 * fill, err);
-                if (st == MR_OK)
-                    st = ooc_file_write(t, &r->attr, 4 * r->astride * (n + 1 - fill), arow,
-                                        4 * r->astride * fill, err);
+                st = write_rows(t, &pos, &r->attr, &r->org, r->astride, n + 1 - fill, fill, prow,
+                                arow, orow, err);
                 fill = 0;
             }
             n++;
@@ -792,12 +830,10 @@ static mr_status obj_tuples(raw_source *r, obj_tables *x, size_t nv, size_t nvt,
         if (st == MR_OK)
             st = ooc_extsort_add(&c, &o, err);
     }
-    if (st == MR_OK && fill) {
-        st = ooc_file_write(t, &pos, 12 * (n - fill), prow, 12 * fill, err);
-        if (st == MR_OK)
-            st = ooc_file_write(t, &r->attr, 4 * r->astride * (n - fill), arow,
-                                4 * r->astride * fill, err);
-    }
+    if (st == MR_OK && fill)
+        st = write_rows(t, &pos, &r->attr, &r->org, r->astride, n - fill, fill, prow, arow, orow,
+                        err);
+    free(prow);
     ooc_extsort_free(&a);
     if (mp)
         munmap((void *)mp, 12 * nv);

@@ -26,6 +26,10 @@ typedef struct ooc_source {
      * one vertex, positions included), or NULL: the format's attributes
      * are not carried out of core */
     void (*vertex)(const void *impl, uint32_t v, const mr_mesh *one);
+    unsigned carried;     /* MR_ATTR_* that vertex() fills */
+    /* vertex v's place among the file's own vertices (an OBJ's v line,
+     * where its vertices are the corners' (v, vt, vn)), or NULL: v */
+    uint32_t (*origin)(const void *impl, uint32_t v);
     void (*prefetch)(const void *impl, uint32_t first, uint32_t last);
     size_t face_chunks;   /* next_faces calls from the first to the last */
     void (*rewind)(void *impl);
