@@ -359,6 +359,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
 
     /* A vertex lock on any wedge locks the geometric vertex. */
     mr_simplify_options o;
+    mr_simplify_options_default(&o); /* read below even without options */
     if (options)
         o = *options;
     uint8_t *lock = NULL;
