@@ -629,9 +629,10 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
  * with its bytes. On the out-of-core path the normals, texture
  * coordinates and colors of a binary PLY or OBJ input travel through the
  * chunks (surface points, seams kept, also across the cuts; not into an
- * output larger than a chunk, which then fails saying so). A
- * geometry-only input's vertices are taken as given (a split vertex is a
- * boundary). Indices stay 32-bit: at most 4,294,967,295 vertices and
+ * output larger than a chunk, which then fails saying so); a PLY's
+ * vertices split by attributes that the write options drop are joined
+ * as in memory. A PLY without attributes is taken as given (a vertex
+ * repeated at one position is a boundary). Indices stay 32-bit: at most 4,294,967,295 vertices and
  * triangles.
  */
 #define MR_MEMORY_DEFAULT ((uint64_t)4 << 30) /* 4 GiB */

@@ -676,9 +676,29 @@ static void test_attributes(void **state)
     mr_mesh_free(&in);
     o.vertex_lock = NULL;
     free(lock);
+    /* the PLY's attributes dropped by the write options: its vertices
+     * stay split at the seams, and are joined as in memory (no crack) */
+    mr_write_options w;
+    mr_write_options_default(&w);
+    w.write_texcoords = w.write_colors = 0;
+    mr_out_of_core_options c;
+    mr_out_of_core_options_default(&c);
+    c.memory = 6000 << 10;
+    c.temp_dir = tmp;
+    mr_error err;
+    assert_int_equal(mr_simplify_file(ply, out, &o, &c, &w, &st, &err), MR_OK);
+    assert_true(st.out_of_core && st.chunks >= 8);
+    read_mesh(out, &got);
+    assert_null(got.texcoords);
+    mr_stats s;
+    stats_of(&got, &s);
+    if (s.boundary_edges || s.nonmanifold_edges)
+        fail_msg("attributes dropped: %zu boundary, %zu non-manifold edges from a closed input",
+                 s.boundary_edges, s.nonmanifold_edges);
+    assert_int_equal(s.surface_vertices, st.simplify.output_points);
+    mr_mesh_free(&got);
     /* an output larger than a chunk would be several chunks' results */
     o.target_ratio = 0.9;
-    mr_error err;
     assert_int_not_equal(run(ply, out, &o, 6000, tmp, &st, &err), MR_OK);
     assert_non_null(strstr(err.message, "attributes"));
     assert_int_equal(entries(tmp), 0);

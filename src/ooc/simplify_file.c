@@ -152,6 +152,10 @@ typedef struct job {
     uint32_t *range;         /* per vertex: its first and last leaf (with
                                 attributes: of every vertex at its position) */
     unsigned attrs;          /* MR_ATTR_* carried through the chunks */
+    bool wedges;             /* the vertices are wedges, joined into surface
+                                points in each chunk: with attributes
+                                carried, or a PLY's dropped (its vertices
+                                stay split at their seams) */
     ooc_file spill;          /* the leaves' triangles */
     uint64_t *leaf_at;       /* the triangle each leaf's run starts at */
     uint64_t *leaf_count;    /* triangles written to it */
@@ -942,7 +946,8 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
                             .unit = j->diagonal,
                             .normals = attr[0],
                             .texcoords = attr[1],
-                            .colors = attr[2]};
+                            .colors = attr[2],
+                            .wedges = j->wedges};
         st = run_chunk(j, i, &c, gid, root, err);
     }
     free(idx);
@@ -1082,7 +1087,8 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
                         .unit = j->diagonal,
                         .normals = attr[0],
                         .texcoords = attr[1],
-                        .colors = attr[2]};
+                        .colors = attr[2],
+                        .wedges = j->wedges};
     st = run_chunk(j, i, &c, gid, root, err);
 done:
     for (int k = 0; k < 3; k++)
@@ -2028,13 +2034,16 @@ static mr_status output_fits(const job *j, uint64_t memory, const char *out_path
     const mr_format fmt = write && write->format != MR_FORMAT_AUTO ? write->format
                                                                    : mr_format_from_path(out_path);
     char a[32], b[32];
-    if (fmt == MR_FORMAT_PLY && j->attrs)
+    if (fmt == MR_FORMAT_PLY && j->wedges)
         return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
                              "the output (about %.0f triangles) does not fit the memory budget "
-                             "of %s, and an output written as several chunks' results carries "
-                             "no attributes yet: give at least %s, or drop the attributes "
-                             "(--no-normals, --no-texcoords, --no-colors)",
+                             "of %s, and an output written as several chunks' results %s: give "
+                             "at least %s",
                              j->share_triangles, size_text(a, sizeof a, memory),
+                             j->attrs ? "carries no attributes yet (or drop them: --no-normals, "
+                                        "--no-texcoords, --no-colors)"
+                                      : "does not join the vertices that its attributes split "
+                                        "yet",
                              size_up(b, sizeof b,
                                      memory + (uint64_t)ceil(4 * j->share_triangles / 3 -
                                                              (double)j->capacity) *
@@ -2133,7 +2142,7 @@ static mr_status size_chunks(job *j, uint64_t memory, uint32_t grid_bins, uint64
                            4 * (uint64_t)grid_bins * grid_bins * grid_bins + buffers +
                            (uint64_t)j->batch * 40;
     const uint64_t per_triangle =
-        CHUNK_BYTES_PER_TRIANGLE + (j->attrs ? ATTR_BYTES_PER_TRIANGLE : 0);
+        CHUNK_BYTES_PER_TRIANGLE + (j->wedges ? ATTR_BYTES_PER_TRIANGLE : 0);
     const uint64_t capacity = memory > fixed ? (memory - fixed) / per_triangle : 0;
     /* a chunk well above its cut: 16 sqrt(T) (a cut of a chunk high in
      * the tree is about that long, at the input's resolution) */
@@ -2178,6 +2187,8 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     const uint64_t batch = memory / 640;
     j->batch = batch < 4096 ? 4096 : batch > FACE_BATCH ? FACE_BATCH : (size_t)batch;
     j->attrs = kept_attributes(j, write) & j->src.carried;
+    /* a PLY's vertices split by attributes stay split when they are dropped */
+    j->wedges = j->attrs || (j->src.carried & j->src.attributes);
     if ((st = size_chunks(j, memory, grid_bins, buffers, err)) != MR_OK) {
         mr_obj_stream_close(os);
         return st;
@@ -2204,6 +2215,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         if (st == MR_OK) {
             j->nv = j->src.vertex_count;
             j->attrs = kept_attributes(j, write) & j->src.carried;
+            j->wedges = j->attrs != 0; /* dropped: the v lines, not split */
             st = size_chunks(j, memory, grid_bins, buffers, err);
         }
     } else {
@@ -2291,13 +2303,13 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
                                "the faces changed between two passes over the file");
     if ((st = agree(j, st, err)) != MR_OK)
         return st;
-    if (j->attrs && (st = agree(j, join_coincident(j, memory, err), err)) != MR_OK)
+    if (j->wedges && (st = agree(j, join_coincident(j, memory, err), err)) != MR_OK)
         return st;
     j->referenced = 0;
     for (size_t v = 0; v < j->nv; v++)
         j->referenced += j->range[v] != RANGE_NONE;
     fs->simplify.input_vertices = j->referenced;
-    if (j->attrs)
+    if (j->wedges)
         j->referenced = j->points;
     if ((st = resolve_targets(j, err)) != MR_OK ||
         (st = output_fits(j, memory, out_path, write, &forest, err)) != MR_OK)
@@ -2329,7 +2341,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     } else if (st == MR_OK && j->rank == 0) {
         mr_simplify_stats *s = &fs->simplify;
         s->output_vertices = root.mesh.vertex_count;
-        s->output_points = j->attrs ? root.mesh.stats.output_points : root.mesh.vertex_count;
+        s->output_points = j->wedges ? root.mesh.stats.output_points : root.mesh.vertex_count;
         s->output_triangles = root.mesh.triangle_count;
         s->stop = root.mesh.stats.stop;
         s->target_reached = root.mesh.stats.target_reached;

@@ -175,7 +175,7 @@ mr_status mr_simplify_chunk(const mr_chunk *chunk, const mr_simplify_options *op
     if (!(chunk->unit > 0))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: a chunk's quadric unit must be > 0");
-    if (chunk->normals || chunk->texcoords || chunk->colors)
+    if (chunk->wedges || chunk->normals || chunk->texcoords || chunk->colors)
         return simplify_attributed(chunk, options, out, err);
     const int dynamic = mr_omp_fixed_teams();
     const mr_status st = simplify_chunk(chunk, options, out, err);

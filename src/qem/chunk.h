@@ -37,6 +37,9 @@ typedef struct mr_chunk {
     const float *normals;         /* 3 * vertex_count */
     const float *texcoords;       /* 2 * vertex_count */
     const float *colors;          /* 4 * vertex_count */
+    bool wedges;                  /* without attributes too, the vertices are
+                                     wedges (split at seams whose attributes
+                                     were dropped) */
 } mr_chunk;
 
 /* The simplified chunk: positions, triangles and each output vertex's
