@@ -618,6 +618,8 @@ static mr_status join_coincident(job *j, uint64_t memory, mr_error *err)
             r.v = (uint32_t)(v0 + i);
             st = ooc_extsort_add(&x, &r, err);
         }
+        if (st == MR_OK)
+            report(j, 0, err, &st); /* the callback may cancel */
     }
     b.vertex_count = VERTEX_BLOCK;
     mr_mesh_free(&b);
@@ -628,10 +630,12 @@ static mr_status join_coincident(job *j, uint64_t memory, mr_error *err)
     uint32_t *group = NULL;
     size_t n = 0, cap = 0;
     uint32_t bits[3] = {0, 0, 0};
-    for (;;) {
+    for (uint64_t k = 1;; k++) {
         const void *rec = NULL;
         if (st == MR_OK)
             st = ooc_extsort_next(&x, &rec, err);
+        if (st == MR_OK && k % (1u << 20) == 0)
+            report(j, 0, err, &st);
         const at_point *r = rec;
         if (n && (!r || memcmp(r->bits, bits, 12) != 0)) {
             if (n > 1) {
