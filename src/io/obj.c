@@ -1051,7 +1051,7 @@ mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
 
 typedef struct obj_window {
     size_t off, end;       /* bytes of the body */
-    size_t v0, vt0, vn0, tri0, nv, ntri;
+    size_t v0, vt0, vn0, tri0, nv, nvt, nvn, ntri;
 } obj_window;
 
 struct mr_obj_stream {
@@ -1149,10 +1149,11 @@ mr_status mr_obj_stream_open(const char *path, int threads, size_t window,
             }
         }
         w->nv = s->counts.nv - w->v0;
+        w->nvt = s->counts.nvt - w->vt0;
+        w->nvn = s->counts.nvn - w->vn0;
         w->ntri = s->counts.ntri - w->tri0;
-        const size_t nvt = s->counts.nvt - w->vt0, nvn = s->counts.nvn - w->vn0;
-        s->most_vt = nvt > s->most_vt ? nvt : s->most_vt;
-        s->most_vn = nvn > s->most_vn ? nvn : s->most_vn;
+        s->most_vt = w->nvt > s->most_vt ? w->nvt : s->most_vt;
+        s->most_vn = w->nvn > s->most_vn ? w->nvn : s->most_vn;
         s->most_v = w->nv > s->most_v ? w->nv : s->most_v;
         s->most_tri = w->ntri > s->most_tri ? w->ntri : s->most_tri;
         mr_release_mapped(&s->file, (size_t)(s->begin - s->data) + w->off,
@@ -1268,10 +1269,10 @@ mr_status mr_obj_stream_next(mr_obj_stream *s, mr_obj_window *w, mr_error *err)
     w->corner_texcoords = s->cvt;
     w->corner_normals = s->cvn;
     w->first_texcoord = win->vt0;
-    w->texcoord_count = s->vt ? (win + 1 < s->win + s->nwin ? win[1].vt0 : s->counts.nvt) - win->vt0 : 0;
+    w->texcoord_count = s->vt ? win->nvt : 0;
     w->texcoords = s->vt;
     w->first_normal = win->vn0;
-    w->normal_count = s->vn ? (win + 1 < s->win + s->nwin ? win[1].vn0 : s->counts.nvn) - win->vn0 : 0;
+    w->normal_count = s->vn ? win->nvn : 0;
     w->normals = s->vn;
     return MR_OK;
 }

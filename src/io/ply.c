@@ -919,11 +919,6 @@ static mr_status nonfinite_error(const ply_reader *r, uint64_t v, size_t at)
                    (unsigned long long)v, (double)p[0], (double)p[1], (double)p[2]);
 }
 
-/* Rows [i0, i1) of a vertex element without lists into dst's arrays, row
- * i at dst index i - first (attributes where dst has their arrays), column
- * by column, in blocks of rows spread over the threads. x y z as the first
- * three host-order floats is the common layout and is copied as is.
- * Returns the first row with a non-finite position, or UINT64_MAX. */
 /* The vertex element's columns that go somewhere in dst. */
 typedef struct vertex_column {
     size_t off;
@@ -989,6 +984,11 @@ static uint64_t decode_rows(const ply_reader *r, const ply_elem *e, const vertex
     return v != UINT64_MAX ? v + first : UINT64_MAX;
 }
 
+/* Rows [i0, i1) of a vertex element without lists into dst's arrays, row
+ * i at dst index i - first (attributes where dst has their arrays), column
+ * by column, in blocks of rows spread over the threads. x y z as the first
+ * three host-order floats is the common layout and is copied as is.
+ * Returns the first row with a non-finite position, or UINT64_MAX. */
 static uint64_t decode_vertex_range(const ply_reader *r, const ply_elem *e, const mr_mesh *dst,
                                     size_t first, size_t i0, size_t i1)
 {

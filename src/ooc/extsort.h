@@ -12,6 +12,13 @@
 
 #include "temp.h"
 
+/* A key that puts records of bitwise-equal positions (three floats'
+ * bits) together. */
+static inline uint64_t ooc_position_key(const uint32_t bits[3])
+{
+    return mr_mix64(((uint64_t)bits[0] << 32 | bits[1]) ^ mr_mix64(bits[2]));
+}
+
 /* A total order of two records (<0, 0, >0), among records of one key. */
 typedef int (*ooc_record_cmp)(const void *a, const void *b);
 /* A record's key: the order's first part. */

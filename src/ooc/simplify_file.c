@@ -93,8 +93,9 @@ typedef struct piece {
     float *pos;
     mr_quadricf *q;
     uint32_t *idx;
-    /* the attributes carried (job.attrs), or NULL */
-    float *normals, *texcoords, *colors;
+    /* the attributes carried (job.attrs): normals, texture coordinates,
+     * colors (attr_bit's order), or NULL */
+    float *attr[3];
     ooc_file file;
 } piece;
 
@@ -104,11 +105,12 @@ static void piece_free(piece *p)
     free(p->pos);
     free(p->q);
     free(p->idx);
-    free(p->normals);
-    free(p->texcoords);
-    free(p->colors);
+    for (int a = 0; a < 3; a++) {
+        free(p->attr[a]);
+        p->attr[a] = NULL;
+    }
     p->gid = p->idx = NULL;
-    p->pos = p->normals = p->texcoords = p->colors = NULL;
+    p->pos = NULL;
     p->q = NULL;
 }
 
@@ -126,10 +128,6 @@ static size_t attr_bytes(unsigned attrs)
     return n;
 }
 
-static float **piece_attr(piece *p, int a)
-{
-    return a == 0 ? &p->normals : a == 1 ? &p->texcoords : &p->colors;
-}
 
 typedef struct job {
     const char *in_path;
@@ -183,6 +181,37 @@ typedef struct job {
     uint32_t *seg_first, *seg_last;
     size_t nseg;
 } job;
+
+/* Arrays for n vertices of each attribute the job carries (the others
+ * NULL); false when one could not be had (those that were stay set). */
+static bool attrs_alloc(const job *j, size_t n, float *attr[3])
+{
+    bool ok = true;
+    for (int a = 0; a < 3; a++) {
+        attr[a] = NULL;
+        if (j->attrs & attr_bit[a])
+            ok &= (attr[a] = mr_alloc_array(n, 4 * attr_floats[a])) != NULL;
+    }
+    return ok;
+}
+
+/* A piece's arrays in their order on its file, with their bytes; the
+ * total. */
+static uint64_t piece_parts(const job *j, piece *p, void *data[7], uint64_t bytes[7])
+{
+    const uint64_t nv = p->nv;
+    void *d[7] = {p->gid, p->pos, p->q, p->idx, p->attr[0], p->attr[1], p->attr[2]};
+    uint64_t b[7] = {4 * nv, 12 * nv, sizeof(mr_quadricf) * nv, 12 * (uint64_t)p->nt, 0, 0, 0};
+    for (int a = 0; a < 3; a++)
+        b[4 + a] = j->attrs & attr_bit[a] ? 4 * attr_floats[a] * nv : 0;
+    uint64_t total = 0;
+    for (int i = 0; i < 7; i++) {
+        data[i] = d[i];
+        bytes[i] = b[i];
+        total += b[i];
+    }
+    return total;
+}
 
 /* The caller's lock of vertex v (options.vertex_lock is by the input's
  * vertices: an OBJ's v lines where its vertices are (v, vt, vn)). */
@@ -570,8 +599,7 @@ typedef struct at_point {
 
 static uint64_t at_point_key(const void *a)
 {
-    const at_point *x = a;
-    return mr_mix64(((uint64_t)x->bits[0] << 32 | x->bits[1]) ^ mr_mix64(x->bits[2]));
+    return ooc_position_key(((const at_point *)a)->bits);
 }
 
 static int at_point_cmp(const void *a, const void *b)
@@ -676,19 +704,12 @@ static mr_status piece_store(job *j, piece *p, mr_error *err)
 {
     mr_status st = ooc_file_open(&j->temp, &p->file, err);
     uint64_t at = 0;
-    const struct {
-        const void *data;
-        size_t bytes;
-    } parts[7] = {{p->gid, 4 * p->nv},
-                  {p->pos, 12 * p->nv},
-                  {p->q, sizeof *p->q * p->nv},
-                  {p->idx, 12 * p->nt},
-                  {p->normals, p->normals ? 12 * p->nv : 0},
-                  {p->texcoords, p->texcoords ? 8 * p->nv : 0},
-                  {p->colors, p->colors ? 16 * p->nv : 0}};
+    void *data[7];
+    uint64_t bytes[7];
+    piece_parts(j, p, data, bytes);
     for (int i = 0; i < 7 && st == MR_OK; i++) {
-        st = ooc_file_write(&j->temp, &p->file, at, parts[i].data, parts[i].bytes, err);
-        at += parts[i].bytes;
+        st = ooc_file_write(&j->temp, &p->file, at, data[i], bytes[i], err);
+        at += bytes[i];
     }
     piece_free(p);
     return st;
@@ -708,24 +729,16 @@ static mr_status piece_read(job *j, piece *p, bool keep, mr_error *err)
     p->pos = mr_alloc_array(p->nv + 1, 3 * sizeof *p->pos);
     p->q = mr_alloc_array(p->nv + 1, sizeof *p->q);
     p->idx = mr_alloc_array(p->nt + 1, 3 * sizeof *p->idx);
-    bool fail = !p->gid || !p->pos || !p->q || !p->idx;
-    for (int a = 0; a < 3; a++)
-        if (j->attrs & attr_bit[a])
-            fail |= !(*piece_attr(p, a) = mr_alloc_array(p->nv + 1, 4 * attr_floats[a]));
-    if (fail) {
+    const bool attrs = attrs_alloc(j, p->nv + 1, p->attr);
+    if (!p->gid || !p->pos || !p->q || !p->idx || !attrs) {
         piece_free(p);
         return mr_fail_nomem(err, NULL, p->nv * (60 + attr_bytes(j->attrs)) + p->nt * 12);
     }
     uint64_t at = 0;
     mr_status st = MR_OK;
-    void *data[7] = {p->gid, p->pos, p->q, p->idx, p->normals, p->texcoords, p->colors};
-    const size_t bytes[7] = {4 * p->nv,
-                             12 * p->nv,
-                             sizeof *p->q * p->nv,
-                             12 * p->nt,
-                             p->normals ? 12 * p->nv : 0,
-                             p->texcoords ? 8 * p->nv : 0,
-                             p->colors ? 16 * p->nv : 0};
+    void *data[7];
+    uint64_t bytes[7];
+    piece_parts(j, p, data, bytes);
     for (int i = 0; i < 7 && st == MR_OK; i++) {
         st = ooc_file_read(&j->temp, &p->file, at, data[i], bytes[i], err);
         at += bytes[i];
@@ -855,9 +868,9 @@ static mr_status keep_result(job *j, piece *p, mr_chunk_result *rp, const uint32
     p->pos = r.mesh.positions;
     p->idx = r.mesh.indices;
     p->q = r.quadrics;
-    p->normals = r.normals;
-    p->texcoords = r.texcoords;
-    p->colors = r.colors;
+    p->attr[0] = r.normals;
+    p->attr[1] = r.texcoords;
+    p->attr[2] = r.colors;
     r.mesh.positions = NULL;
     r.mesh.indices = NULL;
     r.quadrics = NULL;
@@ -911,11 +924,8 @@ static mr_status run_leaf(job *j, uint32_t i, mr_chunk_result *root, mr_error *e
     uint8_t *cut = st == MR_OK ? mr_alloc_array(nv, 1) : NULL;
     uint8_t *lock = st == MR_OK && j->o->vertex_lock ? mr_alloc_array(nv, 1) : NULL;
     float *attr[3] = {NULL, NULL, NULL};
-    bool fail = !pos || !cut || (j->o->vertex_lock && !lock);
-    for (int a = 0; a < 3 && st == MR_OK; a++)
-        if (j->attrs & attr_bit[a])
-            fail |= !(attr[a] = mr_alloc_array(nv, 4 * attr_floats[a]));
-    if (st == MR_OK && fail)
+    const bool attrs = st != MR_OK || attrs_alloc(j, nv, attr);
+    if (st == MR_OK && (!pos || !cut || (j->o->vertex_lock && !lock) || !attrs))
         st = mr_fail_nomem(err, NULL, nv * (14 + attr_bytes(j->attrs)));
     if (st == MR_OK) {
         const uint32_t *gid = key;
@@ -1006,13 +1016,10 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
     uint8_t *lock = j->o->vertex_lock ? mr_alloc_array(nv_max + 1, 1) : NULL;
     uint32_t *idx = mr_alloc_array(nt, 3 * sizeof *idx);
     uint32_t *bmap = mr_alloc_array(b->nv + 1, sizeof *bmap);
-    float *attr[3] = {NULL, NULL, NULL};
-    bool fail = !table || !gid || !pos || !q || !cut || !was || (j->o->vertex_lock && !lock) ||
-                !idx || !bmap;
-    for (int k = 0; k < 3; k++)
-        if (j->attrs & attr_bit[k])
-            fail |= !(attr[k] = mr_alloc_array(nv_max + 1, 4 * attr_floats[k]));
-    if (fail) {
+    float *attr[3];
+    const bool attrs = attrs_alloc(j, nv_max + 1, attr);
+    if (!table || !gid || !pos || !q || !cut || !was || (j->o->vertex_lock && !lock) || !idx ||
+        !bmap || !attrs) {
         st = mr_fail_nomem(err, NULL, nv_max * (70 + attr_bytes(j->attrs)) + nt * 12);
         goto done;
     }
@@ -1024,7 +1031,7 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
         memcpy(pos + 3 * nv, a->pos + 3 * v, 12);
         for (int k = 0; k < 3; k++)
             if (attr[k])
-                memcpy(attr[k] + attr_floats[k] * nv, *piece_attr(a, k) + attr_floats[k] * v,
+                memcpy(attr[k] + attr_floats[k] * nv, a->attr[k] + attr_floats[k] * v,
                        4 * attr_floats[k]);
         q[nv] = a->q[v];
         was[nv] = range_outside(j->range[a->gid[v]], na->first_leaf, na->last_leaf);
@@ -1060,7 +1067,7 @@ static mr_status run_inner(job *j, uint32_t i, mr_chunk_result *root, mr_error *
         memcpy(pos + 3 * nv, b->pos + 3 * v, 12);
         for (int k = 0; k < 3; k++)
             if (attr[k])
-                memcpy(attr[k] + attr_floats[k] * nv, *piece_attr(b, k) + attr_floats[k] * v,
+                memcpy(attr[k] + attr_floats[k] * nv, b->attr[k] + attr_floats[k] * v,
                        4 * attr_floats[k]);
         q[nv] = b->q[v];
         was[nv] = on_cut;
@@ -1241,10 +1248,9 @@ static mr_status recv_piece(job *j, uint32_t i, int from, mr_error *err)
         return st;
     p->nv = (size_t)head[0];
     p->nt = (size_t)head[1];
-    const uint64_t bytes =
-        p->nt ? (uint64_t)p->nv * (16 + sizeof(mr_quadricf) + attr_bytes(j->attrs)) +
-                    12 * (uint64_t)p->nt
-              : 0;
+    void *data[7];
+    uint64_t sizes[7];
+    const uint64_t bytes = p->nt ? piece_parts(j, p, data, sizes) : 0; /* piece_store's */
     char *buf = bytes ? mr_alloc_array(MESSAGE_BYTES, 1) : NULL;
     mr_status local = bytes && !buf ? mr_fail_nomem(err, NULL, MESSAGE_BYTES) : MR_OK;
     if (bytes && local == MR_OK)
@@ -2088,9 +2094,6 @@ static mr_status write_root(job *j, const char *out_path, mr_chunk_result *r,
     return st;
 }
 
-/* The input's attributes that the output would keep (the write options
- * may drop them): carried through the chunks where the source reads a
- * vertex whole (binary PLY), else refused. */
 /* The attributes the write options keep (MR_ATTR_*). */
 static unsigned written_attributes(const mr_write_options *write)
 {
@@ -2108,6 +2111,9 @@ static unsigned kept_attributes(const job *j, const mr_write_options *write)
     return j->src.attributes & written_attributes(write);
 }
 
+/* The input's attributes that the output would keep: carried through
+ * the chunks where the source fills them (ooc_source.carried), else
+ * refused. */
 static mr_status check_attributes(job *j, const mr_write_options *write, mr_error *err)
 {
     const unsigned kept = kept_attributes(j, write);

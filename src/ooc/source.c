@@ -265,12 +265,12 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
         st = ooc_file_open(t, &r->tri, err);
     if (st == MR_OK && keep)
         st = mr_obj_stream_keep(os, keep, err);
-    const ooc_file *tab[5] = {&x.col, &x.vt, &x.vn, &x.cvt, &x.cvn};
+    ooc_file *tab[5] = {&x.col, &x.vt, &x.vn, &x.cvt, &x.cvn};
     const unsigned need[5] = {MR_ATTR_COLORS, MR_ATTR_TEXCOORDS, MR_ATTR_NORMALS,
                               MR_ATTR_TEXCOORDS, MR_ATTR_NORMALS};
     for (int i = 0; i < 5 && st == MR_OK; i++)
         if (keep & need[i])
-            st = ooc_file_open(t, (ooc_file *)tab[i], err);
+            st = ooc_file_open(t, tab[i], err);
     size_t nvt = 0, nvn = 0;
     for (;;) {
         if (st != MR_OK)
@@ -328,16 +328,14 @@ mr_status ooc_source_from_obj(mr_obj_stream *os, const char *path, ooc_temp *t, 
  * failure r is closed. */
 static mr_status raw_finish(raw_source *r, size_t nv, ooc_source *s, mr_error *err)
 {
-    r->map_bytes = 12 * nv;
-    void *m = mmap(NULL, r->map_bytes, PROT_READ, MAP_SHARED, r->pos.fd, 0);
-    if (m == MAP_FAILED) {
-        r->map_bytes = 0;
-        const mr_status st = mr_fail_plain(err, MR_ERR_IO, r->temp->dir,
-                                           "cannot map a temporary file: %s", strerror(errno));
+    const void *m;
+    const mr_status st = map_temp(r->temp, &r->pos, 12 * nv, &m, err);
+    if (st != MR_OK) {
         raw_close(r);
         return st;
     }
     r->map = m;
+    r->map_bytes = 12 * nv;
     s->impl = r;
     s->vertex_count = nv;
     s->triangle_count = r->nt;
@@ -399,8 +397,7 @@ static int member_cmp(const void *a, const void *b)
  * first corner, a corner's number. */
 static uint64_t corner_key(const void *a)
 {
-    const stl_corner *x = a;
-    return mr_mix64(((uint64_t)x->bits[0] << 32 | x->bits[1]) ^ mr_mix64(x->bits[2]));
+    return ooc_position_key(((const stl_corner *)a)->bits);
 }
 
 static uint64_t member_key(const void *a)
