@@ -15,15 +15,16 @@ fail() { echo "FAIL: $*"; exit 1; }
 rm -rf "$W" && mkdir -p "$W/tmp" || exit 1
 "$MR" generate scan --triangles 300k -o "$W/scan.ply" -q || fail "generate"
 "$MR" convert "$W/scan.ply" "$W/scan.obj" -q || fail "convert"
-# meshreduce-mpi's simplify of $W/INPUT on 1-4 ranks (1 or 2 threads) gives
-# the single process's bytes; usage: same_at_ranks WHAT INPUT ARGS...
+# meshreduce-mpi's COMMAND (simplify or cluster) of $W/INPUT on 1-4 ranks (1
+# or 2 threads) gives the single process's bytes;
+# usage: same_at_ranks WHAT COMMAND INPUT ARGS...
 same_at_ranks() {
-  local what=$1 input=$2
-  shift 2
-  "$MR" --threads 2 simplify "$W/$input" -o "$W/one.ply" "$@" -q || fail "single $what"
+  local what=$1 command=$2 input=$3
+  shift 3
+  "$MR" --threads 2 "$command" "$W/$input" -o "$W/one.ply" "$@" -q || fail "single $what"
   for np in 1 2 3 4; do
     t=$(( np % 2 + 1 ))
-    run "$np" "$MPI" --threads "$t" simplify "$W/$input" -o "$W/np$np.ply" "$@" -q \
+    run "$np" "$MPI" --threads "$t" "$command" "$W/$input" -o "$W/np$np.ply" "$@" -q \
       || fail "$np ranks, $what"
     cmp -s "$W/one.ply" "$W/np$np.ply" || fail "$np ranks ($t threads), $what: other bytes"
   done
@@ -31,34 +32,27 @@ same_at_ranks() {
 }
 for input in scan.ply scan.obj; do
   for mode in full half; do
-    same_at_ranks "$input $mode" "$input" --ratio 2% --memory 6M --collapse "$mode" \
+    same_at_ranks "$input $mode" simplify "$input" --ratio 2% --memory 6M --collapse "$mode" \
       --temp-dir "$W/tmp"
   done
 done
 # an output larger than a chunk (the forest)
-same_at_ranks "the forest" scan.ply --ratio 60% --memory 6M
+same_at_ranks "the forest" simplify scan.ply --ratio 60% --memory 6M
 # texture coordinates and colors carried through the chunks (seams across
 # the cuts)
 /usr/bin/python3 "$(dirname "$0")/make_seamed.py" "$W/scan.ply" "$W/seamed.ply" || fail "seamed input"
-same_at_ranks "attributes" seamed.ply --ratio 2% --memory 8M --temp-dir "$W/tmp"
+same_at_ranks "attributes" simplify seamed.ply --ratio 2% --memory 8M --temp-dir "$W/tmp"
 "$MR" convert "$W/seamed.ply" "$W/seamed.obj" -q || fail "convert seamed"
-same_at_ranks "an OBJ's attributes" seamed.obj --ratio 2% --memory 8M --temp-dir "$W/tmp"
+same_at_ranks "an OBJ's attributes" simplify seamed.obj --ratio 2% --memory 8M --temp-dir "$W/tmp"
 # cluster: the passes shared out over 1-4 ranks give the single process's
 # bytes (binary PLY in place; OBJ and binary STL through temporary files
 # under a small budget; a cell and a target count)
 "$MR" convert "$W/scan.ply" "$W/scan.stl" -q || fail "convert stl"
 for input in scan.ply scan.obj scan.stl; do
   for size in "--cell-rel 0.004" "--target-vertices 3000"; do
-    args=($size --memory 1M --temp-dir "$W/tmp")
-    "$MR" --threads 2 cluster "$W/$input" -o "$W/one.ply" "${args[@]}" -q || fail "single cluster $input"
-    for np in 1 2 3 4; do
-      t=$(( np % 2 + 1 ))
-      run "$np" "$MPI" --threads "$t" cluster "$W/$input" -o "$W/np$np.ply" "${args[@]}" -q \
-        || fail "cluster: $np ranks, $input, $size"
-      cmp -s "$W/one.ply" "$W/np$np.ply" || fail "cluster: $np ranks ($t threads), $input, $size: other bytes"
-    done
+    same_at_ranks "cluster of $input, $size" cluster "$input" $size --memory 1M \
+      --temp-dir "$W/tmp"
   done
-  echo "ok: cluster of $input at 1-4 ranks: the single process's bytes"
 done
 # --json on rank 0 only: one object
 out=$(run 3 "$MPI" simplify "$W/scan.ply" -o "$W/j.ply" --ratio 2% --memory 6M --json -q) \
