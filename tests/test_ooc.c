@@ -1026,6 +1026,23 @@ static void test_failures(void **state)
     tu_write_file(bad, data, n);
     expect_failure(bad, out, &o, 2048, tmp, 0, MR_ERR_PARSE, "finite");
     free(data);
+    /* an OBJ whose texture coordinates are carried (its attribute files
+     * and (v, vt) pass): a face's vt past the file's, in its last line;
+     * a temporary-disk budget that its files pass */
+    char seamed[1024], seamed_obj[1024];
+    tmp_path(seamed, "ooc-f-seamed.ply");
+    tmp_path(seamed_obj, "ooc-f-seamed.obj");
+    mr_mesh sm;
+    mr_mesh_init(&sm);
+    size_t lines;
+    make_seamed(seamed, seamed_obj, 60000, &sm, &lines);
+    mr_mesh_free(&sm);
+    FILE *f = fopen(seamed_obj, "a");
+    assert_non_null(f);
+    fprintf(f, "f 1/999999999 2/1 3/1\n");
+    assert_int_equal(fclose(f), 0);
+    expect_failure(seamed_obj, out, &o, 6000, tmp, 0, MR_ERR_PARSE, "texture coordinate");
+    expect_failure(seamed_obj, out, &o, 6000, tmp, 1 << 20, MR_ERR_IO, "temporary-disk budget");
     assert_int_equal(entries(tmp), 0);
     mr_mesh_free(&m);
 }
