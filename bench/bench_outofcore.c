@@ -3,7 +3,7 @@
  *
  *   bench_outofcore [--sizes 4M,20M] [--large 100M,300M] [--runs N]
  *                   [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC]
- *                   [--cluster | --cluster-only]
+ *                   [--cluster | --cluster-only] [--attributes | --attributes-only]
  *
  * For each generated scan (written once into DIR as binary PLY, streamed:
  * mr_generate_file), the whole process, as a user runs it: `meshreduce
@@ -33,6 +33,11 @@
  * threads, to a fixed cell (1/500 of the diagonal) and to a target count
  * (the ratio of the vertices), median of N alternating runs;
  * --cluster-only: that alone.
+ * --attributes: a seamed copy of each --sizes scan (texture coordinates and
+ * colours by tests/make_seamed.py, run by /usr/bin/python3) as binary PLY
+ * and OBJ, in memory against out of core (64M up to 8M triangles, else 1G),
+ * 2 threads, time and peak RSS, median of N alternating runs;
+ * --attributes-only: that alone (with --cluster-only: both).
  */
 #define _GNU_SOURCE
 #include "benchutil.h"
@@ -386,12 +391,80 @@ static double cluster_section(const char *self, const char *dir, const size_t *s
     return worst;
 }
 
+/* --attributes: a seamed copy of each --sizes scan (texture coordinates and
+ * colours, split four ways by tests/make_seamed.py), as binary PLY and as
+ * OBJ, simplified in memory and out of core, 2 threads: time and peak RSS,
+ * medians of alternating runs. */
+static void attributes_section(const char *dir, const size_t *sizes, int nsizes, int runs,
+                               const char *ratio)
+{
+    printf("\nattributes: seamed scans (texture coordinates, colours) in memory and out of "
+           "core, 2 threads; median of %d alternating runs\n\n",
+           runs);
+    printf("%-9s %-5s %-8s %9s %9s %9s %9s %7s\n", "input", "fmt", "budget", "memory s",
+           "ooc s", "mem RSS", "ooc RSS", "ratio");
+    for (int si = 0; si < nsizes; si++) {
+        char scan[1024], label[32], in[2][1100], out[1100];
+        snprintf(label, sizeof label, "%zuM", sizes[si] / 1000000);
+        snprintf(scan, sizeof scan, "%s/scan-%s.ply", dir, label);
+        ensure_scan(sizes[si], scan);
+        snprintf(in[0], sizeof in[0], "%s/seamed-%s.ply", dir, label);
+        snprintf(in[1], sizeof in[1], "%s/seamed-%s.obj", dir, label);
+        snprintf(out, sizeof out, "%s/seamed-out.ply", dir);
+        struct stat sb;
+        if (stat(in[0], &sb) != 0) {
+            char *av[] = {"/usr/bin/python3", MR_SOURCE_DIR "/tests/make_seamed.py", scan, in[0],
+                          NULL};
+            run_result rr = run_cmd(av);
+            free(rr.out);
+            if (rr.status != 0) {
+                fprintf(stderr, "make_seamed.py failed (%d)\n", rr.status);
+                exit(1);
+            }
+        }
+        if (stat(in[1], &sb) != 0) {
+            char *av[] = {MR_CLI_PATH, "convert", in[0], in[1], "-q", NULL};
+            run_result rr = run_cmd(av);
+            free(rr.out);
+            if (rr.status != 0) {
+                fprintf(stderr, "convert failed (%d)\n", rr.status);
+                exit(1);
+            }
+        }
+        const char *budget = sizes[si] <= 8000000 ? "64M" : "1G";
+        for (int f = 0; f < 2; f++) {
+            double sec[2][64];
+            size_t rss[2] = {0, 0};
+            const int n = runs < 64 ? runs : 64;
+            for (int r = 0; r < n; r++)
+                for (int m = 0; m < 2; m++) {
+                    const int k = (r & 1) ? 1 - m : m; /* alternating */
+                    char *av[] = {MR_CLI_PATH, "--threads", "2", "simplify", in[f], "-o", out,
+                                  "--ratio", (char *)ratio, "-q",
+                                  k ? "--memory" : NULL, (char *)budget, NULL};
+                    run_result rr = run_cmd(av);
+                    free(rr.out);
+                    if (rr.status != 0) {
+                        fprintf(stderr, "simplify failed (%d): %s\n", rr.status, in[f]);
+                        exit(1);
+                    }
+                    sec[k][r] = rr.seconds;
+                    rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
+                }
+            const double a = bench_summarize(sec[0], n).median,
+                         b = bench_summarize(sec[1], n).median;
+            printf("%-9s %-5s %-8s %9.3f %9.3f %7.0fMB %7.0fMB %6.2fx\n", label, f ? "OBJ" : "PLY",
+                   budget, a, b, rss[0] / 1e6, rss[1] / 1e6, a / b);
+        }
+    }
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 8 && !strcmp(argv[1], "--cluster-child"))
         return cluster_child(argv + 2);
     size_t sizes[8], large[8];
-    bool cluster = false, cluster_only = false;
+    bool cluster = false, attributes = false, skip_main = false;
     int nsizes = parse_list("4M,20M", sizes, 8), nlarge = 0, runs = 3;
     double ratio = 0.01;
     const char *dir = "bench/work", *csv = NULL, *mpiexec = NULL;
@@ -413,11 +486,15 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--cluster"))
             cluster = true;
         else if (!strcmp(argv[i], "--cluster-only"))
-            cluster = cluster_only = true;
+            cluster = skip_main = true;
+        else if (!strcmp(argv[i], "--attributes"))
+            attributes = true;
+        else if (!strcmp(argv[i], "--attributes-only"))
+            attributes = skip_main = true;
         else {
             fprintf(stderr, "usage: bench_outofcore [--sizes 4M,20M] [--large 100M,300M] "
                             "[--runs N] [--ratio R] [--dir DIR] [--csv FILE] [--mpi MPIEXEC] "
-                            "[--cluster | --cluster-only]\n");
+                            "[--cluster | --cluster-only] [--attributes | --attributes-only]\n");
             return 2;
         }
     }
@@ -441,7 +518,7 @@ int main(int argc, char **argv)
     char ratio_s[32];
     snprintf(ratio_s, sizeof ratio_s, "%g", ratio);
     double bar_tp = -1, bar_mpi = -1;
-    for (int big = 0; big < 2 && !cluster_only; big++) {
+    for (int big = 0; big < 2 && !skip_main; big++) {
         const int count = big ? nlarge : nsizes;
         for (int si = 0; si < count; si++) {
             const size_t T = big ? large[si] : sizes[si];
@@ -623,6 +700,8 @@ int main(int argc, char **argv)
     if (bar_mpi > 0)
         printf("bar: 2 ranks of 1 thread %.2fx faster than 1 rank at 20M (at least 1.7)\n",
                bar_mpi);
+    if (attributes)
+        attributes_section(dir, sizes, nsizes, runs, ratio_s);
     if (cluster) {
         const double w = cluster_section("/proc/self/exe", dir, sizes, nsizes, runs, ratio);
         printf("\nbar: cluster in passes at least as fast as in memory: worst %.2fx (in "
