@@ -628,8 +628,8 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
  * bytes a triangle) is simplified in memory as mr_mesh_simplify does,
  * with its bytes. On the out-of-core path the normals, texture
  * coordinates and colors of a binary PLY or OBJ input travel through the
- * chunks (surface points, seams kept, also across the cuts; not into an
- * output larger than a chunk, which then fails saying so); a PLY's
+ * chunks (surface points, seams kept, also across the cuts and into an
+ * output larger than a chunk, written as PLY); a PLY's
  * vertices split by attributes that the write options drop are joined
  * as in memory. A PLY without attributes is taken as given (a vertex
  * repeated at one position is a boundary). Indices stay 32-bit: at most 4,294,967,295 vertices and

@@ -44,6 +44,9 @@ same_at_ranks "the forest" simplify scan.ply --ratio 60% --memory 6M
 same_at_ranks "attributes" simplify seamed.ply --ratio 2% --memory 8M --temp-dir "$W/tmp"
 "$MR" convert "$W/seamed.ply" "$W/seamed.obj" -q || fail "convert seamed"
 same_at_ranks "an OBJ's attributes" simplify seamed.obj --ratio 2% --memory 8M --temp-dir "$W/tmp"
+# ... and an output larger than a chunk with them (the forest's bands find
+# a seam's wedges by position)
+same_at_ranks "the forest with attributes" simplify seamed.ply --ratio 30% --memory 8M
 # cluster: the passes shared out over 1-4 ranks give the single process's
 # bytes (binary PLY in place; OBJ and binary STL through temporary files
 # under a small budget; a cell and a target count)

@@ -1444,6 +1444,80 @@ static bool gidmap_put(gidmap *m, uint32_t g, uint32_t v, bool *added)
     return true;
 }
 
+/* Positions (three floats' bits) as a set, open addressing (growing):
+ * with wedges, the forest finds the wedges of one surface point in
+ * different pieces, or in a band and its piece's rest, by their position
+ * (join_coincident's rule). */
+typedef struct posset {
+    uint32_t (*key)[3];
+    uint8_t *used;
+    size_t mask, count;
+} posset;
+
+static bool posset_init(posset *m, size_t hint)
+{
+    size_t cap = 64;
+    while (cap < 2 * hint)
+        cap *= 2;
+    m->key = mr_alloc_array(cap, sizeof *m->key);
+    m->used = mr_calloc_array(cap, 1);
+    m->mask = cap - 1;
+    m->count = 0;
+    return m->key && m->used;
+}
+
+static void posset_free(posset *m)
+{
+    free(m->key);
+    free(m->used);
+    memset(m, 0, sizeof *m);
+}
+
+/* The slot of position p: its own, or the empty one where it would go. */
+static size_t posset_slot(const posset *m, const float p[3])
+{
+    uint32_t b[3];
+    memcpy(b, p, sizeof b);
+    size_t s = (size_t)(ooc_position_key(b) & m->mask);
+    while (m->used[s] && memcmp(m->key[s], b, sizeof b) != 0)
+        s = (s + 1) & m->mask;
+    return s;
+}
+
+static bool posset_has(const posset *m, const float p[3])
+{
+    return m->used[posset_slot(m, p)] != 0;
+}
+
+/* p into the set; *added says whether it was new. false: no memory. */
+static bool posset_put(posset *m, const float p[3], bool *added)
+{
+    if (2 * (m->count + 1) > m->mask + 1) {
+        posset n;
+        if (!posset_init(&n, m->mask + 1))
+            return posset_free(&n), false;
+        for (size_t s = 0; s <= m->mask; s++)
+            if (m->used[s]) {
+                float q[3];
+                memcpy(q, m->key[s], sizeof q);
+                const size_t t = posset_slot(&n, q);
+                memcpy(n.key[t], m->key[s], sizeof n.key[t]);
+                n.used[t] = 1;
+            }
+        n.count = m->count;
+        posset_free(m);
+        *m = n;
+    }
+    const size_t s = posset_slot(m, p);
+    *added = !m->used[s];
+    if (*added) {
+        memcpy(m->key[s], p, sizeof m->key[s]);
+        m->used[s] = 1;
+        m->count++;
+    }
+    return true;
+}
+
 static bool fits_as_root(const job *j, const ooc_node *n)
 {
     const double s =
@@ -1489,34 +1563,79 @@ static inline bool seg_shared(const job *j, const gidmap *rim, size_t s, uint32_
     return range_outside(j->range[g], j->seg_first[s], j->seg_last[s]) || gidmap_find(rim, g);
 }
 
-/* The pieces' vertices, a shared one once, and their triangles. */
-static mr_status count_forest(job *j, const gidmap *rim, size_t *nv, size_t *nt, mr_error *err)
+/* Piece s's input vertex ids and, unless pos is NULL, positions (the
+ * first two of piece_parts' arrays). */
+static mr_status piece_ids(job *j, size_t s, uint32_t **gid, float **pos, mr_error *err)
+{
+    const piece *p = &j->seg[s];
+    const size_t per = pos ? 16 : 4;
+    uint8_t *buf = mr_alloc_array(p->nv + 1, per);
+    *gid = (uint32_t *)buf;
+    if (pos)
+        *pos = (float *)(buf + 4 * p->nv);
+    if (!buf)
+        return mr_fail_nomem(err, NULL, p->nv * per);
+    mr_status st = ooc_file_read(&j->temp, &j->seg[s].file, 0, buf, per * p->nv, err);
+    if (st != MR_OK)
+        free(buf), *gid = NULL;
+    return st;
+}
+
+/* The pieces' vertices, a shared one once (*nv), their surface points
+ * (*np: with wedges, their distinct positions, join_coincident's rule;
+ * else *nv) and their triangles. */
+static mr_status count_forest(job *j, const gidmap *rim, size_t *nv, size_t *np, size_t *nt,
+                              mr_error *err)
 {
     gidmap seen;
-    if (!gidmap_init(&seen, rim->count + 1024))
-        return gidmap_free(&seen), mr_fail_nomem(err, NULL, rim->count * 16);
-    mr_status st = MR_OK;
-    *nv = *nt = 0;
+    posset shared = {0};
+    bool ok = gidmap_init(&seen, rim->count + 1024);
+    if (j->wedges)
+        ok &= posset_init(&shared, rim->count + 1024);
+    mr_status st = ok ? MR_OK : mr_fail_nomem(err, NULL, rim->count * 32);
+    *nv = *np = *nt = 0;
+    /* with wedges, first the positions of the shared vertices: a position
+     * that more than one piece holds is one of these */
+    for (size_t s = 0; j->wedges && s < j->nseg && st == MR_OK; s++) {
+        uint32_t *gid;
+        float *pos;
+        if (!j->seg[s].nt || (st = piece_ids(j, s, &gid, &pos, err)) != MR_OK)
+            continue;
+        for (size_t v = 0; v < j->seg[s].nv && st == MR_OK; v++) {
+            bool added;
+            if (seg_shared(j, rim, s, gid[v]) && !posset_put(&shared, pos + 3 * v, &added))
+                st = mr_fail_nomem(err, NULL, shared.count * 32);
+        }
+        free(gid);
+    }
     for (size_t s = 0; s < j->nseg && st == MR_OK; s++) {
-        piece *p = &j->seg[s];
+        const piece *p = &j->seg[s];
         if (!p->nt)
             continue;
-        uint32_t *gid = mr_alloc_array(p->nv + 1, sizeof *gid);
-        if (!gid) {
-            st = mr_fail_nomem(err, NULL, p->nv * 4);
+        uint32_t *gid;
+        float *pos = NULL;
+        if ((st = piece_ids(j, s, &gid, j->wedges ? &pos : NULL, err)) != MR_OK)
             break;
-        }
-        st = ooc_file_read(&j->temp, &p->file, 0, gid, 4 * p->nv, err);
+        posset own = {0};
+        if (j->wedges && !posset_init(&own, p->nv))
+            st = mr_fail_nomem(err, NULL, p->nv * 32);
         for (size_t v = 0; v < p->nv && st == MR_OK; v++) {
             bool added = true;
             if (seg_shared(j, rim, s, gid[v]) && !gidmap_put(&seen, gid[v], 0, &added))
                 st = mr_fail_nomem(err, NULL, seen.count * 16);
             *nv += added;
+            if (j->wedges && !posset_has(&shared, pos + 3 * v) &&
+                !posset_put(&own, pos + 3 * v, &added))
+                st = mr_fail_nomem(err, NULL, own.count * 32);
         }
+        *np += own.count;
         *nt += p->nt;
+        posset_free(&own);
         free(gid);
     }
+    *np = j->wedges ? *np + shared.count : *nv;
     gidmap_free(&seen);
+    posset_free(&shared);
     return st;
 }
 
@@ -1603,16 +1722,22 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
     /* the band, growing: its vertices (by input id), their quadrics and
      * marks, its triangles */
     gidmap at = {0}, kept = {0};
+    /* with wedges, the rests' kept shared vertices by position, and the
+     * positions of the band's rim (a seam's two wedges may fall on the
+     * two sides of the band's edge) */
+    posset keptpos = {0}, rimpos = {0};
     size_t bnv = 0, bnt = 0, rimmed = 0;
     uint32_t *bgid = NULL, *bidx = NULL;
-    float *bpos = NULL;
+    float *bpos = NULL, *battr[3] = {NULL, NULL, NULL};
     mr_quadricf *bq = NULL;
     uint8_t *bcut = NULL, *bwas = NULL, *brim = NULL, *block = NULL;
     /* the shared vertices (cut or rim) the pieces' rests keep: locked in
      * the band too, whichever piece brought them */
-    mr_status st = gidmap_init(&at, 4096) && gidmap_init(&kept, 4096)
+    mr_status st = gidmap_init(&at, 4096) && gidmap_init(&kept, 4096) &&
+                           (!j->wedges || (posset_init(&keptpos, 4096) &&
+                                           posset_init(&rimpos, 4096)))
                        ? MR_OK
-                       : mr_fail_nomem(err, NULL, 1 << 16);
+                       : mr_fail_nomem(err, NULL, 1 << 17);
     int rings = 0;
     size_t cap = 0; /* the band's triangles; its vertices at most three times that */
     if (st == MR_OK)
@@ -1630,8 +1755,10 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
         bwas = mr_alloc_array(3 * cap + 1, 1);
         brim = mr_alloc_array(3 * cap + 1, 1);
         bidx = mr_alloc_array(cap + 1, 3 * sizeof *bidx);
-        if (!bgid || !bpos || !bq || !bcut || !bwas || !brim || !bidx)
-            st = mr_fail_nomem(err, NULL, cap * (3 * (19 + sizeof *bq) + 12));
+        const bool attrs = attrs_alloc(j, 3 * cap + 1, battr);
+        if (!bgid || !bpos || !bq || !bcut || !bwas || !brim || !bidx || !attrs)
+            st = mr_fail_nomem(err, NULL,
+                               cap * (3 * (19 + sizeof *bq + attr_bytes(j->attrs)) + 12));
     }
     for (size_t s = 0; s < j->nseg && st == MR_OK; s++) {
         piece *p = &j->seg[s];
@@ -1642,8 +1769,9 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
         uint8_t *mark = mr_calloc_array(p->nv + 1, 1), *use = mr_calloc_array(p->nv + 1, 1);
         uint8_t *tin = mr_calloc_array(p->nt + 1, 1);
         uint32_t *map = mr_alloc_array(p->nv + 1, sizeof *map);
-        if (!mark || !use || !tin || !map) {
-            free(mark), free(use), free(tin), free(map);
+        posset own = {0}; /* with wedges: the positions of its band part */
+        if (!mark || !use || !tin || !map || (j->wedges && !posset_init(&own, 1024))) {
+            free(mark), free(use), free(tin), free(map), posset_free(&own);
             st = mr_fail_nomem(err, NULL, p->nv * 6 + p->nt);
             piece_free(p);
             break;
@@ -1660,6 +1788,10 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
             const uint32_t g = p->gid[v];
             const bool was = seg_shared(j, rim, s, g); /* cut where its quadric was made */
             bool added;
+            if (j->wedges && !posset_put(&own, p->pos + 3 * v, &added)) {
+                st = mr_fail_nomem(err, NULL, own.count * 32);
+                break;
+            }
             if (!gidmap_put(&at, g, (uint32_t)bnv, &added)) {
                 st = mr_fail_nomem(err, NULL, at.count * 16);
                 break;
@@ -1667,6 +1799,10 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
             if (added) {
                 bgid[bnv] = g;
                 memcpy(bpos + 3 * bnv, p->pos + 3 * v, 12);
+                for (int k = 0; k < 3; k++)
+                    if (battr[k])
+                        memcpy(battr[k] + attr_floats[k] * bnv, p->attr[k] + attr_floats[k] * v,
+                               4 * attr_floats[k]);
                 memset(&bq[bnv], 0, sizeof *bq);
                 bcut[bnv] = bwas[bnv] = brim[bnv] = 0;
                 bnv++;
@@ -1696,20 +1832,42 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
                 bidx[3 * bnt + (size_t)k] = map[p->idx[3 * f + k]];
             bnt++;
         }
-        /* the piece's rest, kept */
+        /* the piece's rest, kept (with wedges, by position: a shared
+         * vertex, or a wedge of a surface point whose other wedges went
+         * into the band) */
         size_t nv = 0, nt = 0;
         for (size_t v = 0; v < p->nv && st == MR_OK; v++) {
             bool added;
-            if ((use[v] & 1) && seg_shared(j, rim, s, p->gid[v]) &&
-                !gidmap_put(&kept, p->gid[v], 0, &added))
+            if (!(use[v] & 1))
+                continue;
+            if (j->wedges) {
+                /* a wedge whose surface point is in the band too is on
+                 * the rim from now on, as the band's wedges there are:
+                 * shared, so that the bands above find it */
+                bool shared = seg_shared(j, rim, s, p->gid[v]);
+                if (!shared && posset_has(&own, p->pos + 3 * v)) {
+                    shared = true;
+                    if (!gidmap_put(rim, p->gid[v], 0, &added))
+                        st = mr_fail_nomem(err, NULL, rim->count * 16);
+                }
+                if (shared && st == MR_OK && !posset_put(&keptpos, p->pos + 3 * v, &added))
+                    st = mr_fail_nomem(err, NULL, keptpos.count * 32);
+            } else if (seg_shared(j, rim, s, p->gid[v]) &&
+                       !gidmap_put(&kept, p->gid[v], 0, &added)) {
                 st = mr_fail_nomem(err, NULL, kept.count * 16);
+            }
         }
+        posset_free(&own);
         for (size_t v = 0; v < p->nv; v++)
             if (use[v] & 1) {
                 map[v] = (uint32_t)nv;
                 p->gid[nv] = p->gid[v];
                 memcpy(p->pos + 3 * nv, p->pos + 3 * v, 12);
                 p->q[nv] = p->q[v];
+                for (int k = 0; k < 3; k++)
+                    if (p->attr[k])
+                        memmove(p->attr[k] + attr_floats[k] * nv,
+                                p->attr[k] + attr_floats[k] * v, 4 * attr_floats[k]);
                 nv++;
             }
         for (size_t f = 0; f < p->nt; f++)
@@ -1728,22 +1886,30 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
     }
     for (size_t v = 0; v < bnv && st == MR_OK; v++) {
         bool added;
-        if (!brim[v] && gidmap_find(&kept, bgid[v])) {
+        if (!brim[v] && (j->wedges ? posset_has(&keptpos, bpos + 3 * v)
+                                   : gidmap_find(&kept, bgid[v]) != NULL)) {
             brim[v] = bcut[v] = 1;
             if (!gidmap_put(rim, bgid[v], 0, &added))
                 st = mr_fail_nomem(err, NULL, rim->count * 16);
         }
-        rimmed += brim[v];
+        if (!j->wedges)
+            rimmed += brim[v];
+        else if (brim[v] && !posset_put(&rimpos, bpos + 3 * v, &added))
+            st = mr_fail_nomem(err, NULL, rimpos.count * 32);
     }
+    if (j->wedges)
+        rimmed = rimpos.count; /* the targets count surface points */
     gidmap_free(&kept);
+    posset_free(&keptpos);
+    posset_free(&rimpos);
     if (st == MR_OK && bnt) {
         if (last) {
             /* what the targets still ask, exactly: the pieces' rest counts */
-            size_t rest_nv = 0, rest_nt = 0;
-            st = count_forest(j, rim, &rest_nv, &rest_nt, err);
+            size_t rest_nv = 0, rest_np = 0, rest_nt = 0;
+            st = count_forest(j, rim, &rest_nv, &rest_np, &rest_nt, err);
             const double tt = j->target_triangles ? (double)j->target_triangles - (double)rest_nt : 0;
             const double tv = j->target_vertices
-                                  ? (double)j->target_vertices - (double)rest_nv + (double)rimmed
+                                  ? (double)j->target_vertices - (double)rest_np + (double)rimmed
                                   : 0;
             j->band_t = !j->target_triangles ? 0 : tt < 1 ? 1 : (size_t)tt;
             j->band_v = !j->target_vertices ? 0 : tv < 1 ? 1 : (size_t)tv;
@@ -1769,7 +1935,11 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
                             .locked = block,
                             .quadrics = bq,
                             .was_cut = bwas,
-                            .unit = j->diagonal};
+                            .unit = j->diagonal,
+                            .normals = battr[0],
+                            .texcoords = battr[1],
+                            .colors = battr[2],
+                            .wedges = j->wedges};
         if (st == MR_OK)
             st = run_chunk(j, N, &c, bgid, &root, err);
         piece *p = &j->seg[j->nseg];
@@ -1795,7 +1965,11 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
         }
     }
     gidmap_free(&at);
+    posset_free(&keptpos);
+    posset_free(&rimpos);
     free(bgid), free(bidx), free(bpos), free(bq), free(bcut), free(bwas), free(brim), free(block);
+    for (int k = 0; k < 3; k++)
+        free(battr[k]);
     return st;
 }
 
@@ -1809,21 +1983,25 @@ static mr_status write_forest(job *j, const char *out_path, const mr_write_optio
         mr_write_options_default(&defaults);
         write = &defaults;
     }
-    size_t nv, nt;
-    mr_status st = count_forest(j, rim, &nv, &nt, err);
+    size_t nv, np, nt;
+    mr_status st = count_forest(j, rim, &nv, &np, &nt, err);
     if (st != MR_OK)
         return st;
     mr_simplify_stats *s = &j->st->simplify;
-    s->output_vertices = s->output_points = nv;
+    s->output_vertices = nv;
+    s->output_points = np;
     s->output_triangles = nt;
     enum { BLOCK = 1 << 16 };
-    float *pos = mr_alloc_array(3 * (size_t)BLOCK, sizeof *pos);
+    float *pos = mr_alloc_array(3 * (size_t)BLOCK, sizeof *pos), *attr[3];
     size_t *base = mr_alloc_array(j->nseg + 1, sizeof *base);
     gidmap id;
     const bool ok = gidmap_init(&id, rim->count + 1024);
-    if (!pos || !base || !ok) {
+    const bool attrs = attrs_alloc(j, BLOCK, attr);
+    if (!pos || !base || !ok || !attrs) {
         free(pos), free(base), gidmap_free(&id);
-        return mr_fail_nomem(err, NULL, 12 * (size_t)BLOCK);
+        for (int k = 0; k < 3; k++)
+            free(attr[k]);
+        return mr_fail_nomem(err, NULL, (12 + attr_bytes(j->attrs)) * (size_t)BLOCK);
     }
     const double t0 = mr_now_seconds();
     mr_output_file of;
@@ -1837,7 +2015,11 @@ static mr_status write_forest(job *j, const char *out_path, const mr_write_optio
     if (buf)
         setvbuf(of.f, buf, _IOFBF, bufsize);
     mr_ply_stream ps;
-    st = mr_ply_stream_begin(&ps, of.f, nv, nt, 0, write, out_path, err);
+    st = mr_ply_stream_begin(&ps, of.f, nv, nt, j->attrs, write, out_path, err);
+    const mr_mesh block = {.positions = pos,
+                           .normals = attr[0],
+                           .texcoords = attr[1],
+                           .colors = attr[2]};
     size_t next = 0, fill = 0;
     for (size_t k = 0; k < j->nseg && st == MR_OK; k++) {
         piece *p = &j->seg[k];
@@ -1852,9 +2034,14 @@ static mr_status write_forest(job *j, const char *out_path, const mr_write_optio
             if (!added)
                 continue;
             memcpy(pos + 3 * fill, p->pos + 3 * v, 12);
+            for (int a = 0; a < 3; a++)
+                if (attr[a])
+                    memcpy(attr[a] + attr_floats[a] * fill, p->attr[a] + attr_floats[a] * v,
+                           4 * attr_floats[a]);
             next++;
             if (++fill == BLOCK) {
-                const mr_mesh b = {fill, 0, pos, NULL, NULL, NULL, NULL};
+                mr_mesh b = block;
+                b.vertex_count = fill;
                 st = mr_ply_stream_vertices(&ps, &b, err);
                 fill = 0;
             }
@@ -1862,7 +2049,8 @@ static mr_status write_forest(job *j, const char *out_path, const mr_write_optio
         piece_free(p);
     }
     if (st == MR_OK && fill) {
-        const mr_mesh b = {fill, 0, pos, NULL, NULL, NULL, NULL};
+        mr_mesh b = block;
+        b.vertex_count = fill;
         st = mr_ply_stream_vertices(&ps, &b, err);
     }
     for (size_t k = 0; k < j->nseg && st == MR_OK; k++) {
@@ -1896,6 +2084,8 @@ static mr_status write_forest(job *j, const char *out_path, const mr_write_optio
     st = mr_output_close(&of, out_path, st, err);
     free(buf);
     free(pos);
+    for (int k = 0; k < 3; k++)
+        free(attr[k]);
     free(base);
     gidmap_free(&id);
     j->st->seconds_write = mr_now_seconds() - t0;
@@ -2044,28 +2234,14 @@ static mr_status output_fits(const job *j, uint64_t memory, const char *out_path
     const mr_format fmt = write && write->format != MR_FORMAT_AUTO ? write->format
                                                                    : mr_format_from_path(out_path);
     char a[32], b[32];
-    if (fmt == MR_FORMAT_PLY && j->wedges)
-        return mr_fail_plain(err, MR_ERR_UNSUPPORTED, j->in_path,
-                             "the output (about %.0f triangles) does not fit the memory budget "
-                             "of %s, and an output written as several chunks' results %s: give "
-                             "at least %s",
-                             j->share_triangles, size_text(a, sizeof a, memory),
-                             j->attrs ? "carries no attributes yet (or drop them: --no-normals, "
-                                        "--no-texcoords, --no-colors)"
-                                      : "does not join the vertices that its attributes split "
-                                        "yet",
-                             size_up(b, sizeof b,
-                                     memory + (uint64_t)ceil(4 * j->share_triangles / 3 -
-                                                             (double)j->capacity) *
-                                                  (CHUNK_BYTES_PER_TRIANGLE +
-                                                   ATTR_BYTES_PER_TRIANGLE)));
     if (fmt == MR_FORMAT_PLY) {
         *forest = true;
         return MR_OK;
     }
     const uint64_t need =
         memory +
-        (uint64_t)ceil(4 * j->share_triangles / 3 - (double)j->capacity) * CHUNK_BYTES_PER_TRIANGLE;
+        (uint64_t)ceil(4 * j->share_triangles / 3 - (double)j->capacity) *
+            (CHUNK_BYTES_PER_TRIANGLE + (j->wedges ? ATTR_BYTES_PER_TRIANGLE : 0));
     return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, j->in_path,
                          "the output (about %.0f triangles) does not fit the memory budget "
                          "of %s: its chunks hold %llu triangles, and the last one makes the "
@@ -2340,7 +2516,7 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
         mr_simplify_stats *s = &fs->simplify;
         const bool counts =
             (j->target_triangles && s->output_triangles <= j->target_triangles) ||
-            (j->target_vertices && s->output_vertices <= j->target_vertices);
+            (j->target_vertices && s->output_points <= j->target_vertices);
         /* short of the counts: why the last band stopped (the error bound
          * counts as reached, as in memory) */
         s->stop = counts ? MR_STOP_TARGET
