@@ -631,9 +631,10 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
  * chunks (surface points, seams kept, also across the cuts and into an
  * output larger than a chunk, written as PLY); a PLY's
  * vertices split by attributes that the write options drop are joined
- * as in memory. A PLY without attributes is taken as given (a vertex
- * repeated at one position is a boundary). Indices stay 32-bit: at most 4,294,967,295 vertices and
- * triangles.
+ * as in memory, and so are the vertices of a PLY or OBJ without
+ * attributes that repeat a position (an unwelded export: found by a
+ * sort of the positions). Indices stay 32-bit: at most 4,294,967,295
+ * vertices and triangles.
  */
 #define MR_MEMORY_DEFAULT ((uint64_t)4 << 30) /* 4 GiB */
 

@@ -4,12 +4,14 @@ lists) for the out-of-core tests: each vertex split by the quadrant
 (in x and y about the mean) of the triangles that use it, with texture
 coordinates linear in the position plus the quadrant's offset (seams that
 cross each other and the chunks' cuts) and colors linear in the position.
-Standard library only.  usage: make_seamed.py IN.ply OUT.ply"""
+With --bare, the same split vertices without attributes (an export that
+did not weld its vertices).
+Standard library only.  usage: make_seamed.py [--bare] IN.ply OUT.ply"""
 import struct
 import sys
 
 
-def main(src, dst):
+def main(src, dst, bare=False):
     data = open(src, "rb").read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
     header = data[:end].decode("ascii").split("\n")
@@ -48,21 +50,29 @@ def main(src, dst):
     out = bytearray()
     out += ("ply\nformat binary_little_endian 1.0\nelement vertex %d\n"
             "property float x\nproperty float y\nproperty float z\n"
-            "property float s\nproperty float t\n"
-            "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-            "element face %d\nproperty list uchar int vertex_indices\nend_header\n"
-            % (len(verts), len(faces))).encode("ascii")
+            % len(verts)).encode("ascii")
+    if not bare:
+        out += (b"property float s\nproperty float t\n"
+                b"property uchar red\nproperty uchar green\nproperty uchar blue\n")
+    out += ("element face %d\nproperty list uchar int vertex_indices\nend_header\n"
+            % len(faces)).encode("ascii")
     for v, side in verts:
         x, y, z = pos[3 * v:3 * v + 3]
         u = x * 0.01 + 0.5 * (side & 1)
         w = y * 0.01 + 0.5 * (side >> 1)
         r = max(0, min(255, int(128 + x)))
         g = max(0, min(255, int(128 + y)))
-        out += struct.pack("<5f3B", x, y, z, u, w, r, g, 64)
+        if bare:
+            out += struct.pack("<3f", x, y, z)
+        else:
+            out += struct.pack("<5f3B", x, y, z, u, w, r, g, 64)
     for f in faces:
         out += struct.pack("<B3i", 3, *f)
     open(dst, "wb").write(bytes(out))
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    args = [a for a in sys.argv[1:] if a != "--bare"]
+    if len(args) != 2:
+        raise SystemExit(__doc__)
+    main(args[0], args[1], bare="--bare" in sys.argv[1:])

@@ -47,6 +47,11 @@ same_at_ranks "an OBJ's attributes" simplify seamed.obj --ratio 2% --memory 8M -
 # ... and an output larger than a chunk with them (the forest's bands find
 # a seam's wedges by position)
 same_at_ranks "the forest with attributes" simplify seamed.ply --ratio 30% --memory 8M
+# an unwelded PLY (the seamed vertices without attributes): the position
+# pass finds the repeats, and they go as wedges
+/usr/bin/python3 "$(dirname "$0")/make_seamed.py" --bare "$W/scan.ply" "$W/unwelded.ply" \
+  || fail "unwelded input"
+same_at_ranks "an unwelded PLY" simplify unwelded.ply --ratio 2% --memory 8M
 # cluster: the passes shared out over 1-4 ranks give the single process's
 # bytes (binary PLY in place; OBJ and binary STL through temporary files
 # under a small budget; a cell and a target count)

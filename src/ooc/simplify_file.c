@@ -611,8 +611,73 @@ static int at_point_cmp(const void *a, const void *b)
     return x->v < y->v ? -1 : x->v > y->v;
 }
 
-/* With attributes, a surface point's vertices (wedges: a UV seam, a hard
- * edge) may sit in different leaves, each the only one at that point in
+/* The vertices (only the referenced: those with a range) by position,
+ * sorted in *x (an external sort in runs of about memory/2 bytes). */
+static mr_status sort_positions(job *j, uint64_t memory, bool referenced, ooc_extsort *x,
+                                mr_error *err)
+{
+    const size_t run = (size_t)(memory < ((uint64_t)16 << 20) ? (uint64_t)8 << 20 : memory / 2);
+    memset(x, 0, sizeof *x);
+    x->file.fd = -1;
+    mr_mesh b;
+    mr_mesh_init(&b);
+    mr_status st = ooc_extsort_init(x, &j->temp, sizeof(at_point), run, at_point_key, 64,
+                                    at_point_cmp, j->threads, err);
+    if (st == MR_OK)
+        st = mr_mesh_alloc(&b, VERTEX_BLOCK, 0, 0, err);
+    for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += VERTEX_BLOCK) {
+        const size_t m = j->nv - v0 < VERTEX_BLOCK ? j->nv - v0 : VERTEX_BLOCK;
+        b.vertex_count = m;
+        if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
+            break;
+        for (size_t i = 0; i < m && st == MR_OK; i++) {
+            if (referenced && j->range[v0 + i] == RANGE_NONE)
+                continue;
+            at_point r;
+            memcpy(r.bits, b.positions + 3 * i, 12);
+            r.v = (uint32_t)(v0 + i);
+            st = ooc_extsort_add(x, &r, err);
+        }
+        if (st == MR_OK)
+            report(j, 0, err, &st); /* the callback may cancel */
+    }
+    b.vertex_count = VERTEX_BLOCK;
+    mr_mesh_free(&b);
+    j->src.release(j->src.impl);
+    if (st == MR_OK)
+        st = ooc_extsort_finish(x, run, err);
+    return st;
+}
+
+/* Without attributes, does a position repeat among the vertices (an
+ * export that did not weld them)? In memory, mr_simplify's surface points
+ * join such vertices; out of core they then go as wedges (job.wedges),
+ * else each copy would be a boundary that the chunks move apart. Every
+ * vertex counts, referenced or not: the chunks are sized before the
+ * passes tell which are. */
+static mr_status find_coincident(job *j, uint64_t memory, bool *found, mr_error *err)
+{
+    ooc_extsort x;
+    mr_status st = sort_positions(j, memory, false, &x, err);
+    *found = false;
+    uint32_t bits[3];
+    for (uint64_t k = 1; st == MR_OK && !*found; k++) {
+        const void *rec = NULL;
+        st = ooc_extsort_next(&x, &rec, err);
+        if (st == MR_OK && k % (1u << 20) == 0)
+            report(j, 0, err, &st);
+        if (!rec)
+            break;
+        const at_point *r = rec;
+        *found = k > 1 && memcmp(r->bits, bits, 12) == 0;
+        memcpy(bits, r->bits, 12);
+    }
+    ooc_extsort_free(&x);
+    return st;
+}
+
+/* With wedges, a surface point's vertices (a UV seam, a hard edge, an
+ * unwelded export) may sit in different leaves, each the only one at that point in
  * its leaf, so that no vertex id tells a cut: every vertex at one position
  * (bitwise, as mr_surface_points joins them) takes the leaves of all of
  * them, so that a node's cut locks each of its wedges, and the node above
@@ -623,37 +688,8 @@ static int at_point_cmp(const void *a, const void *b)
  * rank does the same with the same (reduced) ranges. */
 static mr_status join_coincident(job *j, uint64_t memory, mr_error *err)
 {
-    const size_t run = (size_t)(memory < ((uint64_t)16 << 20) ? (uint64_t)8 << 20 : memory / 2);
     ooc_extsort x;
-    memset(&x, 0, sizeof x);
-    x.file.fd = -1;
-    mr_mesh b;
-    mr_mesh_init(&b);
-    mr_status st = ooc_extsort_init(&x, &j->temp, sizeof(at_point), run, at_point_key, 64,
-                                    at_point_cmp, j->threads, err);
-    if (st == MR_OK)
-        st = mr_mesh_alloc(&b, VERTEX_BLOCK, 0, 0, err);
-    for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += VERTEX_BLOCK) {
-        const size_t m = j->nv - v0 < VERTEX_BLOCK ? j->nv - v0 : VERTEX_BLOCK;
-        b.vertex_count = m;
-        if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
-            break;
-        for (size_t i = 0; i < m && st == MR_OK; i++) {
-            if (j->range[v0 + i] == RANGE_NONE)
-                continue;
-            at_point r;
-            memcpy(r.bits, b.positions + 3 * i, 12);
-            r.v = (uint32_t)(v0 + i);
-            st = ooc_extsort_add(&x, &r, err);
-        }
-        if (st == MR_OK)
-            report(j, 0, err, &st); /* the callback may cancel */
-    }
-    b.vertex_count = VERTEX_BLOCK;
-    mr_mesh_free(&b);
-    j->src.release(j->src.impl);
-    if (st == MR_OK)
-        st = ooc_extsort_finish(&x, run, err);
+    mr_status st = sort_positions(j, memory, true, &x, err);
     /* each run of one position: its members' leaves joined */
     uint32_t *group = NULL;
     size_t n = 0, cap = 0;
@@ -1709,6 +1745,31 @@ static mr_status band_width(job *j, const ooc_node *n, const ooc_node *l, const 
     return st;
 }
 
+/* The band's surface points (mr_surface_points) over its distinct
+ * positions: *apart. */
+static mr_status band_apart(const float *pos, size_t nv, const uint32_t *idx, size_t nt,
+                            size_t *apart, mr_error *err)
+{
+    uint32_t *point = mr_alloc_array(nv + 1, sizeof *point);
+    posset at = {0};
+    if (!point || !posset_init(&at, nv)) {
+        free(point), posset_free(&at);
+        return mr_fail_nomem(err, NULL, nv * 36);
+    }
+    mr_status st = mr_surface_points(pos, nv, idx, nt, point, NULL, err);
+    size_t points = 0;
+    for (size_t v = 0; v < nv && st == MR_OK; v++) {
+        bool added;
+        points += point[v] == v;
+        if (!posset_put(&at, pos + 3 * v, &added))
+            st = mr_fail_nomem(err, NULL, at.count * 32);
+    }
+    *apart = st == MR_OK && points > at.count ? points - at.count : 0;
+    free(point);
+    posset_free(&at);
+    return st;
+}
+
 /* The band of above node N: out of every piece inside N, the triangles
  * within BAND_RINGS rings of the vertices on N's own cut, simplified to
  * `reduce` fewer triangles (the last band: to the targets); its result a
@@ -1913,6 +1974,13 @@ static mr_status run_band(job *j, uint32_t N, double reduce, bool last, gidmap *
                                   : 0;
             j->band_t = !j->target_triangles ? 0 : tt < 1 ? 1 : (size_t)tt;
             j->band_v = !j->target_vertices ? 0 : tv < 1 ? 1 : (size_t)tv;
+            /* the band counts its surface points, which keep apart the
+             * wedges of a position whose seam edge lies outside it (at
+             * its rim, locked): those it counts over the positions */
+            size_t apart = 0;
+            if (st == MR_OK && j->wedges && j->band_v)
+                st = band_apart(bpos, bnv, bidx, bnt, &apart, err);
+            j->band_v += apart;
         } else {
             const double tt = (double)bnt - (reduce > 0 ? reduce : 0);
             j->band_t = tt < 1 ? 1 : (size_t)tt;
@@ -2407,6 +2475,20 @@ static mr_status out_of_core(job *j, const char *out_path, uint64_t memory,
     } else {
         mr_obj_stream_close(os);
     }
+    /* without attributes, vertices that repeat a position (an unwelded
+     * export) go as wedges too, joined into surface points as in memory
+     * (a binary STL's are welded) */
+    if (st == MR_OK && !j->wedges && !stl) {
+        bool found = false;
+        st = agree(j, find_coincident(j, memory, &found, err), err);
+        if (st == MR_OK && found) {
+            j->wedges = true;
+            st = size_chunks(j, memory, grid_bins, buffers, err);
+        }
+    }
+    /* the output against the chunks as sized now */
+    if (st == MR_OK)
+        st = output_fits(j, memory, out_path, write, &forest, err);
     if (st == MR_OK)
         st = check_attributes(j, write, err);
     if ((st = agree(j, st, err)) == MR_OK)
