@@ -7,7 +7,7 @@ CMAKE     ?= cmake
 FUZZ_SECONDS ?= 60
 
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
-BUILD_PKGS = cmake gcc libc6-dev make libpng-dev
+BUILD_PKGS = cmake gcc libc6-dev make libpng-dev libcjson-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest \
              python3-matplotlib libopenmpi-dev openmpi-bin
 # The report's plots (bench/plots.py): Debian's matplotlib, run by Debian's

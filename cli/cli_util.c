@@ -246,6 +246,7 @@ const char *cli_format_name(mr_format f)
     case MR_FORMAT_PLY: return "PLY";
     case MR_FORMAT_STL: return "STL";
     case MR_FORMAT_XYZ: return "XYZ";
+    case MR_FORMAT_GLTF: return "glTF";
     default: return "unknown";
     }
 }
@@ -273,7 +274,8 @@ int cli_check_output_path(const char *cmd, const char *out, mr_format format)
 {
     if (format == MR_FORMAT_AUTO && mr_format_from_path(out) == MR_FORMAT_AUTO)
         return cli_usage_error(cmd, "cannot tell the output format of '%s' "
-                                    "(use .obj, .ply, .stl or .xyz, or --format)", out);
+                                    "(use .obj, .ply, .stl, .xyz, .gltf or .glb, or --format)",
+                               out);
     return CLI_OK;
 }
 

@@ -114,8 +114,11 @@ static const cli_job clean_and_write = {work, NULL, NULL, print_summary};
 static const char convert_usage[] =
     "usage: meshreduce convert IN OUT [options]\n"
     "\n"
-    "Convert a mesh or point cloud between OBJ, PLY, STL and XYZ (formats by\n"
-    "extension). Vertex order and triangles are kept as read; when --no-normals,\n"
+    "Convert a mesh or point cloud between OBJ, PLY, STL, XYZ and glTF (.gltf,\n"
+    ".glb; formats by extension). A glTF file into glTF keeps its document\n"
+    "(scene, nodes, materials, skins, animations; its buffers joined into one);\n"
+    "read into another format, a glTF scene is its triangles in world space.\n"
+    "Vertex order and triangles are kept as read; when --no-normals,\n"
     "--no-texcoords or --no-colors drops an attribute, the vertices that only it\n"
     "split (a UV seam) are merged back into one.\n"
     "\n" CLI_OUTPUT_OPTIONS_HELP
@@ -140,6 +143,21 @@ static int run_convert(int argc, char **argv)
     int rc = cli_io_parse(&io, argc, argv, convert_option, &job);
     if (rc == CLI_OK)
         rc = cli_check_output_path(io.cmd, io.out, io.write.format);
+    const mr_format out_format =
+        io.write.format != MR_FORMAT_AUTO ? io.write.format : mr_format_from_path(io.out);
+    if (rc == CLI_OK && !job.clean && mr_format_from_path(io.in) == MR_FORMAT_GLTF &&
+        out_format == MR_FORMAT_GLTF) {
+        /* the document itself, not its scene as one mesh */
+        const double t0 = cli_now();
+        size_t prims;
+        mr_error err;
+        if (mr_convert_gltf(io.in, io.out, &prims, &err) != MR_OK)
+            return cli_fail_err(&err);
+        if (!io.quiet)
+            fprintf(stderr, "%s: the glTF document, %zu triangle primitive%s (written in %.3f s)\n",
+                    io.out, prims, prims == 1 ? "" : "s", cli_now() - t0);
+        return CLI_OK;
+    }
     return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
 }
 
@@ -206,7 +224,7 @@ static int run_clean(int argc, char **argv)
     return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
 }
 
-const cli_command cli_cmd_convert = {"convert", "convert between OBJ, PLY, STL and XYZ",
+const cli_command cli_cmd_convert = {"convert", "convert between OBJ, PLY, STL, XYZ and glTF",
                                      run_convert, convert_usage};
 const cli_command cli_cmd_clean = {"clean", "weld duplicates, drop degenerate and unused, fix winding",
                                    run_clean, clean_usage};

@@ -633,6 +633,50 @@ static int run_file(const cli_io *io, simplify_job *job)
     return CLI_OK;
 }
 
+/* A glTF document into a glTF document: mr_simplify_gltf keeps it whole,
+ * each triangle primitive simplified on its own. */
+static int run_gltf(const cli_io *io, simplify_job *job)
+{
+    if (job->lock_path)
+        return cli_usage_error("simplify", "--lock is not supported for a glTF document");
+    if (job->ooc_given)
+        return cli_usage_error("simplify", "--memory, --temp-dir and --temp-budget are not "
+                                           "supported for a glTF document (it is read whole)");
+    progress prog = {cli_now(), 0, -1};
+    if (!io->quiet && isatty(STDERR_FILENO)) {
+        job->o.progress = show_progress;
+        job->o.progress_user = &prog;
+    }
+    const double t0 = cli_now();
+    mr_gltf_simplify_stats gs;
+    mr_error err;
+    const mr_status st = mr_simplify_gltf(io->in, io->out, &job->o, &gs, &err);
+    if (prog.shown)
+        fprintf(stderr, "\r%60s\r", "");
+    if (st != MR_OK)
+        return cli_fail_err(&err);
+    job->s = gs.simplify;
+    if (gs.dropped_tangents && !io->quiet)
+        fprintf(stderr,
+                "meshreduce: note: %s: TANGENT dropped from %zu primitive%s (clients compute "
+                "MikkTSpace tangents where a material needs them)\n",
+                io->in, gs.dropped_tangents, gs.dropped_tangents == 1 ? "" : "s");
+    warn_after(io, job);
+    const double total = cli_now() - t0;
+    const double work_s = gs.simplify.seconds_setup + gs.simplify.seconds_collapse +
+                          gs.simplify.seconds_output;
+    const cli_times t = {total - work_s > 0 ? total - work_s : 0, work_s, 0};
+    if (io->json)
+        print_json(io, NULL, &t, job);
+    if (io->stats)
+        print_stats(io, NULL, &t, job);
+    else if (!io->quiet && !io->json)
+        cli_summary(io->out, gs.simplify.output_vertices, gs.simplify.output_triangles,
+                    "%zu primitive%s simplified in %.3f s", gs.primitives,
+                    gs.primitives == 1 ? "" : "s", total);
+    return CLI_OK;
+}
+
 static int run(int argc, char **argv)
 {
     cli_io io;
@@ -651,6 +695,10 @@ static int run(int argc, char **argv)
         return rc;
     static const cli_job steps = {work, print_json, print_stats, print_summary};
     const mr_format in_format = mr_format_from_path(io.in);
+    const mr_format out_format =
+        io.write.format != MR_FORMAT_AUTO ? io.write.format : mr_format_from_path(io.out);
+    if (in_format == MR_FORMAT_GLTF && out_format == MR_FORMAT_GLTF && !cli_comm)
+        return run_gltf(&io, &job);
     const bool streamed = in_format == MR_FORMAT_PLY || in_format == MR_FORMAT_STL ||
                           in_format == MR_FORMAT_OBJ;
     if (cli_comm || job.ooc_given || (streamed && cli_file_size(io.in) > FILE_PATH_BYTES))

@@ -121,7 +121,11 @@ typedef enum mr_format {
     MR_FORMAT_OBJ,
     MR_FORMAT_PLY,
     MR_FORMAT_STL,
-    MR_FORMAT_XYZ       /* plain text point cloud: "x y z [nx ny nz]" lines */
+    MR_FORMAT_XYZ,      /* plain text point cloud: "x y z [nx ny nz]" lines */
+    MR_FORMAT_GLTF      /* glTF 2.0 (.gltf with its buffers, or .glb): read as
+                           its scene's triangles in world space; written as
+                           one mesh (simplify keeps a glTF input's document:
+                           mr_simplify_gltf) */
 } mr_format;
 
 typedef enum mr_encoding {
@@ -148,7 +152,7 @@ void mr_read_options_default(mr_read_options *options);
 void mr_write_options_default(mr_write_options *options);
 
 /* Format named by a path's extension (case-insensitive: .obj .ply .stl
- * .xyz), or MR_FORMAT_AUTO when it names none. */
+ * .xyz .gltf .glb), or MR_FORMAT_AUTO when it names none. */
 mr_format mr_format_from_path(const char *path);
 
 /* Format of a file's content: MR_FORMAT_PLY ("ply\n" magic),
@@ -692,6 +696,49 @@ mr_status mr_simplify_file(const char *in_path, const char *out_path,
                            const mr_simplify_options *options,
                            const mr_out_of_core_options *ooc, const mr_write_options *write,
                            mr_simplify_file_stats *stats, mr_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* glTF documents                                                           */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Simplify a glTF 2.0 file (.gltf with its buffers, or .glb) into another
+ * (.gltf or .glb by out_path's extension), keeping the document: each
+ * mesh's triangle primitives are simplified on their own, in the mesh's
+ * space (a mesh that several nodes instance once), with their materials;
+ * points and lines, the scene, nodes, materials, images, samplers, skins,
+ * animations, extras and extensions are written back as they were. The
+ * targets: target_ratio applies to each primitive; target_triangles and
+ * target_vertices are split over the primitives in proportion to their
+ * triangles;
+ * a relative max_error is relative to the diagonal of all the primitives'
+ * positions. Attributes besides NORMAL, TEXCOORD_0 and COLOR_0 (more UV
+ * sets and colors, JOINTS_n and WEIGHTS_n, morph targets) are the
+ * surviving input vertex's; TANGENT is dropped (clients compute MikkTSpace
+ * tangents where a material needs them) and counted. Accessors and
+ * buffer views nothing uses any more are dropped, the buffers joined into
+ * one (a .gltf's beside it as OUT.bin; its external images copied beside
+ * it when it goes to another folder; a .glb takes them in). Compressed
+ * geometry (KHR_draco_mesh_compression, EXT_meshopt_compression) is
+ * refused. options->vertex_lock is not supported here.
+ */
+typedef struct mr_gltf_simplify_stats {
+    mr_simplify_stats simplify; /* summed over the primitives (their largest
+                                   error; target_reached: all of them) */
+    size_t primitives;          /* triangle primitives simplified */
+    size_t dropped_tangents;    /* primitives whose TANGENT was dropped */
+} mr_gltf_simplify_stats;
+
+mr_status mr_simplify_gltf(const char *in_path, const char *out_path,
+                           const mr_simplify_options *options, mr_gltf_simplify_stats *stats,
+                           mr_error *err);
+
+/* Copy a glTF document into another (.gltf or .glb by out_path), as
+ * mr_simplify_gltf writes it: the same document, its buffers joined into
+ * one and what nothing uses dropped; *primitives (optional) gets its
+ * triangle primitives' count. */
+mr_status mr_convert_gltf(const char *in_path, const char *out_path, size_t *primitives,
+                          mr_error *err);
 
 /* ------------------------------------------------------------------------ */
 /* Error metrics                                                            */

@@ -4,6 +4,7 @@
  * (output.c). */
 #define _DEFAULT_SOURCE /* madvise under strict C11 */
 #include "io_internal.h"
+#include "gltf.h"
 #include "mapped.h"
 #include "text.h"
 
@@ -38,6 +39,8 @@ mr_format mr_format_from_path(const char *path)
         return MR_FORMAT_STL;
     if (ends_with_ci(path, ".xyz"))
         return MR_FORMAT_XYZ;
+    if (ends_with_ci(path, ".gltf") || ends_with_ci(path, ".glb"))
+        return MR_FORMAT_GLTF;
     return MR_FORMAT_AUTO;
 }
 
@@ -51,6 +54,8 @@ mr_format mr_format_sniff(const void *data, size_t size)
     const unsigned char *d = data;
     if (size >= 4 && memcmp(d, "ply", 3) == 0 && (d[3] == '\n' || d[3] == '\r'))
         return MR_FORMAT_PLY;
+    if (size >= 12 && memcmp(d, "glTF", 4) == 0)
+        return MR_FORMAT_GLTF; /* .glb */
     /* Binary STL: 80-byte header, triangle count, 50 bytes per triangle.
      * Checked before ascii because binary headers often start "solid". */
     if (size >= 84 && (size - 84) % 50 == 0 && read_le32(d + 80) == (size - 84) / 50)
@@ -88,6 +93,19 @@ mr_status mr_validate_mesh(const mr_mesh *mesh, const char *name, mr_error *err)
     return MR_OK;
 }
 
+/* A glTF document's scene as one mesh (base_dir NULL: from memory, no
+ * external file read). */
+static mr_status read_gltf(const void *data, size_t size, const char *name, const char *base_dir,
+                           mr_mesh *mesh, mr_error *err)
+{
+    mr_gltf *g;
+    mr_status st = mr_gltf_load(data, size, name, base_dir, &g, err);
+    if (st == MR_OK)
+        st = mr_gltf_scene_mesh(g, mesh, err);
+    mr_gltf_free(g);
+    return st;
+}
+
 mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
                               const mr_read_options *options, mr_mesh *mesh,
                               mr_error *err)
@@ -114,7 +132,8 @@ mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
         fmt = sniffed;
     if (fmt == MR_FORMAT_AUTO)
         return mr_fail_plain(err, MR_ERR_UNSUPPORTED, name,
-                             "unknown file format (expected .obj, .ply, .stl or .xyz)");
+                             "unknown file format (expected .obj, .ply, .stl, .xyz, .gltf or "
+                             ".glb)");
 
     int threads = mr_thread_count(options->threads);
     mr_status st;
@@ -123,6 +142,7 @@ mr_status mr_mesh_read_memory(const void *data, size_t size, const char *name,
     case MR_FORMAT_PLY: st = mr_read_ply(data, size, name, threads, mesh, err); break;
     case MR_FORMAT_STL: st = mr_read_stl(data, size, name, threads, mesh, err); break;
     case MR_FORMAT_XYZ: st = mr_read_xyz(data, size, name, threads, mesh, err); break;
+    case MR_FORMAT_GLTF: st = read_gltf(data, size, name, NULL, mesh, err); break;
     default:
         st = mr_fail_plain(err, MR_ERR_UNSUPPORTED, name, "unknown file format");
     }
@@ -146,7 +166,24 @@ mr_status mr_mesh_read(const char *path, const mr_read_options *options, mr_mesh
     if (st != MR_OK)
         return st;
     madvise((void *)f.data, f.size, MADV_SEQUENTIAL | MADV_WILLNEED);
-    st = mr_mesh_read_memory(f.data, f.size, path, options, mesh, err);
+    const mr_format fmt = options && options->format != MR_FORMAT_AUTO
+                              ? options->format
+                              : mr_format_sniff(f.data, f.size) != MR_FORMAT_AUTO
+                                    ? mr_format_sniff(f.data, f.size)
+                                    : mr_format_from_path(path);
+    if (fmt == MR_FORMAT_GLTF && f.size) {
+        /* its external buffers beside it */
+        char dir[4200];
+        const char *slash = strrchr(path, '/');
+        snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path + (slash == path)) : 1,
+                 slash ? path : ".");
+        mr_error_clear(err);
+        st = read_gltf(f.data, f.size, path, dir, mesh, err);
+        if (st != MR_OK)
+            mr_mesh_free(mesh);
+    } else {
+        st = mr_mesh_read_memory(f.data, f.size, path, options, mesh, err);
+    }
     mr_unmap_file(&f);
     return st;
 }
@@ -169,7 +206,7 @@ typedef struct written_array {
 static int written_arrays(mr_format fmt, const mr_mesh *m, const mr_write_options *o,
                           written_array a[4])
 {
-    bool attributes = fmt == MR_FORMAT_OBJ || fmt == MR_FORMAT_PLY;
+    bool attributes = fmt == MR_FORMAT_OBJ || fmt == MR_FORMAT_PLY || fmt == MR_FORMAT_GLTF;
     int n = 0;
     a[n++] = (written_array){m->positions, 3, 3, "position"};
     if (m->normals && o->write_normals && (attributes || fmt == MR_FORMAT_XYZ))
@@ -217,7 +254,7 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     if (fmt == MR_FORMAT_AUTO)
         return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
                              "cannot tell the output format from the extension "
-                             "(use .obj, .ply, .stl or .xyz)");
+                             "(use .obj, .ply, .stl, .xyz, .gltf or .glb)");
     if (fmt == MR_FORMAT_STL && mesh->triangle_count == 0 && mesh->vertex_count > 0)
         return mr_fail_plain(err, MR_ERR_UNSUPPORTED, path,
                              "STL holds triangles only; a point cloud cannot be written "
@@ -232,6 +269,8 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     mr_status st = check_finite(fmt, mesh, options, path, err);
     if (st != MR_OK)
         return st;
+    if (fmt == MR_FORMAT_GLTF)
+        return mr_gltf_write_mesh(mesh, path, options, err); /* its own files */
 
     mr_output_file out;
     st = mr_output_open(&out, path, err);
