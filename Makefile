@@ -45,6 +45,7 @@ demo: build
 
 # Build and pass every test.
 check: build
+	@scripts/need-gltf-validator.sh $(BUILD)/gltf-validator
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
 # The test suite under AddressSanitizer and UndefinedBehaviorSanitizer,
@@ -94,7 +95,7 @@ fuzz: deps-build deps-fuzz
 	CC=clang $(CMAKE) -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DMR_FUZZ=ON \
 	    -DMR_BUILD_TESTS=OFF -DMR_BUILD_BENCH=OFF
 	$(CMAKE) --build build-fuzz -j $(JOBS)
-	@for f in obj ply stl xyz; do \
+	@for f in obj ply stl xyz gltf; do \
 	    mkdir -p build-fuzz/corpus/$$f; \
 	    cp tests/fuzz/seeds/*.$$f build-fuzz/corpus/$$f/ 2>/dev/null || true; \
 	    echo "fuzz_$$f: $(FUZZ_SECONDS) s"; \

@@ -1074,7 +1074,7 @@ done:
 /* read / write / generate / info                                           */
 /* ------------------------------------------------------------------------ */
 
-static const char *const format_names[] = {"auto", "obj", "ply", "stl", "xyz", NULL};
+static const char *const format_names[] = {"auto", "obj", "ply", "stl", "xyz", "gltf", NULL};
 
 static int path_arg(PyObject *o, PyObject **bytes)
 {
@@ -1085,8 +1085,9 @@ PyDoc_STRVAR(read_doc,
 "read($module, /, path, *, format=None, threads=0)\n"
 "--\n"
 "\n"
-"Read a mesh or point cloud (OBJ, PLY, STL, XYZ; by extension, PLY and STL also by\n"
-"content; format='obj'|'ply'|'stl'|'xyz' forces one). Returns a Mesh with vertices\n"
+"Read a mesh or point cloud (OBJ, PLY, STL, XYZ, glTF (.gltf, .glb: its scene's\n"
+"triangles in world space); by extension, PLY, STL and .glb also by\n"
+"content; format='obj'|'ply'|'stl'|'xyz'|'gltf' forces one). Returns a Mesh with vertices\n"
 "(N, 3) float32, triangles (M, 3) uint32 ((0, 3) for a point cloud), and normals,\n"
 "texcoords, colors (or None). Raises meshreduce.MeshIOError when the file cannot\n"
 "be read and meshreduce.ParseError (with .line / .offset) when it is malformed.");

@@ -895,7 +895,8 @@ static uint64_t vertex_hash(const gl_prim_data *p, size_t v)
 }
 
 /* p->first and p->nw: the vertices the triangles use, equal ones once, in
- * the order of their first use; p->tri renumbered. */
+ * the vertices' order (a primitive without copies keeps its own); p->tri
+ * renumbered. */
 static mr_status weld(const mr_gltf *g, gl_prim_data *p, mr_error *err)
 {
     size_t cap = 16;
@@ -908,22 +909,24 @@ static mr_status weld(const mr_gltf *g, gl_prim_data *p, mr_error *err)
         return mr_fail_nomem(err, g->name, cap * 4 + p->nv * 8);
     }
     memset(slot, 0xFF, cap * sizeof *slot);
-    memset(to, 0xFF, (p->nv + 1) * sizeof *to);
+    memset(to, 0, (p->nv + 1) * sizeof *to);
+    for (size_t c = 0; c < 3 * p->nt; c++)
+        to[p->tri[c]] = 1; /* used */
     p->nw = 0;
-    for (size_t c = 0; c < 3 * p->nt; c++) {
-        const uint32_t v = p->tri[c];
-        if (to[v] == UINT32_MAX) {
-            size_t s = (size_t)vertex_hash(p, v) & (cap - 1);
-            while (slot[s] != UINT32_MAX && !same_vertex(p, p->first[slot[s]], v))
-                s = (s + 1) & (cap - 1);
-            if (slot[s] == UINT32_MAX) {
-                slot[s] = (uint32_t)p->nw;
-                p->first[p->nw++] = v;
-            }
-            to[v] = slot[s];
+    for (size_t v = 0; v < p->nv; v++) {
+        if (!to[v])
+            continue;
+        size_t s = (size_t)vertex_hash(p, v) & (cap - 1);
+        while (slot[s] != UINT32_MAX && !same_vertex(p, p->first[slot[s]], v))
+            s = (s + 1) & (cap - 1);
+        if (slot[s] == UINT32_MAX) {
+            slot[s] = (uint32_t)p->nw;
+            p->first[p->nw++] = (uint32_t)v;
         }
-        p->tri[c] = to[v];
+        to[v] = slot[s];
     }
+    for (size_t c = 0; c < 3 * p->nt; c++)
+        p->tri[c] = to[p->tri[c]];
     free(slot);
     free(to);
     return MR_OK;
@@ -1239,8 +1242,11 @@ static mr_status visit(scene_acc *s, long long n, const double *parent, int dept
             gl_prim_data pd;
             mr_mesh_init(&s->parts[s->nparts]);
             st = prim_read(g, (size_t)mi, (size_t)p, &pd, err);
+            /* (an identity transform leaves the positions' bits as they are) */
+            static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
             if (st == MR_OK)
-                st = prim_mesh(g, &pd, world, ~0u, &s->parts[s->nparts], err);
+                st = prim_mesh(g, &pd, memcmp(world, id, sizeof id) ? world : NULL, ~0u,
+                               &s->parts[s->nparts], err);
             prim_free(&pd);
             s->nparts++;
         }
