@@ -15,8 +15,12 @@ static const char usage[] =
     "and mean distance over the points of both directions, each one-sided maximum\n"
     "and RMS, and the modified Hausdorff distance (RMS over REF's vertices of the\n"
     "distance to the nearest vertex of TEST); absolute and as a percentage of\n"
-    "REF's bounding-box diagonal. The same meshes, samples and seed give the same\n"
-    "figures on any number of threads.\n"
+    "REF's bounding-box diagonal. Where both meshes have normals, texture\n"
+    "coordinates or colors, their deviation at the matched points too (each\n"
+    "point's nearest point on the other surface, both interpolated there): the\n"
+    "normals' angle in degrees, the UV distance, the RGBA distance; RMS and\n"
+    "largest (at a seam the largest is the seam's jump). The same meshes, samples\n"
+    "and seed give the same figures on any number of threads.\n"
     "\n"
     "  --samples N   surface samples per mesh besides its vertices (default 1M;\n"
     "                0 = vertices only)\n"
@@ -103,7 +107,8 @@ static void print_row(const char *name, double v, double diagonal)
 }
 
 static void print_table(const compare_args *a, const mr_mesh *ref, const mr_mesh *test,
-                        const mr_compare_result *r, double read_s, double compare_s)
+                        const mr_compare_result *r, const mr_attribute_error *e, double read_s,
+                        double compare_s)
 {
     char x[32], y[32], z[32];
     printf("%-18s %s (%s triangles, %s vertices)\n", "reference", a->ref,
@@ -125,12 +130,26 @@ static void print_table(const compare_args *a, const mr_mesh *ref, const mr_mesh
     print_row("  test -> reference rms", r->test_to_ref_rms, r->diagonal);
     print_row("mean", r->mean, r->diagonal);
     print_row("modified hausdorff", r->modified_hausdorff, r->diagonal);
+    if (e->attributes) {
+        printf("\n  %-24s %14s   %12s   (at matched surface points)\n", "attribute", "rms",
+               "max");
+        if (e->attributes & MR_ATTR_NORMALS)
+            printf("  %-24s %14.7g   %12.7g\n", "normal angle (degrees)", e->normal_rms,
+                   e->normal_max);
+        if (e->attributes & MR_ATTR_TEXCOORDS)
+            printf("  %-24s %14.7g   %12.7g\n", "texcoord distance", e->texcoord_rms,
+                   e->texcoord_max);
+        if (e->attributes & MR_ATTR_COLORS)
+            printf("  %-24s %14.7g   %12.7g\n", "color distance (rgba)", e->color_rms,
+                   e->color_max);
+    }
     printf("\n%-18s compare %.3f s, read %.3f s, %d thread%s\n", "time", compare_s, read_s,
            threads_used(), threads_used() == 1 ? "" : "s");
 }
 
 static void print_json(const compare_args *a, const mr_mesh *ref, const mr_mesh *test,
-                       const mr_compare_result *r, double read_s, double compare_s)
+                       const mr_compare_result *r, const mr_attribute_error *e, double read_s,
+                       double compare_s)
 {
     printf("{\"reference\": ");
     cli_json_string(stdout, a->ref);
@@ -153,6 +172,14 @@ static void print_json(const compare_args *a, const mr_mesh *ref, const mr_mesh 
     printf(", \"hausdorff_rel\": %.17g, \"rms_rel\": %.17g, \"mean_rel\": %.17g"
            ", \"modified_hausdorff_rel\": %.17g",
            r->hausdorff_rel, r->rms_rel, r->mean_rel, r->modified_hausdorff_rel);
+    if (e->attributes & MR_ATTR_NORMALS)
+        printf(", \"normal_rms_degrees\": %.17g, \"normal_max_degrees\": %.17g", e->normal_rms,
+               e->normal_max);
+    if (e->attributes & MR_ATTR_TEXCOORDS)
+        printf(", \"texcoord_rms\": %.17g, \"texcoord_max\": %.17g", e->texcoord_rms,
+               e->texcoord_max);
+    if (e->attributes & MR_ATTR_COLORS)
+        printf(", \"color_rms\": %.17g, \"color_max\": %.17g", e->color_rms, e->color_max);
     printf(", \"threads\": %d, \"read_seconds\": %.6f, \"compare_seconds\": %.6f}\n",
            threads_used(), read_s, compare_s);
 }
@@ -185,12 +212,17 @@ static int run(int argc, char **argv)
     mr_status st = mr_compare(ref.positions, ref.vertex_count, ref.indices, ref.triangle_count,
                               test.positions, test.vertex_count, test.indices,
                               test.triangle_count, &opt, &r, &err);
+    /* the attributes both have, at the same points */
+    mr_attribute_error e;
+    memset(&e, 0, sizeof e);
+    if (st == MR_OK && (mr_mesh_attributes(&ref) & mr_mesh_attributes(&test)))
+        st = mr_compare_attributes(&ref, &test, &opt, &e, &err);
     double t2 = cli_now();
     if (st == MR_OK) {
         if (a.json)
-            print_json(&a, &ref, &test, &r, t1 - t0, t2 - t1);
+            print_json(&a, &ref, &test, &r, &e, t1 - t0, t2 - t1);
         else
-            print_table(&a, &ref, &test, &r, t1 - t0, t2 - t1);
+            print_table(&a, &ref, &test, &r, &e, t1 - t0, t2 - t1);
     }
     mr_mesh_free(&ref);
     mr_mesh_free(&test);

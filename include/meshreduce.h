@@ -783,6 +783,30 @@ mr_status mr_compare(const float *ref_positions, size_t ref_vertex_count,
                      const mr_compare_options *options, mr_compare_result *result,
                      mr_error *err);
 
+/* The deviation of the attributes that both meshes have, at matched
+ * surface points: the samples mr_compare measures (each mesh's
+ * area-uniform samples, by the same options and seed), each matched to
+ * the nearest point of the other surface, both meshes' attributes
+ * interpolated there (barycentric); the area samples only (a vertex on
+ * a seam has both sides' values), or the vertices where options->samples
+ * is 0. Normals: the angle in degrees between
+ * the two (normalised); texture coordinates: the UV distance; colors: the
+ * RGBA distance (channels in [0, 1]). RMS and largest over the points of
+ * both directions. Near a seam the nearest point may fall on its other
+ * side: the largest values there are the seam's jump. The same figures at
+ * any thread count. */
+typedef struct mr_attribute_error {
+    unsigned attributes;          /* MR_ATTR_* both have: the figures measured */
+    double normal_rms, normal_max;     /* degrees */
+    double texcoord_rms, texcoord_max; /* UV units */
+    double color_rms, color_max;       /* RGBA distance */
+    size_t points;                /* matched points, both directions */
+} mr_attribute_error;
+
+mr_status mr_compare_attributes(const mr_mesh *ref, const mr_mesh *test,
+                                const mr_compare_options *options, mr_attribute_error *out,
+                                mr_error *err);
+
 /* A reference surface prepared once for several measurements against it
  * (a sheet of reductions, a sweep): its checks, its surface samples and its
  * nearest-triangle hierarchy, built by mr_reference_build with the

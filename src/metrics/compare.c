@@ -222,8 +222,10 @@ static uint32_t find_triangle(const surface *s, double a)
     return (uint32_t)(lo - 1);
 }
 
-/* Point q of the surface: a vertex for q < vert_count, else a sample. */
-static inline uint32_t surface_point(const surface *s, size_t q, double p[3])
+/* Point q of the surface: a vertex for q < vert_count, else a sample
+ * (its triangle returned, its barycentric weights in w, which may be
+ * NULL). */
+static inline uint32_t surface_point_w(const surface *s, size_t q, double p[3], double w[3])
 {
     if (q < s->vert_count) {
         load(s->pos, s->verts[q], p);
@@ -241,7 +243,14 @@ static inline uint32_t surface_point(const surface *s, size_t q, double p[3])
     const double wa = 1 - r1, wb = r1 * (1 - r2), wc = r1 * r2;
     for (int k = 0; k < 3; k++)
         p[k] = wa * va[k] + wb * vb[k] + wc * vc[k];
+    if (w)
+        w[0] = wa, w[1] = wb, w[2] = wc;
     return t;
+}
+
+static inline uint32_t surface_point(const surface *s, size_t q, double p[3])
+{
+    return surface_point_w(s, q, p, NULL);
 }
 
 /* ---- blocks of queries ------------------------------------------------------- */
@@ -547,4 +556,184 @@ double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
     }
     free(keys);
     return (double)same / (double)a_vertex_count;
+}
+
+/* ---- attribute deviation ------------------------------------------------------ */
+
+typedef struct attr_partial {
+    double sum2[3], max[3];
+} attr_partial;
+
+/* The attributes of mesh m at weights w of triangle t (a vertex: t is
+ * MR_NO_HINT and v the vertex). */
+static void attributes_at(const mr_mesh *m, uint32_t t, uint32_t v, const double w[3],
+                          double n[3], double uv[2], double c[4])
+{
+    uint32_t id[3] = {v, v, v};
+    double ww[3] = {1, 0, 0};
+    if (t != MR_NO_HINT) {
+        memcpy(id, m->indices + 3 * (size_t)t, sizeof id);
+        memcpy(ww, w, sizeof ww);
+    }
+    for (int k = 0; k < 4; k++) {
+        if (k < 3)
+            n[k] = 0;
+        if (k < 2)
+            uv[k] = 0;
+        c[k] = 0;
+    }
+    for (int j = 0; j < 3; j++) {
+        const size_t x = id[j];
+        for (int k = 0; m->normals && k < 3; k++)
+            n[k] += ww[j] * m->normals[3 * x + (size_t)k];
+        for (int k = 0; m->texcoords && k < 2; k++)
+            uv[k] += ww[j] * m->texcoords[2 * x + (size_t)k];
+        for (int k = 0; m->colors && k < 4; k++)
+            c[k] += ww[j] * m->colors[4 * x + (size_t)k];
+    }
+}
+
+/* Barycentric weights of point p (on triangle t of m, or nearly). */
+static void weights_of(const mr_mesh *m, uint32_t t, const double p[3], double w[3])
+{
+    double a[3], b[3], c[3];
+    load(m->positions, m->indices[3 * (size_t)t], a);
+    load(m->positions, m->indices[3 * (size_t)t + 1], b);
+    load(m->positions, m->indices[3 * (size_t)t + 2], c);
+    double v0[3], v1[3], v2[3];
+    for (int k = 0; k < 3; k++)
+        v0[k] = b[k] - a[k], v1[k] = c[k] - a[k], v2[k] = p[k] - a[k];
+    const double d00 = v0[0] * v0[0] + v0[1] * v0[1] + v0[2] * v0[2];
+    const double d01 = v0[0] * v1[0] + v0[1] * v1[1] + v0[2] * v1[2];
+    const double d11 = v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2];
+    const double d20 = v2[0] * v0[0] + v2[1] * v0[1] + v2[2] * v0[2];
+    const double d21 = v2[0] * v1[0] + v2[1] * v1[1] + v2[2] * v1[2];
+    const double den = d00 * d11 - d01 * d01;
+    double wb = den > 0 ? (d11 * d20 - d01 * d21) / den : 0;
+    double wc = den > 0 ? (d00 * d21 - d01 * d20) / den : 0;
+    wb = wb < 0 ? 0 : wb > 1 ? 1 : wb;
+    wc = wc < 0 ? 0 : wc > 1 - wb ? 1 - wb : wc;
+    w[0] = 1 - wb - wc, w[1] = wb, w[2] = wc;
+}
+
+typedef struct attr_job {
+    const surface *surf[2];
+    const mr_mesh *mesh[2];
+    const mr_tri_bvh *tree[2];
+    size_t count[2], blocks[3];
+} attr_job;
+
+static attr_partial attr_block(const attr_job *jb, size_t b)
+{
+    const int kind = b >= jb->blocks[1];
+    const surface *src = jb->surf[kind];
+    const mr_mesh *sm = jb->mesh[kind], *dm = jb->mesh[1 - kind];
+    /* the area samples (a vertex on a seam has two sides' values; a
+     * sample is inside a triangle), or the vertices where there are none */
+    const size_t skip = src->samples ? src->vert_count : 0;
+    const size_t begin = skip + (b - jb->blocks[kind]) * BLOCK;
+    const size_t end =
+        begin + BLOCK < skip + jb->count[kind] ? begin + BLOCK : skip + jb->count[kind];
+    attr_partial r;
+    memset(&r, 0, sizeof r);
+    uint32_t hint = MR_NO_HINT;
+    for (size_t q = begin; q < end; q++) {
+        double p[3], w[3], closest[3], dw[3];
+        const uint32_t t = surface_point_w(src, q, p, w);
+        uint32_t near = MR_NO_HINT;
+        mr_tri_bvh_nearest(jb->tree[1 - kind], p, hint, &near, closest);
+        hint = near;
+        weights_of(dm, near, closest, dw);
+        double n0[3], u0[2], c0[4], n1[3], u1[2], c1[4];
+        attributes_at(sm, t, q < src->vert_count ? src->verts[q] : 0, w, n0, u0, c0);
+        attributes_at(dm, near, 0, dw, n1, u1, c1);
+        double e[3] = {0, 0, 0};
+        const double l0 = sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]),
+                     l1 = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+        if (l0 > 0 && l1 > 0) {
+            double d = (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2]) / (l0 * l1);
+            d = d > 1 ? 1 : d < -1 ? -1 : d;
+            e[0] = acos(d) * (180.0 / 3.14159265358979323846);
+        }
+        e[1] = sqrt((u0[0] - u1[0]) * (u0[0] - u1[0]) + (u0[1] - u1[1]) * (u0[1] - u1[1]));
+        double c2 = 0;
+        for (int k = 0; k < 4; k++)
+            c2 += (c0[k] - c1[k]) * (c0[k] - c1[k]);
+        e[2] = sqrt(c2);
+        for (int k = 0; k < 3; k++) {
+            r.sum2[k] += e[k] * e[k];
+            r.max[k] = e[k] > r.max[k] ? e[k] : r.max[k];
+        }
+    }
+    return r;
+}
+
+mr_status mr_compare_attributes(const mr_mesh *ref, const mr_mesh *test,
+                                const mr_compare_options *options, mr_attribute_error *out,
+                                mr_error *err)
+{
+    if (!ref || !test || !out)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL, "mesh or result is NULL");
+    memset(out, 0, sizeof *out);
+    mr_compare_options opt;
+    mr_compare_options_default(&opt);
+    if (options)
+        opt = *options;
+    const int nt = mr_thread_count(opt.threads);
+    out->attributes = mr_mesh_attributes(ref) & mr_mesh_attributes(test);
+    /* the same points as mr_compare's */
+    surface s0, s1 = {.name = "test mesh", .pos = test->positions,
+                      .vertex_count = test->vertex_count, .idx = test->indices,
+                      .triangle_count = test->triangle_count, .samples = opt.samples,
+                      .seed = mr_mix64(opt.seed ^ 0x746573746d657368ull)};
+    reference_surface(&s0, ref->positions, ref->vertex_count, ref->indices, ref->triangle_count,
+                      &opt);
+    mr_tri_bvh t0, t1;
+    memset(&t0, 0, sizeof t0);
+    memset(&t1, 0, sizeof t1);
+    mr_status st = prepare(&s0, nt, err);
+    if (st == MR_OK)
+        st = prepare(&s1, nt, err);
+    if (st == MR_OK && out->attributes) {
+        st = mr_tri_bvh_build(&t0, s0.pos, s0.idx, s0.triangle_count, nt, err);
+        if (st == MR_OK)
+            st = mr_tri_bvh_build(&t1, s1.pos, s1.idx, s1.triangle_count, nt, err);
+    }
+    if (st == MR_OK && out->attributes) {
+        attr_job jb = {{&s0, &s1}, {ref, test}, {&t0, &t1}, {0, 0}, {0, 0, 0}};
+        jb.count[0] = s0.samples ? s0.samples : s0.vert_count;
+        jb.count[1] = s1.samples ? s1.samples : s1.vert_count;
+        jb.blocks[1] = (jb.count[0] + BLOCK - 1) / BLOCK;
+        jb.blocks[2] = jb.blocks[1] + (jb.count[1] + BLOCK - 1) / BLOCK;
+        const size_t nb = jb.blocks[2];
+        attr_partial *part = mr_alloc_array(nb + 1, sizeof *part);
+        if (!part) {
+            st = mr_fail_nomem(err, NULL, nb * sizeof *part);
+        } else {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+            for (size_t b = 0; b < nb; b++)
+                part[b] = attr_block(&jb, b);
+            attr_partial total;
+            memset(&total, 0, sizeof total);
+            for (size_t b = 0; b < nb; b++) /* in block order: the same sums on any threads */
+                for (int k = 0; k < 3; k++) {
+                    total.sum2[k] += part[b].sum2[k];
+                    total.max[k] = part[b].max[k] > total.max[k] ? part[b].max[k] : total.max[k];
+                }
+            free(part);
+            const double n = (double)(jb.count[0] + jb.count[1]);
+            out->points = jb.count[0] + jb.count[1];
+            if (out->attributes & MR_ATTR_NORMALS)
+                out->normal_rms = sqrt(total.sum2[0] / n), out->normal_max = total.max[0];
+            if (out->attributes & MR_ATTR_TEXCOORDS)
+                out->texcoord_rms = sqrt(total.sum2[1] / n), out->texcoord_max = total.max[1];
+            if (out->attributes & MR_ATTR_COLORS)
+                out->color_rms = sqrt(total.sum2[2] / n), out->color_max = total.max[2];
+        }
+    }
+    mr_tri_bvh_free(&t0);
+    mr_tri_bvh_free(&t1);
+    surface_free(&s0);
+    surface_free(&s1);
+    return st;
 }
