@@ -657,9 +657,43 @@ static mr_status sort_positions(job *j, uint64_t memory, bool referenced, ooc_ex
  * passes tell which are. */
 static mr_status find_coincident(job *j, uint64_t memory, bool *found, mr_error *err)
 {
+    *found = false;
+    /* first, where they fit half the budget, the positions' 64-bit keys
+     * sorted in memory: no two equal, no two positions equal (the common
+     * case, settled in a fraction of the exact sort's time); else the
+     * exact sort decides */
+    if (16 * (uint64_t)j->nv <= memory / 2) {
+        uint64_t *key = mr_alloc_array(j->nv + 1, sizeof *key);
+        mr_mesh b;
+        mr_mesh_init(&b);
+        mr_status st = key ? mr_mesh_alloc(&b, VERTEX_BLOCK, 0, 0, err)
+                           : mr_fail_nomem(err, j->in_path, j->nv * 8);
+        for (size_t v0 = 0; v0 < j->nv && st == MR_OK; v0 += VERTEX_BLOCK) {
+            const size_t m = j->nv - v0 < VERTEX_BLOCK ? j->nv - v0 : VERTEX_BLOCK;
+            b.vertex_count = m;
+            if ((st = j->src.vertices(j->src.impl, v0, m, &b, err)) != MR_OK)
+                break;
+            for (size_t i = 0; i < m; i++) {
+                uint32_t bits[3];
+                memcpy(bits, b.positions + 3 * i, 12);
+                key[v0 + i] = ooc_position_key(bits);
+            }
+            report(j, 0, err, &st);
+        }
+        b.vertex_count = VERTEX_BLOCK;
+        mr_mesh_free(&b);
+        j->src.release(j->src.impl);
+        if (st == MR_OK)
+            st = mr_radix_sort_u64(key, NULL, j->nv, 64, j->threads, err);
+        bool twice = false;
+        for (size_t v = 1; st == MR_OK && v < j->nv && !twice; v++)
+            twice = key[v] == key[v - 1];
+        free(key);
+        if (st != MR_OK || !twice)
+            return st;
+    }
     ooc_extsort x;
     mr_status st = sort_positions(j, memory, false, &x, err);
-    *found = false;
     uint32_t bits[3];
     for (uint64_t k = 1; st == MR_OK && !*found; k++) {
         const void *rec = NULL;
