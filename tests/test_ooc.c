@@ -764,8 +764,10 @@ static void test_unwelded(void **state)
     const bool quick = getenv("MR_TEST_QUICK") != NULL;
     const char *inputs[2] = {ply, obj};
     const double ratios[2] = {0.02, 0.5};
+    /* (the sanitizers' runs: the PLY into the forest, whose leaves are a
+     * tree's) */
     for (int i = 0; i < (quick ? 1 : 2); i++)
-        for (int r = 0; r < 2; r++) {
+        for (int r = quick ? 1 : 0; r < 2; r++) {
             mr_simplify_options o;
             mr_simplify_options_default(&o);
             o.target_ratio = ratios[r];
