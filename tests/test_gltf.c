@@ -673,8 +673,6 @@ static void test_document(void **state)
     for (int k = 7; k <= 9; k++) {
         size_t n1, n2;
         int c1, c2;
-        const cJSON *an = cJSON_GetArrayItem(cJSON_GetObjectItem(a.root, "animations"), 0);
-        (void)an;
         double *x = read_acc(&a, k, &n1, &c1), *y = read_acc(&c, k, &n2, &c2);
         assert_int_equal(n1, n2);
         assert_memory_equal(x, y, n1 * (size_t)c1 * sizeof *x);

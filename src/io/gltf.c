@@ -1055,7 +1055,7 @@ void mr_gltf_primitive_at(const mr_gltf *g, size_t i, size_t *mesh, size_t *prim
 /* The mesh of a read primitive, its positions (and normals) under the
  * 4x4 column-major matrix x (NULL: as they are). */
 static mr_status prim_mesh(const mr_gltf *g, const gl_prim_data *p, const double *x,
-                           unsigned want, mr_mesh *out, mr_error *err)
+                           mr_mesh *out, mr_error *err)
 {
     const gl_attr *N = find_attr(p, "NORMAL"), *T = find_attr(p, "TEXCOORD_0"),
                   *C = find_attr(p, "COLOR_0"), *P = find_attr(p, "POSITION");
@@ -1065,10 +1065,8 @@ static mr_status prim_mesh(const mr_gltf *g, const gl_prim_data *p, const double
         T = NULL;
     if (C && C->info.comps != 3 && C->info.comps != 4)
         C = NULL;
-    unsigned flags = (N ? MR_ATTR_NORMALS : 0) | (T ? MR_ATTR_TEXCOORDS : 0) |
-                     (C ? MR_ATTR_COLORS : 0);
-    if (want != ~0u)
-        flags = want;
+    const unsigned flags = (N ? MR_ATTR_NORMALS : 0) | (T ? MR_ATTR_TEXCOORDS : 0) |
+                           (C ? MR_ATTR_COLORS : 0);
     mr_status st = mr_mesh_alloc(out, p->nw, p->nt, flags, err);
     if (st != MR_OK)
         return st;
@@ -1090,28 +1088,22 @@ static mr_status prim_mesh(const mr_gltf *g, const gl_prim_data *p, const double
             out->positions[3 * w + (size_t)k] =
                 x ? (float)(x[k] * q[0] + x[4 + k] * q[1] + x[8 + k] * q[2] + x[12 + k])
                   : (float)q[k];
-        if (out->normals) {
-            double nn[3] = {0, 0, 1};
-            if (N) {
-                const double *m = N->data + 3 * v;
-                for (int k = 0; k < 3; k++)
-                    nn[k] = n3[3 * k] * m[0] + n3[3 * k + 1] * m[1] + n3[3 * k + 2] * m[2];
-                const double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-                if (l > 0 && x)
-                    nn[0] /= l, nn[1] /= l, nn[2] /= l;
-            }
+        if (N) {
+            const double *m = N->data + 3 * v;
+            double nn[3];
+            for (int k = 0; k < 3; k++)
+                nn[k] = n3[3 * k] * m[0] + n3[3 * k + 1] * m[1] + n3[3 * k + 2] * m[2];
+            const double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+            if (l > 0 && x)
+                nn[0] /= l, nn[1] /= l, nn[2] /= l;
             for (int k = 0; k < 3; k++)
                 out->normals[3 * w + (size_t)k] = (float)nn[k];
         }
-        if (out->texcoords)
-            for (int k = 0; k < 2; k++)
-                out->texcoords[2 * w + (size_t)k] = T ? (float)T->data[2 * v + (size_t)k] : 0.0f;
-        if (out->colors)
-            for (int k = 0; k < 4; k++)
-                out->colors[4 * w + (size_t)k] =
-                    !C ? 1.0f
-                       : k < C->info.comps ? (float)C->data[(size_t)C->info.comps * v + (size_t)k]
-                                           : 1.0f;
+        for (int k = 0; T && k < 2; k++)
+            out->texcoords[2 * w + (size_t)k] = (float)T->data[2 * v + (size_t)k];
+        for (int k = 0; C && k < 4; k++) /* rgb: alpha 1 */
+            out->colors[4 * w + (size_t)k] =
+                k < C->info.comps ? (float)C->data[(size_t)C->info.comps * v + (size_t)k] : 1.0f;
     }
     const bool flip = x && (x[0] * (x[5] * x[10] - x[9] * x[6]) -
                             x[4] * (x[1] * x[10] - x[9] * x[2]) +
@@ -1130,7 +1122,7 @@ mr_status mr_gltf_primitive_mesh(const mr_gltf *g, size_t i, mr_mesh *out, mr_er
     gl_prim_data p;
     mr_status st = prim_read(g, g->prims[i].mesh, g->prims[i].prim, &p, err);
     if (st == MR_OK)
-        st = prim_mesh(g, &p, NULL, ~0u, out, err);
+        st = prim_mesh(g, &p, NULL, out, err);
     prim_free(&p);
     if (st != MR_OK)
         mr_mesh_free(out);
@@ -1245,7 +1237,7 @@ static mr_status visit(scene_acc *s, long long n, const double *parent, int dept
             /* (an identity transform leaves the positions' bits as they are) */
             static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
             if (st == MR_OK)
-                st = prim_mesh(g, &pd, memcmp(world, id, sizeof id) ? world : NULL, ~0u,
+                st = prim_mesh(g, &pd, memcmp(world, id, sizeof id) ? world : NULL,
                                &s->parts[s->nparts], err);
             prim_free(&pd);
             s->nparts++;
@@ -1758,52 +1750,53 @@ static void each_view_ref(cJSON *root, ref_fn f, void *user)
     }
 }
 
+/* The entries of root[key] that the references `walk` finds, renumbered
+ * (the others dropped): r->to[i] is entry i's new index, -1 where it went.
+ * `what` names the entries in the error for a reference past them. */
+static mr_status renumber(mr_gltf *g, const char *key, void (*walk)(cJSON *, ref_fn, void *),
+                          const char *what, remap *r, mr_error *err)
+{
+    r->n = (size_t)array_size(member(g->root, key));
+    r->to = calloc(r->n + 1, sizeof *r->to);
+    r->bad = false;
+    if (!r->to)
+        return mr_fail_nomem(err, g->name, r->n * 8);
+    walk(g->root, mark_ref, r);
+    if (r->bad) {
+        free(r->to);
+        r->to = NULL;
+        return mr_fail_plain(err, MR_ERR_PARSE, g->name, "a reference to %s that is none", what);
+    }
+    compact(g->root, key, r);
+    walk(g->root, apply_ref, r);
+    return MR_OK;
+}
+
 static mr_status drop_and_renumber(mr_gltf *g, mr_error *err)
 {
     if (!drop_unused(g))
         return MR_OK;
-    const size_t na = (size_t)array_size(member(g->root, "accessors"));
-    remap r = {calloc(na + 1, sizeof *r.to), na, false};
-    if (!r.to)
-        return mr_fail_nomem(err, g->name, na * 8);
-    each_accessor_ref(g->root, mark_ref, &r);
-    if (r.bad) {
-        free(r.to);
-        return mr_fail_plain(err, MR_ERR_PARSE, g->name, "a reference to an accessor that is none");
-    }
-    compact(g->root, "accessors", &r);
-    each_accessor_ref(g->root, apply_ref, &r);
+    remap r;
+    mr_status st = renumber(g, "accessors", each_accessor_ref, "an accessor", &r, err);
     free(r.to);
     /* the buffer views the accessors and images left use */
-    const size_t nv = (size_t)array_size(member(g->root, "bufferViews"));
-    remap v = {calloc(nv + 1, sizeof *v.to), nv, false};
-    if (!v.to)
-        return mr_fail_nomem(err, g->name, nv * 8);
-    each_view_ref(g->root, mark_ref, &v);
-    if (v.bad) {
-        free(v.to);
-        return mr_fail_plain(err, MR_ERR_PARSE, g->name,
-                             "a reference to a buffer view that is none");
-    }
+    if (st == MR_OK)
+        st = renumber(g, "bufferViews", each_view_ref, "a buffer view", &r, err);
+    if (st != MR_OK)
+        return st;
     /* the new views' bytes follow the views they become */
-    size_t kept_new = 0;
-    for (size_t i = 0; i < nv; i++) {
-        if (i >= g->input_views) {
-            const size_t k = i - g->input_views;
-            if (v.to[i])
-                g->added[kept_new++] = g->added[k];
-            else
-                free(g->added[k].data);
-        }
+    size_t kept_old = 0, kept_new = 0;
+    for (size_t i = 0; i < r.n; i++) {
+        if (i < g->input_views)
+            kept_old += r.to[i] >= 0;
+        else if (r.to[i] >= 0)
+            g->added[kept_new++] = g->added[i - g->input_views];
+        else
+            free(g->added[i - g->input_views].data);
     }
-    size_t kept_old = 0;
-    for (size_t i = 0; i < g->input_views && i < nv; i++)
-        kept_old += v.to[i] != 0;
-    g->nadded = kept_new;
-    compact(g->root, "bufferViews", &v);
-    each_view_ref(g->root, apply_ref, &v);
     g->input_views = kept_old;
-    free(v.to);
+    g->nadded = kept_new;
+    free(r.to);
     return MR_OK;
 }
 
