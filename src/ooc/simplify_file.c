@@ -1451,11 +1451,19 @@ typedef struct gidmap {
     size_t mask, count;
 } gidmap;
 
-static bool gidmap_init(gidmap *m, size_t hint)
+/* An open-addressing table's slots for `hint` entries: a power of two,
+ * at most half full. */
+static size_t table_capacity(size_t hint)
 {
     size_t cap = 64;
     while (cap < 2 * hint)
         cap *= 2;
+    return cap;
+}
+
+static bool gidmap_init(gidmap *m, size_t hint)
+{
+    const size_t cap = table_capacity(hint);
     m->key = mr_alloc_array(cap, sizeof *m->key);
     m->val = mr_alloc_array(cap, sizeof *m->val);
     m->mask = cap - 1;
@@ -1526,9 +1534,7 @@ typedef struct posset {
 
 static bool posset_init(posset *m, size_t hint)
 {
-    size_t cap = 64;
-    while (cap < 2 * hint)
-        cap *= 2;
+    const size_t cap = table_capacity(hint);
     m->key = mr_alloc_array(cap, sizeof *m->key);
     m->used = mr_calloc_array(cap, 1);
     m->mask = cap - 1;
