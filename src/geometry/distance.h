@@ -45,6 +45,30 @@
 double mr_point_triangle_dist2(const double p[3], const double a[3], const double b[3],
                                const double c[3], double closest[3]);
 
+/* The coordinates of point x of triangle (a, b, c)'s plane along its edges,
+ * x - a = bb (b - a) + bc (c - a): *bb and *bc when the edges' Gram
+ * determinant, returned, exceeds `floor` times the product of their
+ * squared lengths (else they are left alone: a sliver). */
+static inline double mr_edge_coords(const double a[3], const double b[3], const double c[3],
+                                     const double x[3], double floor, double *bb,
+                                     double *bc)
+{
+    const double e0[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double e1[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double e2[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
+    const double d00 = e0[0] * e0[0] + e0[1] * e0[1] + e0[2] * e0[2];
+    const double d01 = e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2];
+    const double d11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    const double d20 = e2[0] * e0[0] + e2[1] * e0[1] + e2[2] * e0[2];
+    const double d21 = e2[0] * e1[0] + e2[1] * e1[1] + e2[2] * e1[2];
+    const double den = d00 * d11 - d01 * d01;
+    if (den > floor * d00 * d11) {
+        *bb = (d11 * d20 - d01 * d21) / den;
+        *bc = (d00 * d21 - d01 * d20) / den;
+    }
+    return den > floor * d00 * d11 ? den : 0;
+}
+
 /* Closest point of segment (a, b) to p; a == b is allowed. */
 double mr_point_segment_dist2(const double p[3], const double a[3], const double b[3],
                               double closest[3]);

@@ -600,17 +600,8 @@ static void weights_of(const mr_mesh *m, uint32_t t, const double p[3], double w
     load(m->positions, m->indices[3 * (size_t)t], a);
     load(m->positions, m->indices[3 * (size_t)t + 1], b);
     load(m->positions, m->indices[3 * (size_t)t + 2], c);
-    double v0[3], v1[3], v2[3];
-    for (int k = 0; k < 3; k++)
-        v0[k] = b[k] - a[k], v1[k] = c[k] - a[k], v2[k] = p[k] - a[k];
-    const double d00 = v0[0] * v0[0] + v0[1] * v0[1] + v0[2] * v0[2];
-    const double d01 = v0[0] * v1[0] + v0[1] * v1[1] + v0[2] * v1[2];
-    const double d11 = v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2];
-    const double d20 = v2[0] * v0[0] + v2[1] * v0[1] + v2[2] * v0[2];
-    const double d21 = v2[0] * v1[0] + v2[1] * v1[1] + v2[2] * v1[2];
-    const double den = d00 * d11 - d01 * d01;
-    double wb = den > 0 ? (d11 * d20 - d01 * d21) / den : 0;
-    double wc = den > 0 ? (d00 * d21 - d01 * d20) / den : 0;
+    double wb = 0, wc = 0;
+    mr_edge_coords(a, b, c, p, 0, &wb, &wc);
     wb = wb < 0 ? 0 : wb > 1 ? 1 : wb;
     wc = wc < 0 ? 0 : wc > 1 - wb ? 1 - wb : wc;
     w[0] = 1 - wb - wc, w[1] = wb, w[2] = wc;

@@ -191,29 +191,6 @@ static inline void add_pull(const pull *p, double beta, double a[6], double b[3]
     b[2] += g * n2;
 }
 
-/* The coordinates of point x of triangle (a, b, c)'s plane along its edges,
- * x - a = bb (b - a) + bc (c - a): *bb and *bc when the edges' Gram
- * determinant, returned, exceeds `floor` times the product of their
- * squared lengths (else they are left alone: a sliver). */
-static double edge_coords(const double a[3], const double b[3], const double c[3],
-                          const double x[3], double floor, double *bb, double *bc)
-{
-    const double e0[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double e1[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const double e2[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
-    const double d00 = e0[0] * e0[0] + e0[1] * e0[1] + e0[2] * e0[2];
-    const double d01 = e0[0] * e1[0] + e0[1] * e1[1] + e0[2] * e1[2];
-    const double d11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
-    const double d20 = e2[0] * e0[0] + e2[1] * e0[1] + e2[2] * e0[2];
-    const double d21 = e2[0] * e1[0] + e2[1] * e1[1] + e2[2] * e1[2];
-    const double den = d00 * d11 - d01 * d01;
-    if (den > floor * d00 * d11) {
-        *bb = (d11 * d20 - d01 * d21) / den;
-        *bc = (d00 * d21 - d01 * d20) / den;
-    }
-    return den > floor * d00 * d11 ? den : 0;
-}
-
 /* Squared distance from p to triangle t of (pos, tris), its closest point
  * c, and the corners that point leans on: bit j set when c's barycentric
  * coordinate j is clearly above zero (7: inside; on an edge, its two ends;
@@ -231,7 +208,7 @@ static double tri_dist_region(const float *pos, const uint32_t *tris, uint32_t t
     }
     const double d = mr_point_triangle_dist2(p, a, b, cc, c);
     double bb, bc;
-    if (!(edge_coords(a, b, cc, c, 1e-14, &bb, &bc) > 0)) {
+    if (!(mr_edge_coords(a, b, cc, c, 1e-14, &bb, &bc) > 0)) {
         *region = 0;
         return d;
     }
@@ -549,7 +526,7 @@ mr_status mr_simplifier_refine(mr_simplifier *s, const float *positions, size_t 
             const double da[3] = {a[0], a[1], a[2]}, db[3] = {b[0], b[1], b[2]},
                          dc[3] = {cc[0], cc[1], cc[2]};
             double bb = 0, bc = 0;
-            if (!(l2 > 0) || !(edge_coords(da, db, dc, c, 0, &bb, &bc) > 0) || !(sarea[i] > 0)) {
+            if (!(l2 > 0) || !(mr_edge_coords(da, db, dc, c, 0, &bb, &bc) > 0) || !(sarea[i] > 0)) {
                 h->w = 0; /* no pull */
                 continue;
             }
