@@ -334,6 +334,28 @@ static void ensure_scan(size_t T, const char *in)
 }
 
 /* --cluster: in passes against in memory, on each of the sizes. */
+/* n runs of each of two commands (av[0], av[1]; n at most 64), alternating
+ * which goes first: each one's times in sec[k] (run order) and its
+ * largest peak RSS in rss[k]; a failed run ends the benchmark, naming
+ * `what`. */
+static void alternate_runs(char *const *av[2], int n, const char *what, double sec[2][64],
+                           size_t rss[2])
+{
+    rss[0] = rss[1] = 0;
+    for (int r = 0; r < n; r++)
+        for (int m = 0; m < 2; m++) {
+            const int k = (r & 1) ? 1 - m : m;
+            run_result rr = run_cmd(av[k]);
+            free(rr.out);
+            if (rr.status != 0) {
+                fprintf(stderr, "%s failed (%d)\n", what, rr.status);
+                exit(1);
+            }
+            sec[k][r] = rr.seconds;
+            rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
+        }
+}
+
 static double cluster_section(const char *self, const char *dir, const size_t *sizes,
                               int nsizes, int runs, double ratio)
 {
@@ -357,22 +379,14 @@ static double cluster_section(const char *self, const char *dir, const size_t *s
                 char th[8];
                 snprintf(th, sizeof th, "%d", threads);
                 double sec[2][64];
-                size_t rss[2] = {0, 0};
+                size_t rss[2];
                 const int n = runs < 64 ? runs : 64;
-                for (int r = 0; r < n; r++)
-                    for (int m = 0; m < 2; m++) {
-                        const int k = (r & 1) ? 1 - m : m; /* alternating */
-                        char *av[] = {(char *)self, "--cluster-child", k ? "memory" : "file", in,
-                                      out[k], th, g ? "0" : "0.002", g ? target : "0", NULL};
-                        run_result rr = run_cmd(av);
-                        if (rr.status != 0) {
-                            fprintf(stderr, "cluster child failed (%d)\n", rr.status);
-                            exit(1);
-                        }
-                        sec[k][r] = rr.seconds;
-                        rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
-                        free(rr.out);
-                    }
+                char *file[] = {(char *)self, "--cluster-child", "file",   in, out[0], th,
+                                g ? "0" : "0.002", g ? target : "0", NULL};
+                char *memory[] = {(char *)self, "--cluster-child", "memory", in, out[1], th,
+                                  g ? "0" : "0.002", g ? target : "0", NULL};
+                char *const *av[2] = {file, memory};
+                alternate_runs(av, n, "cluster child", sec, rss);
                 size_t na, nb;
                 char *a = read_all(out[0], &na), *b = read_all(out[1], &nb);
                 const bool same = a && b && na == nb && memcmp(a, b, na) == 0;
@@ -434,23 +448,16 @@ static void attributes_section(const char *dir, const size_t *sizes, int nsizes,
         const char *budget = sizes[si] <= 8000000 ? "64M" : "1G";
         for (int f = 0; f < 2; f++) {
             double sec[2][64];
-            size_t rss[2] = {0, 0};
+            size_t rss[2];
             const int n = runs < 64 ? runs : 64;
-            for (int r = 0; r < n; r++)
-                for (int m = 0; m < 2; m++) {
-                    const int k = (r & 1) ? 1 - m : m; /* alternating */
-                    char *av[] = {MR_CLI_PATH, "--threads", "2", "simplify", in[f], "-o", out,
-                                  "--ratio", (char *)ratio, "-q",
-                                  k ? "--memory" : NULL, (char *)budget, NULL};
-                    run_result rr = run_cmd(av);
-                    free(rr.out);
-                    if (rr.status != 0) {
-                        fprintf(stderr, "simplify failed (%d): %s\n", rr.status, in[f]);
-                        exit(1);
-                    }
-                    sec[k][r] = rr.seconds;
-                    rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
-                }
+            char *memory[] = {MR_CLI_PATH, "--threads", "2", "simplify", in[f], "-o", out,
+                              "--ratio", (char *)ratio, "-q", NULL};
+            char *chunks[] = {MR_CLI_PATH, "--threads", "2", "simplify", in[f], "-o", out,
+                              "--ratio", (char *)ratio, "-q", "--memory", (char *)budget, NULL};
+            char *const *av[2] = {memory, chunks};
+            char what[2300];
+            snprintf(what, sizeof what, "simplify %s", in[f]);
+            alternate_runs(av, n, what, sec, rss);
             const double a = bench_summarize(sec[0], n).median,
                          b = bench_summarize(sec[1], n).median;
             printf("%-9s %-5s %-8s %9.3f %9.3f %7.0fMB %7.0fMB %6.2fx\n", label, f ? "OBJ" : "PLY",
