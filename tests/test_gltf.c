@@ -825,6 +825,18 @@ static void test_malformed(void **state)
         assert_int_not_equal(mr_mesh_read(path, NULL, &m, &err), MR_OK);
         tu_assert_contains(err.message, "offset 8");
     }
+    /* a .glb whose header says fewer bytes than the header itself: the JSON
+     * chunk's bound must not wrap (a fuzzer's find) */
+    {
+        const char *path = tu_tmp_path("gltf-tiny.glb");
+        const uint8_t h[23] = {'g', 'l', 'T', 'F', 2, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0x60,
+                               'J', 'S', 'O', 'N', '{', '"', 'b'};
+        tu_write_file(path, h, sizeof h);
+        mr_mesh m;
+        mr_error err;
+        assert_int_not_equal(mr_mesh_read(path, NULL, &m, &err), MR_OK);
+        tu_assert_contains(err.message, "offset 8");
+    }
     /* from memory, an external buffer is not read */
     {
         const char *mem = "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":8,"

@@ -486,11 +486,11 @@ mr_status mr_gltf_load(const void *data, size_t size, const char *name, const ch
             st = mr_fail_plain(err, MR_ERR_UNSUPPORTED, name,
                                "offset 4: .glb version %u (meshreduce reads glTF 2.0)",
                                le32(d + 4));
-        else if (le32(d + 8) > size)
+        else if (le32(d + 8) > size || le32(d + 8) < 20)
             st = mr_fail_plain(err, MR_ERR_PARSE, name,
                                "offset 8: the .glb says %u bytes, the file has %zu", le32(d + 8),
                                size);
-        else if (le32(d + 16) != GLB_JSON || (size_t)le32(d + 12) > le32(d + 8) - 20)
+        else if (le32(d + 16) != GLB_JSON || (size_t)le32(d + 12) > (size_t)le32(d + 8) - 20)
             st = mr_fail_plain(err, MR_ERR_PARSE, name,
                                "offset 12: the first chunk is not JSON within the file");
         if (st == MR_OK) {
