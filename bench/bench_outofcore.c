@@ -60,60 +60,6 @@
 #define MR_MPI_CLI_PATH ""
 #endif
 
-/* A child process's wall time, peak RSS and stdout. */
-typedef struct run_result {
-    double seconds;
-    size_t rss;  /* bytes */
-    int status;
-    char *out;
-} run_result;
-
-static run_result run_cmd(char *const argv[])
-{
-    run_result r = {0, 0, -1, NULL};
-    int pipefd[2];
-    if (pipe(pipefd) != 0)
-        return r;
-    const double t0 = bench_now();
-    const pid_t pid = fork();
-    if (pid == 0) {
-        dup2(pipefd[1], 1);
-        close(pipefd[0]);
-        close(pipefd[1]);
-        execvp(argv[0], argv);
-        _exit(127);
-    }
-    close(pipefd[1]);
-    size_t cap = 1 << 16, len = 0;
-    r.out = malloc(cap);
-    for (;;) {
-        if (cap - len < 4096)
-            r.out = realloc(r.out, cap *= 2);
-        const ssize_t n = read(pipefd[0], r.out + len, cap - len - 1);
-        if (n <= 0)
-            break;
-        len += (size_t)n;
-    }
-    r.out[len] = '\0';
-    close(pipefd[0]);
-    int st;
-    struct rusage ru;
-    wait4(pid, &st, 0, &ru);
-    r.seconds = bench_now() - t0;
-    r.rss = (size_t)ru.ru_maxrss * 1024;
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    return r;
-}
-
-/* A number after "key": in a JSON text (the first one), or NAN. */
-static double json_number(const char *json, const char *key)
-{
-    char pat[64];
-    snprintf(pat, sizeof pat, "\"%s\": ", key);
-    const char *p = json ? strstr(json, pat) : NULL;
-    return p ? strtod(p + strlen(pat), NULL) : NAN;
-}
-
 /* The levels' seconds from --json ("levels": [{... "seconds": x}, ...]). */
 static int json_levels(const char *json, double *sec, int max)
 {
@@ -338,24 +284,6 @@ static void ensure_scan(size_t T, const char *in)
  * which goes first: each one's times in sec[k] (run order) and its
  * largest peak RSS in rss[k]; a failed run ends the benchmark, naming
  * `what`. */
-static void alternate_runs(char *const *av[2], int n, const char *what, double sec[2][64],
-                           size_t rss[2])
-{
-    rss[0] = rss[1] = 0;
-    for (int r = 0; r < n; r++)
-        for (int m = 0; m < 2; m++) {
-            const int k = (r & 1) ? 1 - m : m;
-            run_result rr = run_cmd(av[k]);
-            free(rr.out);
-            if (rr.status != 0) {
-                fprintf(stderr, "%s failed (%d)\n", what, rr.status);
-                exit(1);
-            }
-            sec[k][r] = rr.seconds;
-            rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
-        }
-}
-
 static double cluster_section(const char *self, const char *dir, const size_t *sizes,
                               int nsizes, int runs, double ratio)
 {
@@ -386,7 +314,7 @@ static double cluster_section(const char *self, const char *dir, const size_t *s
                 char *memory[] = {(char *)self, "--cluster-child", "memory", in, out[1], th,
                                   g ? "0" : "0.002", g ? target : "0", NULL};
                 char *const *av[2] = {file, memory};
-                alternate_runs(av, n, "cluster child", sec, rss);
+                bench_alternate(av, n, "cluster child", sec, rss);
                 size_t na, nb;
                 char *a = read_all(out[0], &na), *b = read_all(out[1], &nb);
                 const bool same = a && b && na == nb && memcmp(a, b, na) == 0;
@@ -429,7 +357,7 @@ static void attributes_section(const char *dir, const size_t *sizes, int nsizes,
         if (stat(in[0], &sb) != 0) {
             char *av[] = {"/usr/bin/python3", MR_SOURCE_DIR "/tests/make_seamed.py", scan, in[0],
                           NULL};
-            run_result rr = run_cmd(av);
+            bench_run_result rr = bench_run(av);
             free(rr.out);
             if (rr.status != 0) {
                 fprintf(stderr, "make_seamed.py failed (%d)\n", rr.status);
@@ -438,7 +366,7 @@ static void attributes_section(const char *dir, const size_t *sizes, int nsizes,
         }
         if (stat(in[1], &sb) != 0) {
             char *av[] = {MR_CLI_PATH, "convert", in[0], in[1], "-q", NULL};
-            run_result rr = run_cmd(av);
+            bench_run_result rr = bench_run(av);
             free(rr.out);
             if (rr.status != 0) {
                 fprintf(stderr, "convert failed (%d)\n", rr.status);
@@ -457,7 +385,7 @@ static void attributes_section(const char *dir, const size_t *sizes, int nsizes,
             char *const *av[2] = {memory, chunks};
             char what[2300];
             snprintf(what, sizeof what, "simplify %s", in[f]);
-            alternate_runs(av, n, what, sec, rss);
+            bench_alternate(av, n, what, sec, rss);
             const double a = bench_summarize(sec[0], n).median,
                          b = bench_summarize(sec[1], n).median;
             printf("%-9s %-5s %-8s %9.3f %9.3f %7.0fMB %7.0fMB %6.2fx\n", label, f ? "OBJ" : "PLY",
@@ -550,7 +478,7 @@ int main(int argc, char **argv)
                 cfgs[nc++] = (config){"out of core", 2, 0, "2G"};
             }
             double sec[8][16];
-            run_result last[8];
+            bench_run_result last[8];
             memset(last, 0, sizeof last);
             const int nr = big ? 1 : runs;
             for (int r = 0; r < nr; r++)
@@ -587,7 +515,7 @@ int main(int argc, char **argv)
                         av[a++] = (char *)cfgs[c].memory;
                     }
                     av[a] = NULL;
-                    run_result rr = run_cmd(av);
+                    bench_run_result rr = bench_run(av);
                     if (rr.status != 0) {
                         fprintf(stderr, "failed (%d): %s %s\n", rr.status, cfgs[c].name, in);
                         return 1;
@@ -602,8 +530,8 @@ int main(int argc, char **argv)
             for (int c = 0; c < nc; c++) {
                 med[c] = bench_summarize(sec[c], nr).median;
                 const char *js = last[c].out;
-                const double chunks = json_number(js, "chunks"),
-                             temp = json_number(js, "temp_bytes_peak");
+                const double chunks = bench_json_number(js, "chunks"),
+                             temp = bench_json_number(js, "temp_bytes_peak");
                 double lv[MR_LEVELS_MAX];
                 const int nl = json_levels(js, lv, MR_LEVELS_MAX);
                 char lvs[256] = "", tmps[32] = "-", chs[16] = "-", ls[8] = "-";
@@ -682,10 +610,10 @@ int main(int argc, char **argv)
                                        : cfgs[c2].memory ? "out of core" : "in memory",
                                     cfgs[c2].threads, cfgs[c2].ranks,
                                     cfgs[c2].memory ? cfgs[c2].memory : "default", med[c2],
-                                    last[c2].rss, json_number(last[c2].out, "chunks"),
+                                    last[c2].rss, bench_json_number(last[c2].out, "chunks"),
                                     json_levels(last[c2].out, (double[MR_LEVELS_MAX]){0},
                                                 MR_LEVELS_MAX),
-                                    json_number(last[c2].out, "temp_bytes_peak"), rms, haus,
+                                    bench_json_number(last[c2].out, "temp_bytes_peak"), rms, haus,
                                     srms, smax);
                 mr_mesh_free(&o);
             }

@@ -1,11 +1,13 @@
 #define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT */
 #include "benchutil.h"
+#include <math.h>
 
 #include <sched.h>
 
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -186,4 +188,68 @@ int bench_load_mesh(const char *data_dir, const char *file, size_t triangles, in
     bench_check(mr_mesh_remove_degenerate(mesh, 0, degenerate, &err), &err);
     bench_check(mr_mesh_remove_unreferenced(mesh, unreferenced, &err), &err);
     return 1;
+}
+
+bench_run_result bench_run(char *const argv[])
+{
+    bench_run_result r = {0, 0, -1, NULL};
+    int pipefd[2];
+    if (pipe(pipefd) != 0)
+        return r;
+    const double t0 = bench_now();
+    const pid_t pid = fork();
+    if (pid == 0) {
+        dup2(pipefd[1], 1);
+        close(pipefd[0]);
+        close(pipefd[1]);
+        execvp(argv[0], argv);
+        _exit(127);
+    }
+    close(pipefd[1]);
+    size_t cap = 1 << 16, len = 0;
+    r.out = malloc(cap);
+    for (;;) {
+        if (cap - len < 4096)
+            r.out = realloc(r.out, cap *= 2);
+        const ssize_t n = read(pipefd[0], r.out + len, cap - len - 1);
+        if (n <= 0)
+            break;
+        len += (size_t)n;
+    }
+    r.out[len] = '\0';
+    close(pipefd[0]);
+    int st;
+    struct rusage ru;
+    wait4(pid, &st, 0, &ru);
+    r.seconds = bench_now() - t0;
+    r.rss = (size_t)ru.ru_maxrss * 1024;
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    return r;
+}
+
+void bench_alternate(char *const *av[2], int n, const char *what, double sec[2][64],
+                     size_t rss[2])
+{
+    rss[0] = rss[1] = 0;
+    n = n < 64 ? n : 64;
+    for (int r = 0; r < n; r++)
+        for (int m = 0; m < 2; m++) {
+            const int k = (r & 1) ? 1 - m : m;
+            bench_run_result rr = bench_run(av[k]);
+            free(rr.out);
+            if (rr.status != 0) {
+                fprintf(stderr, "%s failed (%d)\n", what, rr.status);
+                exit(1);
+            }
+            sec[k][r] = rr.seconds;
+            rss[k] = rr.rss > rss[k] ? rr.rss : rss[k];
+        }
+}
+
+double bench_json_number(const char *json, const char *key)
+{
+    char pat[128];
+    snprintf(pat, sizeof pat, "\"%s\": ", key);
+    const char *p = json ? strstr(json, pat) : NULL;
+    return p ? strtod(p + strlen(pat), NULL) : NAN;
 }

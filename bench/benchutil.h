@@ -30,6 +30,27 @@ typedef struct bench_cpu {
 } bench_cpu;
 void bench_cpu_info(bench_cpu *cpu);
 
+/* A child process (argv[0] searched in PATH): its wall time, peak RSS
+ * (bytes), exit status (128 + signal when killed; -1 when it could not be
+ * started) and stdout (malloc'ed, NUL-terminated; the caller frees it). */
+typedef struct bench_run_result {
+    double seconds;
+    size_t rss;
+    int status;
+    char *out;
+} bench_run_result;
+bench_run_result bench_run(char *const argv[]);
+
+/* n runs (at most 64) of two commands, alternating which goes first (so
+ * that a drift of the machine's speed falls on both): sec[k][r] the
+ * seconds of command k's run r, rss[k] its largest peak RSS. Exits with a
+ * message naming `what` when a run fails. */
+void bench_alternate(char *const *av[2], int n, const char *what, double sec[2][64],
+                     size_t rss[2]);
+
+/* The number after "key": in a JSON text (the first one), or NAN. */
+double bench_json_number(const char *json, const char *key);
+
 /* Peak resident set size of this process so far, in bytes. */
 size_t bench_peak_rss(void);
 

@@ -106,6 +106,13 @@ static const char usage[] =
     "                        (default 1, 0 = none)\n"
     "  --max-normal-turn D   refuse collapses that turn a triangle by more than D\n"
     "                        degrees (default 60)\n"
+    "  --attribute-weights normal=W,uv=W,color=W\n"
+    "                        the attributes' part in the collapse cost: each one's\n"
+    "                        deviation times W counts as that fraction of the\n"
+    "                        bounding-box diagonal (normals per unit vector, UVs\n"
+    "                        per unit of their larger extent, colours per unit);\n"
+    "                        defaults normal=0.25,uv=0.25,color=1; 0 or none: only\n"
+    "                        interpolated (the errors reported include them)\n"
     "\n"
     "inputs larger than memory (binary PLY, binary STL, OBJ; others are read whole):\n"
     "  --memory SIZE         memory budget (default 4G; K, M, G, T are powers of\n"
@@ -273,6 +280,40 @@ static int read_locks(simplify_job *job, size_t vertex_count)
     return rc;
 }
 
+/* --attribute-weights: "none", or NAME=W pairs separated by commas (the
+ * names not given keep their weights). */
+static bool parse_attribute_weights(const char *v, mr_simplify_options *o)
+{
+    if (strcmp(v, "none") == 0) {
+        o->normal_weight = o->uv_weight = o->color_weight = 0;
+        return true;
+    }
+    char buf[256];
+    if (!*v || strlen(v) >= sizeof buf)
+        return false;
+    strcpy(buf, v);
+    double w[3] = {o->normal_weight, o->uv_weight, o->color_weight};
+    static const char *const names[3] = {"normal", "uv", "color"};
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        char *eq = strchr(tok, '=');
+        if (!eq)
+            return false;
+        *eq = 0;
+        int k = 0;
+        while (k < 3 && strcmp(tok, names[k]) != 0)
+            k++;
+        double x;
+        if (k == 3 || !cli_parse_double(eq + 1, &x) || !(x >= 0) || !isfinite(x))
+            return false;
+        w[k] = x;
+    }
+    o->normal_weight = w[0];
+    o->uv_weight = w[1];
+    o->color_weight = w[2];
+    return true;
+}
+
 static int option(int argc, char **argv, int *i, void *user)
 {
     mr_simplify_options *o = &((simplify_job *)user)->o;
@@ -378,6 +419,11 @@ static int option(int argc, char **argv, int *i, void *user)
         if (!cli_parse_double(v, &x) || x < 0)
             return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
         o->boundary_weight = x;
+    } else if (cli_value(argc, argv, i, "--attribute-weights", &v)) {
+        if (!parse_attribute_weights(v, o))
+            return cli_usage_error("simplify", "--attribute-weights needs none, or "
+                                               "NAME=W,... with NAME normal, uv or color "
+                                               "and W a number >= 0");
     } else if (cli_value(argc, argv, i, "--max-normal-turn", &v)) {
         if (!cli_parse_double(v, &x) || !(x > 0 && x <= 180))
             return cli_usage_error("simplify", "--max-normal-turn needs degrees in "

@@ -5,13 +5,30 @@ lists) for the out-of-core tests: each vertex split by the quadrant
 coordinates linear in the position plus the quadrant's offset (seams that
 cross each other and the chunks' cuts) and colors linear in the position.
 With --bare, the same split vertices without attributes (an export that
-did not weld its vertices).
-Standard library only.  usage: make_seamed.py [--bare] IN.ply OUT.ply"""
+did not weld its vertices); with --normals, smooth vertex normals too (the
+area-weighted normal of each position's triangles).
+Standard library only.  usage: make_seamed.py [--bare|--normals] IN.ply OUT.ply"""
 import struct
 import sys
 
 
-def main(src, dst, bare=False):
+def smooth_normals(pos, tris, nv):
+    acc = [0.0] * (3 * nv)
+    for a, b, c in tris:
+        ux, uy, uz = (pos[3 * b + k] - pos[3 * a + k] for k in range(3))
+        vx, vy, vz = (pos[3 * c + k] - pos[3 * a + k] for k in range(3))
+        n = (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
+        for v in (a, b, c):
+            for k in range(3):
+                acc[3 * v + k] += n[k]
+    for v in range(nv):
+        x, y, z = acc[3 * v:3 * v + 3]
+        ln = (x * x + y * y + z * z) ** 0.5 or 1.0
+        acc[3 * v:3 * v + 3] = [x / ln, y / ln, z / ln]
+    return acc
+
+
+def main(src, dst, bare=False, normals=False):
     data = open(src, "rb").read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
     header = data[:end].decode("ascii").split("\n")
@@ -51,6 +68,9 @@ def main(src, dst, bare=False):
     out += ("ply\nformat binary_little_endian 1.0\nelement vertex %d\n"
             "property float x\nproperty float y\nproperty float z\n"
             % len(verts)).encode("ascii")
+    if normals:
+        out += b"property float nx\nproperty float ny\nproperty float nz\n"
+        nrm = smooth_normals(pos, tris, nv)
     if not bare:
         out += (b"property float s\nproperty float t\n"
                 b"property uchar red\nproperty uchar green\nproperty uchar blue\n")
@@ -62,17 +82,19 @@ def main(src, dst, bare=False):
         w = y * 0.01 + 0.5 * (side >> 1)
         r = max(0, min(255, int(128 + x)))
         g = max(0, min(255, int(128 + y)))
-        if bare:
-            out += struct.pack("<3f", x, y, z)
+        if normals:
+            out += struct.pack("<6f", x, y, z, *nrm[3 * v:3 * v + 3])
         else:
-            out += struct.pack("<5f3B", x, y, z, u, w, r, g, 64)
+            out += struct.pack("<3f", x, y, z)
+        if not bare:
+            out += struct.pack("<2f3B", u, w, r, g, 64)
     for f in faces:
         out += struct.pack("<B3i", 3, *f)
     open(dst, "wb").write(bytes(out))
 
 
 if __name__ == "__main__":
-    args = [a for a in sys.argv[1:] if a != "--bare"]
+    args = [a for a in sys.argv[1:] if a not in ("--bare", "--normals")]
     if len(args) != 2:
         raise SystemExit(__doc__)
-    main(args[0], args[1], bare="--bare" in sys.argv[1:])
+    main(args[0], args[1], bare="--bare" in sys.argv[1:], normals="--normals" in sys.argv[1:])

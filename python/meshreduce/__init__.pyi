@@ -1,6 +1,6 @@
 # Type stub of the meshreduce module (the C extension meshreduce._core,
 # re-exported by meshreduce/__init__.py).
-from typing import Any, Callable, Literal, Optional, Union
+from typing import Any, Callable, Dict, Literal, Optional, Union
 import os
 
 import numpy as np
@@ -104,6 +104,7 @@ def simplify(
     multiqueue_factor: int = ...,
     quality: Literal["default", "best"] = ...,
     partitions: int = ...,
+    attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
 ) -> Result: ...
 def simplify_file(
     input: _Path,
@@ -139,6 +140,7 @@ def simplify_file(
     memory: Optional[int] = ...,
     temp_dir: Optional[_Path] = ...,
     temp_budget: Optional[int] = ...,
+    attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
 ) -> dict[str, Any]: ...
 def read(path: _Path, *, format: Optional[str] = ..., threads: int = ...) -> Mesh: ...
 def write(

@@ -664,9 +664,37 @@ static int simplify_options_from(mr_simplify_options *o, PyObject *ratio, PyObje
                                  double boundary_weight, double max_normal_turn, int prune,
                                  int threads, unsigned filter_levels,
                                  unsigned multiqueue_factor, const char *quality,
-                                 unsigned partitions, PyObject *progress)
+                                 unsigned partitions, PyObject *progress, PyObject *weights)
 {
     mr_simplify_options_default(o);
+    if (weights != Py_None) {
+        /* {"normal": W, "uv": W, "color": W}: the names given, the others
+         * keep their defaults */
+        if (!PyDict_Check(weights))
+            return format_error(PyExc_TypeError,
+                                "attribute_weights must be a dict such as {'normal': 0.25}, "
+                                "got %.80s",
+                                Py_TYPE(weights)->tp_name);
+        PyObject *key, *value;
+        Py_ssize_t pos = 0;
+        while (PyDict_Next(weights, &pos, &key, &value)) {
+            static const char *const names[3] = {"normal", "uv", "color"};
+            double *dst[3] = {&o->normal_weight, &o->uv_weight, &o->color_weight};
+            const char *name = PyUnicode_Check(key) ? PyUnicode_AsUTF8(key) : NULL;
+            int k = 0;
+            while (name && k < 3 && strcmp(name, names[k]) != 0)
+                k++;
+            if (!name || k == 3)
+                return format_error(PyExc_ValueError,
+                                    "attribute_weights: unknown attribute %R (normal, uv, color)",
+                                    key);
+            if (to_double(value, name, dst[k]) < 0)
+                return -1;
+            if (!(*dst[k] >= 0) || !isfinite(*dst[k]))
+                return format_error(PyExc_ValueError,
+                                    "attribute_weights: %s must be a finite number >= 0", name);
+        }
+    }
     if (ratio != Py_None) {
         if (to_double(ratio, "ratio", &o->target_ratio) < 0)
             return -1;
@@ -747,7 +775,7 @@ PyDoc_STRVAR(simplify_doc,
 "         lock_border=False, boundary_weight=1.0, max_normal_turn=60.0, locked=None,\n"
 "         prune=False, normals=None, texcoords=None, colors=None, threads=0,\n"
 "         progress=None, filter_levels=0, multiqueue_factor=0, quality='default',\n"
-"         partitions=0)\n"
+"         partitions=0, attribute_weights=None)\n"
 "--\n"
 "\n"
 "Reduce a triangle mesh by quadric-error edge collapse, as `meshreduce simplify`\n"
@@ -759,6 +787,10 @@ PyDoc_STRVAR(simplify_doc,
 "(uint32 and non-negative int32 C-contiguous arrays without a copy).\n"
 "normals (N, 3), texcoords (N, 2), colors (N, 4): per-vertex attributes carried\n"
 "through; attribute seams (vertices split at one position) are kept.\n"
+"attribute_weights: their part in the collapse cost, a dict such as\n"
+"{'normal': 0.25, 'uv': 0.25, 'color': 1.0} (those are the defaults; a name not\n"
+"given keeps its default, 0 leaves an attribute out: it is interpolated), as\n"
+"`meshreduce simplify --attribute-weights`.\n"
 "\n"
 "Targets (the first reached stops; at least one is needed): ratio, the fraction\n"
 "of vertices to keep in (0, 1]; vertex_count; triangle_count (0: as far as\n"
@@ -802,27 +834,29 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                              "strategy",  "lock_border",   "boundary_weight", "max_normal_turn",
                              "locked",    "prune",         "normals",         "texcoords",
                              "colors",    "threads",       "progress",        "filter_levels",
-                             "multiqueue_factor", "quality", "partitions", NULL};
+                             "multiqueue_factor", "quality", "partitions", "attribute_weights",
+                             NULL};
     PyObject *vertices, *triangles, *ratio = Py_None, *vcount = Py_None, *tcount = Py_None,
                                     *max_error = Py_None, *locked = Py_None, *normals = Py_None,
-                                    *texcoords = Py_None, *colors = Py_None, *progress = Py_None;
+                                    *texcoords = Py_None, *colors = Py_None, *progress = Py_None,
+                                    *weights = Py_None;
     int absolute = 0, lock_border = 0, prune = 0, threads = 0;
     const char *collapse = "full", *strategy = NULL, *quality = "default";
     double boundary_weight = 1.0, max_normal_turn = 60.0;
     unsigned int filter_levels = 0, multiqueue_factor = 0, partitions = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsI", kwlist, &vertices,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsIO", kwlist, &vertices,
                                      &triangles, &ratio, &vcount, &tcount, &max_error, &absolute,
                                      &collapse, &strategy, &lock_border, &boundary_weight,
                                      &max_normal_turn, &locked, &prune, &normals, &texcoords,
                                      &colors, &threads, &progress, &filter_levels,
-                                     &multiqueue_factor, &quality, &partitions))
+                                     &multiqueue_factor, &quality, &partitions, &weights))
         return NULL;
 
     mr_simplify_options o;
     if (simplify_options_from(&o, ratio, vcount, tcount, max_error, absolute, collapse, strategy,
                               lock_border, boundary_weight, max_normal_turn, prune, threads,
-                              filter_levels, multiqueue_factor, quality, partitions,
-                              progress) < 0)
+                              filter_levels, multiqueue_factor, quality, partitions, progress,
+                              weights) < 0)
         return NULL;
 
     py_mesh in;
@@ -955,7 +989,7 @@ PyDoc_STRVAR(simplify_file_doc,
 "              strategy=None, lock_border=False, boundary_weight=1.0,\n"
 "              max_normal_turn=60.0, locked=None, prune=False, threads=0,\n"
 "              progress=None, quality='default', partitions=0, memory=None,\n"
-"              temp_dir=None, temp_budget=None)\n"
+"              temp_dir=None, temp_budget=None, attribute_weights=None)\n"
 "--\n"
 "\n"
 "Simplify a mesh file into a file, as `meshreduce simplify IN -o OUT --memory M`\n"
@@ -978,20 +1012,20 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
                              "strategy",  "lock_border",   "boundary_weight", "max_normal_turn",
                              "locked",    "prune",         "threads",         "progress",
                              "quality",   "partitions",    "memory",          "temp_dir",
-                             "temp_budget", NULL};
+                             "temp_budget", "attribute_weights", NULL};
     PyObject *input = NULL, *output = NULL, *ratio = Py_None, *vcount = Py_None,
              *tcount = Py_None, *max_error = Py_None, *locked = Py_None, *progress = Py_None,
-             *memory = Py_None, *temp_dir = Py_None, *temp_budget = Py_None;
+             *memory = Py_None, *temp_dir = Py_None, *temp_budget = Py_None, *weights = Py_None;
     int absolute = 0, lock_border = 0, prune = 0, threads = 0;
     const char *collapse = "full", *strategy = NULL, *quality = "default";
     double boundary_weight = 1.0, max_normal_turn = 60.0;
     unsigned int partitions = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOOpszpddOpiOsIOOO", kwlist, path_arg,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOOpszpddOpiOsIOOOO", kwlist, path_arg,
                                      &input, path_arg, &output, &ratio, &vcount, &tcount,
                                      &max_error, &absolute, &collapse, &strategy, &lock_border,
                                      &boundary_weight, &max_normal_turn, &locked, &prune,
                                      &threads, &progress, &quality, &partitions, &memory,
-                                     &temp_dir, &temp_budget))
+                                     &temp_dir, &temp_budget, &weights))
         return NULL;
     PyObject *result = NULL, *dir = NULL;
     uint8_t *lock = NULL;
@@ -1000,7 +1034,7 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
     mr_out_of_core_options_default(&c);
     if (simplify_options_from(&o, ratio, vcount, tcount, max_error, absolute, collapse, strategy,
                               lock_border, boundary_weight, max_normal_turn, prune, threads, 0,
-                              0, quality, partitions, progress) < 0)
+                              0, quality, partitions, progress, weights) < 0)
         goto done;
     if (ooc_options_from(&c, memory, temp_dir, temp_budget, &dir) < 0)
         goto done;

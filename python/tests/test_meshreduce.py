@@ -265,6 +265,9 @@ def test_bad_arrays(vertices, triangles, exc, match):
     ({"ratio": 0.5, "partitions": 5000}, ValueError, "partitions must be in 0..4096"),
     ({"ratio": 0.5, "max_normal_turn": 0}, ValueError, "max_normal_turn"),
     ({"ratio": 0.5, "boundary_weight": -1}, ValueError, "boundary_weight"),
+    ({"ratio": 0.5, "attribute_weights": {"uv": -1}}, ValueError, "uv must be a finite"),
+    ({"ratio": 0.5, "attribute_weights": {"tangent": 1}}, ValueError, "unknown attribute"),
+    ({"ratio": 0.5, "attribute_weights": [1, 2]}, TypeError, "attribute_weights must be a dict"),
     ({"ratio": 0.5, "threads": -1}, ValueError, "threads must be >= 0"),
     ({"ratio": 0.5, "progress": 3}, TypeError, "progress must be callable"),
 ])
@@ -421,6 +424,21 @@ def test_texcoord_seams_match_cli(tmp_path):
     assert r.texcoords is not None and r.texcoords.shape == (len(r.vertices), 2)
     assert r.output_vertices > r.output_points  # seam splits kept
     assert_same(tmp_path, out, r)
+
+
+@needs_cli
+@pytest.mark.skipif(not os.path.exists(SPOT), reason=SPOT + " absent")
+def test_attribute_weights_match_cli(tmp_path):
+    # the attributes' part in the cost, as --attribute-weights sets it; a
+    # weight of 0 (interpolation only) gives other bytes than the default
+    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.2", "--attribute-weights", "uv=2"],
+                           ratio=0.2, attribute_weights={"uv": 2})
+    assert_same(tmp_path, out, r)
+    weighted = r.vertices.copy()
+    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.2", "--attribute-weights", "none"],
+                           ratio=0.2, attribute_weights={"normal": 0, "uv": 0, "color": 0})
+    assert_same(tmp_path, out, r)
+    assert weighted.shape != r.vertices.shape or not np.array_equal(weighted, r.vertices)
 
 
 @needs_cli

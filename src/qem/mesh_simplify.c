@@ -24,6 +24,7 @@
  * (normals renormalised). The output keeps the split: one output vertex
  * per surviving wedge.
  */
+#include "attr_quadric.h"
 #include "entry.h"
 
 #include "../core/omp_compat.h"
@@ -36,6 +37,11 @@ typedef struct attr_ctx {
     uint32_t *corner;   /* 3 * triangle_count: the wedge of each corner */
     float *normals, *texcoords, *colors; /* working copies, or NULL */
     double seam_weight;
+    mr_attr_quadrics aq;  /* the weighted attributes' quadrics (channels 0:
+                             none, every attribute interpolated) */
+    bool lerp_normals, lerp_texcoords, lerp_colors; /* those interpolated */
+    uint32_t *wedge;      /* with aq: a vertex's one wedge (no seam vertex's:
+                             a vertex off the seams keeps its wedge) */
 } attr_ctx;
 
 
@@ -96,6 +102,37 @@ static void lerp_attr(float *a, const float *b, int n, double t, bool normalise)
     }
 }
 
+/* The attributes' part of a collapse of edge (u, w) (the core's
+ * attr_cost): each wedge of u with w's on the same side of the edge. */
+static void attr_cost(const mr_simplifier *s, uint32_t u, uint32_t w, mr_quadric *q)
+{
+    const attr_ctx *a = s->attr;
+    double o[3];
+    mr_collapse_load(&s->m, w, o);
+    if (!((s->m.flags[u] | s->m.flags[w]) & MR_VF_SEAM)) {
+        mr_attr_pair_quadric(&a->aq, a->wedge[u], a->wedge[w], o, q);
+        return;
+    }
+    uint32_t et[2];
+    const uint32_t n = edge_tris(s, u, w, et);
+    uint32_t pa = NONE, pb = NONE;
+    for (uint32_t j = 0; j < n; j++) {
+        const uint32_t fa = wedge_at(s, et[j], u), tb = wedge_at(s, et[j], w);
+        if (fa == pa && tb == pb)
+            break;
+        mr_attr_pair_quadric(&a->aq, fa, tb, o, q);
+        pa = fa;
+        pb = tb;
+    }
+}
+
+static void attr_prefetch(const mr_simplifier *s, uint32_t u, uint32_t w)
+{
+    const attr_ctx *a = s->attr;
+    mr_attr_prefetch(&a->aq, a->wedge[u]);
+    mr_attr_prefetch(&a->aq, a->wedge[w]);
+}
+
 static void attr_apply(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3])
 {
     attr_ctx *a = s->attr;
@@ -107,6 +144,15 @@ static void attr_apply(const mr_simplifier *s, uint32_t r, uint32_t k, const dou
         from[j] = wedge_at(s, et[j], r);
         to[j] = wedge_at(s, et[j], k);
     }
+    /* The weighted attributes: each pair's quadrics merged, the survivor's
+     * values at their best at the target. */
+    if (a->aq.channels)
+        for (uint32_t j = 0; j < n; j++) {
+            if (j == 1 && from[1] == from[0] && to[1] == to[0])
+                break;
+            mr_attr_merge(&a->aq, from[j], to[j]);
+            mr_attr_place(&a->aq, to[j], target);
+        }
     /* Interpolate the survivor's wedges at the target's place on the edge. */
     double pk[3], pr[3];
     mr_collapse_load(m, k, pk);
@@ -121,13 +167,13 @@ static void attr_apply(const mr_simplifier *s, uint32_t r, uint32_t k, const dou
         for (uint32_t j = 0; j < n; j++) {
             if (j == 1 && to[1] == to[0])
                 break;
-            if (a->normals)
+            if (a->lerp_normals)
                 lerp_attr(a->normals + 3 * (size_t)to[j], a->normals + 3 * (size_t)from[j],
                           3, t, true);
-            if (a->texcoords)
+            if (a->lerp_texcoords)
                 lerp_attr(a->texcoords + 2 * (size_t)to[j],
                           a->texcoords + 2 * (size_t)from[j], 2, t, false);
-            if (a->colors)
+            if (a->lerp_colors)
                 lerp_attr(a->colors + 4 * (size_t)to[j], a->colors + 4 * (size_t)from[j], 4,
                           t, false);
         }
@@ -224,12 +270,48 @@ static bool seam_line_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
 
 /* ---- the call ---------------------------------------------------------------------- */
 
+/* The wedge of v's first corner (NONE for a vertex without triangles). */
+static inline uint32_t first_wedge(const mr_collapse_mesh *m, const uint32_t *corner, uint32_t v)
+{
+    return !(m->flags[v] & MR_VF_REMOVED) && m->count[v] > 0
+               ? corner[mr_collapse_vertex_tris(m, v)[0]]
+               : NONE;
+}
+
+/* The attributes' part in the cost, where o weighs one that the mesh has:
+ * their quadrics (attr_quadric.h), each vertex's wedge for the seamless
+ * edges' pairs, and the hooks. Nothing to do without weights. */
+static mr_status attr_cost_setup(mr_simplifier *s, attr_ctx *a, const mr_mesh *in,
+                                 const mr_simplify_options *o, int nth, mr_error *err)
+{
+    const size_t vc = in->vertex_count;
+    if (!mr_attr_quadrics_channels(&a->aq, s, a->corner, in, o, a->normals, a->texcoords,
+                                   a->colors))
+        return MR_OK;
+    mr_status st = mr_attr_quadrics_build(&a->aq, s, a->corner, vc, err);
+    if (st != MR_OK)
+        return st;
+    a->wedge = mr_alloc_array(vc ? vc : 1, sizeof *a->wedge);
+    if (!a->wedge)
+        return mr_fail_nomem(err, NULL, vc * sizeof *a->wedge);
+    const mr_collapse_mesh *m = &s->m;
+    const ptrdiff_t nv = (ptrdiff_t)m->vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nth) if (nth > 1 && nv > 65536)
+    for (ptrdiff_t v = 0; v < nv; v++)
+        a->wedge[v] = first_wedge(m, a->corner, (uint32_t)v);
+    s->attr_cost = attr_cost;
+    s->attr_prefetch = attr_prefetch;
+    return MR_OK;
+}
+
 static void free_ctx(attr_ctx *a)
 {
     free(a->corner);
     free(a->normals);
     free(a->texcoords);
     free(a->colors);
+    mr_attr_quadrics_free(&a->aq);
+    free(a->wedge);
 }
 
 static float *dup_floats(const float *src, size_t n)
@@ -438,15 +520,24 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         mr_simplifier_mark_corners(&s, MR_VF_SEAM, seam_line_edge);
     s.attr_valid = has_seams ? attr_valid : NULL;
     s.attr_apply = has_seams || has_attributes ? attr_apply : NULL;
+    /* The weighted attributes in the cost (their quadrics from the
+     * triangles as set up: before any collapse). */
+    st = attr_cost_setup(&s, &a, in, &o, nth, err);
+    a.lerp_normals = a.normals && !a.aq.has[0];
+    a.lerp_texcoords = a.texcoords && !a.aq.has[1];
+    a.lerp_colors = a.colors && !a.aq.has[2];
     if (!s.attr_apply) {
         /* wedge of each geometric vertex, kept in geo (no longer needed) */
         const mr_collapse_mesh *m0 = &s.m;
 #pragma omp parallel for schedule(static) num_threads(nth) if (par)
-        for (ptrdiff_t v = 0; v < nvc; v++)
-            if (!(m0->flags[v] & MR_VF_REMOVED) && m0->count[v] > 0)
-                geo[v] = a.corner[mr_collapse_vertex_tris(m0, (uint32_t)v)[0]];
+        for (ptrdiff_t v = 0; v < nvc; v++) {
+            const uint32_t w = first_wedge(m0, a.corner, (uint32_t)v);
+            if (w != NONE)
+                geo[v] = w;
+        }
     }
-    st = mr_simplifier_fill_queue(&s, err);
+    if (st == MR_OK)
+        st = mr_simplifier_fill_queue(&s, err);
     if (st != MR_OK) {
         mr_simplify_discard(&s);
         free(geo);
@@ -458,6 +549,11 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     const double t1 = mr_now_seconds();
     double max_error;
     size_t collapses = mr_simplify_run(&s, &max_error);
+    mr_attr_quadrics_free(&a.aq); /* the run's alone */
+    free(a.wedge);
+    a.wedge = NULL;
+    s.attr_cost = NULL;
+    s.attr_prefetch = NULL;
     float *before = NULL; /* a chunk's: where the collapses left the vertices */
     if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
         if (cm) {

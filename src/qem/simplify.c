@@ -26,6 +26,9 @@ void mr_simplify_options_default(mr_simplify_options *o)
     o->filter_levels = 0;     /* from the thread count */
     o->multiqueue_factor = 2;
     o->partitions = 0;        /* MR_PARTITIONS_DEFAULT */
+    o->normal_weight = MR_NORMAL_WEIGHT;
+    o->uv_weight = MR_UV_WEIGHT;
+    o->color_weight = MR_COLOR_WEIGHT;
 }
 
 /* ---- the strategy --------------------------------------------------------- */

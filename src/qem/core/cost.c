@@ -82,6 +82,35 @@ static inline bool may_go_onto(uint8_t fu, uint8_t fw)
 #define PINNING (MR_VF_LOCKED | MR_VF_BOUNDARY | MR_VF_SEAM | MR_VF_CORNER)
 
 /*
+ * mr_free_cost's placement for a merged quadric q (relative to w's
+ * position pw; u at d from it): its optimum where the system is well
+ * conditioned, near the edge and inside the box, else the best point of
+ * the edge. Returns q at x. The free edges with attributes come here
+ * (their quadric has the attributes' part that the vector kernel's
+ * inputs lack).
+ */
+static double free_optimum(const mr_quadric *q, const double d[3], const double pw[3],
+                           const double box[3], double x[3])
+{
+    double o[3];
+    bool ok = mr_quadric_optimum(q, o) != 0;
+    if (ok) {
+        const double len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        const double e0 = o[0] - 0.5 * d[0], e1 = o[1] - 0.5 * d[1], e2 = o[2] - 0.5 * d[2];
+        ok = e0 * e0 + e1 * e1 + e2 * e2 <= 4 * len2;
+        for (int i = 0; i < 3; i++)
+            ok &= fabs(o[i] + pw[i]) <= box[i];
+    }
+    if (ok) {
+        memcpy(x, o, sizeof o);
+    } else {
+        const double zero[3] = {0, 0, 0};
+        mr_quadric_segment_optimum(q, zero, d, x);
+    }
+    return mr_quadric_eval(q, x);
+}
+
+/*
  * The full collapse of edge (u, w): the target relative to w's position
  * (x) and the cost, by the rules above.
  */
@@ -89,7 +118,7 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
 {
     const mr_collapse_mesh *m = &s->m;
     const uint8_t fu = m->flags[u], fw = m->flags[w];
-    if (!((fu | fw) & PINNING)) {
+    if (!((fu | fw) & PINNING) && !s->attr_cost) {
         float in[FREE_INPUTS];
         free_cost_inputs_at(s->q, s->m.pos, u, w, in, 1);
         return mr_free_cost(in, 1, x, 1, s->box);
@@ -110,6 +139,13 @@ static double full_cost(const mr_simplifier *s, uint32_t u, uint32_t w, double x
     const double back[3] = {-d[0], -d[1], -d[2]};
     mr_quadric_shift(&qu, back);
     mr_quadric_add(&qu, &qw);
+    if (s->attr_cost)
+        s->attr_cost(s, u, w, &qu);
+    if (!((fu | fw) & PINNING)) { /* with attributes: free_optimum */
+        double err = free_optimum(&qu, d, pw, s->box, x);
+        err = qu.w > 0 ? err / qu.w : 0;
+        return err > 0 ? err : 0;
+    }
     if (!gu) { /* w goes onto u */
         x[0] = d[0];
         x[1] = d[1];
@@ -140,6 +176,12 @@ static double half_cost(const mr_simplifier *s, uint32_t u, uint32_t w)
                          (double)m->pos[3 * w + 2] - m->pos[3 * u + 2]};
     const double wsum = qu.w + qw.w;
     double err = mr_quadric_eval(&qu, d) + qw.c;
+    if (s->attr_cost) { /* the attributes' part, at w */
+        mr_quadric qa;
+        mr_quadric_zero(&qa);
+        s->attr_cost(s, u, w, &qa);
+        err += qa.c;
+    }
     err = wsum > 0 ? err / wsum : 0;
     return err > 0 ? err : 0;
 }
@@ -286,6 +328,10 @@ void mr_cost_pack_inputs(const mr_quadricf *quadrics, const float *pos, const ui
         free_cost_inputs_at(quadrics, pos, u[l], w[l], in + l, COST_BATCH);
 }
 
+/* How many edges ahead mr_simplifier_plan_edges hints the attributes'
+ * records (s->attr_prefetch). */
+#define ATTR_AHEAD 4
+
 /* Edge i of mr_simplifier_plan_edges through the one-edge path. */
 static void plan_one(const mr_simplifier *s, uint32_t a, uint32_t b, size_t i, double *cost,
                      uint32_t *r, uint32_t *k, double *target)
@@ -305,9 +351,12 @@ void mr_simplifier_plan_edges(const mr_simplifier *s, size_t n, const uint32_t *
                               double *target)
 {
     const mr_collapse_mesh *m = &s->m;
-    if (s->half) {
-        for (size_t i = 0; i < n; i++)
+    if (s->half || s->attr_cost) { /* attributes: no vector kernel */
+        for (size_t i = 0; i < n; i++) {
+            if (s->attr_prefetch && i + ATTR_AHEAD < n)
+                s->attr_prefetch(s, a[i + ATTR_AHEAD], b[i + ATTR_AHEAD]);
             plan_one(s, a[i], b[i], i, cost, r, k, target);
+        }
         return;
     }
     const uint8_t pin = PINNING;
@@ -591,7 +640,18 @@ static double memoryless_plan(const mr_simplifier *s, uint32_t r, uint32_t k, do
     const double az = A[2] * x[0] + A[4] * x[1] + A[5] * x[2];
     const double swept = x[0] * ax + x[1] * ay + x[2] * az -
                          2 * (bv[0] * x[0] + bv[1] * x[1] + bv[2] * x[2]) + cc;
-    return (swept > 0 ? swept : 0) * s->memoryless_scale;
+    double cost = (swept > 0 ? swept : 0) * s->memoryless_scale;
+    if (s->attr_cost && q.w > 0) {
+        /* the attributes' mean squared deviation at the target, for each
+         * triangle of the fans (a triangle's swept term is about its
+         * squared distance, in these units) */
+        mr_quadric qa;
+        mr_quadric_zero(&qa);
+        s->attr_cost(s, r, k, &qa);
+        const double e = mr_quadric_eval(&qa, x) / q.w;
+        cost += (e > 0 ? e : 0) * (double)(m->count[r] + m->count[k]);
+    }
+    return cost;
 }
 
 double mr_simplifier_vertex_error(const mr_simplifier *s)

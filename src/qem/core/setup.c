@@ -511,6 +511,13 @@ mr_status mr_simplify_check_options(const mr_simplify_options *o, size_t input_t
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: boundary weight %g must be finite and >= 0",
                              o->boundary_weight);
+    const double aw[3] = {o->normal_weight, o->uv_weight, o->color_weight};
+    static const char *const aname[3] = {"normal", "uv", "color"};
+    for (int i = 0; i < 3; i++)
+        if (!is_finite(aw[i]) || aw[i] < 0)
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
+                                 "simplify: %s weight %g must be finite and >= 0", aname[i],
+                                 aw[i]);
     if (!is_finite(o->max_normal_turn) || o->max_normal_turn <= 0)
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, NULL,
                              "simplify: max normal turn %g must be a positive angle (radians)",

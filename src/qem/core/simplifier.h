@@ -122,6 +122,13 @@ struct mr_simplifier {
      * before a collapse r -> k to target is applied. */
     bool (*attr_valid)(const mr_simplifier *s, uint32_t r, uint32_t k);
     void (*attr_apply)(const mr_simplifier *s, uint32_t r, uint32_t k, const double target[3]);
+    /* The attributes' part of a collapse of edge (u, w), as a quadric in
+     * the position alone (their values at each position at their best):
+     * added to q, relative to w's position, with no weight. Reads what
+     * attr_valid reads, and u's and w's wedges. */
+    void (*attr_cost)(const mr_simplifier *s, uint32_t u, uint32_t w, mr_quadric *q);
+    /* A hint that attr_cost of edge (u, w) comes soon (or NULL). */
+    void (*attr_prefetch)(const mr_simplifier *s, uint32_t u, uint32_t w);
     void *attr;              /* the hooks' own state: they write only through it */
     const uint8_t *cut;      /* the marks' cut vertices (a chunk's), or NULL */
 };
