@@ -106,6 +106,13 @@ static const char usage[] =
     "                        (default 1, 0 = none)\n"
     "  --max-normal-turn D   refuse collapses that turn a triangle by more than D\n"
     "                        degrees (default 60)\n"
+    "  --lods F1,F2,...      levels of detail instead of one output: level k keeps\n"
+    "                        Fk of the input's triangles (\"50%,25%,10%,2%\"),\n"
+    "                        simplified from level k-1; OUT gets the input, level k\n"
+    "                        goes to OUT's name with .lodK before its extension;\n"
+    "                        each level's Hausdorff and RMS distance to the input\n"
+    "                        are reported, and its error: the largest Hausdorff\n"
+    "                        distance so far\n"
     "  --attribute-weights normal=W,uv=W,color=W\n"
     "                        the attributes' part in the collapse cost: each one's\n"
     "                        deviation times W counts as that fraction of the\n"
@@ -202,6 +209,9 @@ static bool parse_ratio(const char *s, double *out)
     return true;
 }
 
+/* Levels of detail --lods takes at most. */
+#define MAX_LODS 16
+
 /* The options and the statistics of one run. */
 typedef struct simplify_job {
     mr_simplify_options o;
@@ -211,6 +221,8 @@ typedef struct simplify_job {
     mr_out_of_core_options ooc;
     bool ooc_given;        /* --memory, --temp-dir or --temp-budget */
     const mr_simplify_file_stats *fs; /* the file path's figures, or NULL */
+    double lods[MAX_LODS]; /* --lods: fractions of the input's triangles */
+    size_t nlods;
 } simplify_job;
 
 /*
@@ -278,6 +290,25 @@ static int read_locks(simplify_job *job, size_t vertex_count)
     if (rc == CLI_OK)
         job->o.vertex_lock = job->lock;
     return rc;
+}
+
+/* --lods: fractions ("50%" or "0.5") separated by commas, decreasing. */
+static bool parse_lods(const char *v, simplify_job *job)
+{
+    char buf[512];
+    if (!*v || strlen(v) >= sizeof buf)
+        return false;
+    strcpy(buf, v);
+    job->nlods = 0;
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        double f;
+        if (job->nlods == MAX_LODS || !parse_ratio(tok, &f) || !(f > 0 && f < 1) ||
+            (job->nlods && !(f < job->lods[job->nlods - 1])))
+            return false;
+        job->lods[job->nlods++] = f;
+    }
+    return job->nlods > 0;
 }
 
 /* --attribute-weights: "none", or NAME=W pairs separated by commas (the
@@ -419,6 +450,13 @@ static int option(int argc, char **argv, int *i, void *user)
         if (!cli_parse_double(v, &x) || x < 0)
             return cli_usage_error("simplify", "--boundary-weight needs a number >= 0");
         o->boundary_weight = x;
+    } else if (cli_value(argc, argv, i, "--lods", &v)) {
+        simplify_job *job = user;
+        if (!parse_lods(v, job))
+            return cli_usage_error("simplify", "--lods needs up to %d decreasing fractions of "
+                                               "the triangles in (0, 1), such as "
+                                               "50%%,25%%,10%%,2%%",
+                                   MAX_LODS);
     } else if (cli_value(argc, argv, i, "--attribute-weights", &v)) {
         if (!parse_attribute_weights(v, o))
             return cli_usage_error("simplify", "--attribute-weights needs none, or "
@@ -731,6 +769,135 @@ static int run_gltf(const cli_io *io, simplify_job *job)
     return CLI_OK;
 }
 
+/* Level k's file: OUT's name with ".lodK" before its extension. */
+static void lod_path(const char *out, size_t k, char *buf, size_t cap)
+{
+    const char *slash = strrchr(out, '/');
+    const char *dot = strrchr(slash ? slash + 1 : out, '.');
+    if (!dot || dot == (slash ? slash + 1 : out))
+        snprintf(buf, cap, "%s.lod%zu", out, k);
+    else
+        snprintf(buf, cap, "%.*s.lod%zu%s", (int)(dot - out), out, k, dot);
+}
+
+/* The levels' report: --json on stdout, else a table on stderr (not with
+ * -q); a missed target is a warning. path[k]: level k's file (level 0:
+ * the input's copy). */
+static void report_lods(const cli_io *io, const simplify_job *job, const mr_lod_level *lv,
+                        char (*path)[4096], size_t triangles, size_t vertices,
+                        const double t[4])
+{
+    bool reached = true;
+    for (size_t k = 0; k < job->nlods; k++)
+        reached &= lv[k].stats.target_reached != 0;
+    if (io->json) {
+        cli_json_io(io);
+        printf(", \"triangles\": %zu, \"levels\": [", triangles);
+        for (size_t k = 0; k < job->nlods; k++) {
+            const mr_lod_level *l = &lv[k];
+            printf("%s{\"file\": ", k ? ", " : "");
+            cli_json_string(stdout, path[k + 1]);
+            printf(", \"fraction\": %.17g, \"target_triangles\": %zu, \"triangles\": %zu, "
+                   "\"vertices\": %zu, \"target_reached\": %s, \"hausdorff_rel\": %.17g, "
+                   "\"rms_rel\": %.17g, \"error_rel\": %.17g, \"seconds\": %.6f}",
+                   job->lods[k], l->target_triangles, l->stats.output_triangles,
+                   l->stats.output_vertices, l->stats.target_reached ? "true" : "false",
+                   l->hausdorff_rel, l->rms_rel, l->error_rel,
+                   l->stats.seconds_setup + l->stats.seconds_collapse + l->stats.seconds_output);
+        }
+        printf("], \"read_seconds\": %.6f, \"lods_seconds\": %.6f, \"write_seconds\": %.6f}\n",
+               t[1] - t[0], t[2] - t[1], t[3] - t[2]);
+    }
+    if (!io->quiet && !io->json) {
+        char a[32], b[32];
+        fprintf(stderr, "%-5s %12s %12s %11s %9s %9s  %s\n", "level", "triangles", "vertices",
+                "Hausdorff", "RMS", "error", "file");
+        fprintf(stderr, "%-5d %12s %12s %11s %9s %9s  %s\n", 0,
+                cli_count(a, sizeof a, triangles), cli_count(b, sizeof b, vertices), "-", "-",
+                "-", path[0]);
+        for (size_t k = 0; k < job->nlods; k++) {
+            const mr_lod_level *l = &lv[k];
+            fprintf(stderr, "%-5zu %12s %12s %10.4f%% %8.4f%% %8.4f%%  %s%s\n", k + 1,
+                    cli_count(a, sizeof a, l->stats.output_triangles),
+                    cli_count(b, sizeof b, l->stats.output_vertices), 100 * l->hausdorff_rel,
+                    100 * l->rms_rel, 100 * l->error_rel, path[k + 1],
+                    l->stats.target_reached ? "" : " (target not reached)");
+        }
+        fprintf(stderr, "%zu levels in %.3f s (distances to the input, %% of its bounding-box "
+                        "diagonal; error: the largest Hausdorff distance so far)\n",
+                job->nlods, t[3] - t[0]);
+    }
+    if (!reached)
+        fprintf(stderr, "meshreduce: warning: %s: a level's target was not reached (the "
+                        "rules stopped it above its triangle count)\n",
+                io->in);
+}
+
+/* --lods: the input to OUT (level 0), level k to OUT.lodK.ext, each level
+ * simplified from the one before (mr_mesh_lods) and measured against the
+ * input; every file written, or none. A glTF document into glTF: one
+ * document, its levels in MSFT_lod (mr_simplify_gltf_lods). */
+static int run_lods(const cli_io *io, simplify_job *job, bool gltf)
+{
+    if (job->lock_path)
+        return cli_usage_error("simplify", "--lock is not supported with --lods");
+    if (job->ooc_given || cli_comm)
+        return cli_usage_error("simplify", "--lods works in memory (no --memory, --temp-dir, "
+                                           "--temp-budget or MPI)");
+    double t[4] = {cli_now(), 0, 0, 0};
+    mr_lod_level lv[MAX_LODS];
+    char path[MAX_LODS + 1][4096];
+    mr_error err;
+    if (gltf) {
+        const mr_status st = mr_simplify_gltf_lods(io->in, io->out, job->lods, job->nlods,
+                                                   &job->o, 0, lv, &err);
+        if (st != MR_OK)
+            return cli_fail_err(&err);
+        t[1] = t[0];
+        t[2] = t[3] = cli_now();
+        for (size_t k = 0; k <= job->nlods; k++)
+            snprintf(path[k], sizeof path[k], "%s", io->out);
+        size_t nt = 0, nv = 0;
+        for (size_t k = 0; k < job->nlods; k++)
+            nt = lv[k].stats.input_triangles > nt ? lv[k].stats.input_triangles : nt;
+        nv = job->nlods ? lv[0].stats.input_vertices : 0;
+        report_lods(io, job, lv, path, nt, nv, t);
+        return CLI_OK;
+    }
+    mr_mesh mesh;
+    mr_mesh_init(&mesh);
+    if (mr_mesh_read(io->in, NULL, &mesh, &err) != MR_OK)
+        return cli_fail_err(&err);
+    if (mesh.triangle_count == 0) {
+        mr_mesh_free(&mesh);
+        return cli_fail("%s: no triangles: levels of detail need a triangle mesh", io->in);
+    }
+    t[1] = cli_now();
+    mr_status st = mr_mesh_lods(&mesh, job->lods, job->nlods, &job->o, 0, lv, &err);
+    t[2] = cli_now();
+    size_t written = 0;
+    for (size_t k = 0; k <= job->nlods && st == MR_OK; k++) {
+        if (k)
+            lod_path(io->out, k, path[k], sizeof path[k]);
+        else
+            snprintf(path[0], sizeof path[0], "%s", io->out);
+        st = mr_mesh_write(path[k], k ? &lv[k - 1].mesh : &mesh, &io->write, &err);
+        written += st == MR_OK;
+    }
+    if (st != MR_OK) {
+        for (size_t k = 0; k < written; k++) /* all of them or none */
+            remove(path[k]);
+        mr_lod_levels_free(lv, job->nlods);
+        mr_mesh_free(&mesh);
+        return cli_fail_err(&err);
+    }
+    t[3] = cli_now();
+    report_lods(io, job, lv, path, mesh.triangle_count, mesh.vertex_count, t);
+    mr_lod_levels_free(lv, job->nlods);
+    mr_mesh_free(&mesh);
+    return CLI_OK;
+}
+
 static int run(int argc, char **argv)
 {
     cli_io io;
@@ -741,8 +908,12 @@ static int run(int argc, char **argv)
     int rc = cli_io_parse(&io, argc, argv, option, &job);
     if (rc != CLI_OK)
         return rc;
+    if (job.nlods && (job.o.target_ratio != 0 || job.o.target_vertices ||
+                      job.o.target_triangles || job.o.until_error))
+        return cli_usage_error("simplify", "--lods sets the targets (no --ratio, --vertices "
+                                           "or --triangles with it)");
     if (job.o.target_ratio == 0 && job.o.target_vertices == 0 && job.o.target_triangles == 0 &&
-        job.o.max_error == 0 && !job.o.until_error)
+        job.o.max_error == 0 && !job.o.until_error && !job.nlods)
         return cli_usage_error("simplify", "no target given (--ratio, --vertices, "
                                            "--triangles or --max-error)");
     if ((rc = cli_check_output_path(io.cmd, io.out, io.write.format)) != CLI_OK)
@@ -751,6 +922,8 @@ static int run(int argc, char **argv)
     const mr_format in_format = mr_format_from_path(io.in);
     const mr_format out_format =
         io.write.format != MR_FORMAT_AUTO ? io.write.format : mr_format_from_path(io.out);
+    if (job.nlods)
+        return run_lods(&io, &job, in_format == MR_FORMAT_GLTF && out_format == MR_FORMAT_GLTF);
     if (in_format == MR_FORMAT_GLTF && out_format == MR_FORMAT_GLTF && !cli_comm)
         return run_gltf(&io, &job);
     const bool streamed = in_format == MR_FORMAT_PLY || in_format == MR_FORMAT_STL ||

@@ -634,6 +634,35 @@ mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options
                            mr_mesh *out, uint32_t **origin, mr_simplify_stats *stats,
                            mr_error *err);
 
+/*
+ * A chain of levels of detail: level k is mr_mesh_simplify of level k - 1
+ * (of the input for the first) to fractions[k] of the input's triangles,
+ * each with the options (their targets are set per level: target_ratio,
+ * target_vertices and target_triangles must be 0; max_error, when set,
+ * still bounds each level's collapses). fractions: count values in (0, 1),
+ * strictly decreasing. Each level is measured against the input
+ * (mr_compare with `samples` area samples a mesh, 0 = the default's), and
+ * its error is the largest Hausdorff distance of it and every level
+ * before: never smaller than the one before. origin[v] of a level is its
+ * vertex v's input vertex (composed through the levels). levels[] gets
+ * count entries; free them with mr_lod_levels_free (also after a failure,
+ * where the levels not built are empty).
+ */
+typedef struct mr_lod_level {
+    mr_mesh mesh;
+    uint32_t *origin;            /* mesh.vertex_count input vertex ids */
+    mr_simplify_stats stats;     /* its simplification from the level before */
+    size_t target_triangles;     /* fraction * the input's triangles */
+    double hausdorff_rel, rms_rel; /* measured against the input, relative to
+                                    its bounding-box diagonal */
+    double error_rel;            /* the largest hausdorff_rel up to this level */
+} mr_lod_level;
+
+mr_status mr_mesh_lods(const mr_mesh *in, const double *fractions, size_t count,
+                       const mr_simplify_options *options, size_t samples,
+                       mr_lod_level *levels, mr_error *err);
+void mr_lod_levels_free(mr_lod_level *levels, size_t count);
+
 /* ------------------------------------------------------------------------ */
 /* Out-of-core simplification                                               */
 /* ------------------------------------------------------------------------ */
@@ -753,6 +782,24 @@ typedef struct mr_gltf_simplify_stats {
 mr_status mr_simplify_gltf(const char *in_path, const char *out_path,
                            const mr_simplify_options *options, mr_gltf_simplify_stats *stats,
                            mr_error *err);
+
+/* Levels of detail of a glTF document in one document (MSFT_lod): each
+ * triangle primitive's chain as mr_mesh_lods builds it (fractions of its
+ * triangles, in its mesh's space), level k's meshes added as copies of
+ * the document's (named NAME_lodK, their other attributes and morph
+ * targets carried as mr_simplify_gltf carries them), and every node with
+ * a mesh given an LOD node per level (its transform, skin and morph
+ * weights, the copy's mesh, extras "lod" and "lod_error"; no children)
+ * listed in its MSFT_lod "ids"; the rest of the document as
+ * mr_simplify_gltf writes it. levels[k] gets level k's figures (its mesh
+ * stays empty): the statistics summed over the primitives, the largest
+ * Hausdorff and RMS distance over them relative to the diagonal of all
+ * the primitives' positions, and the error (the largest Hausdorff so far).
+ * A relative options->max_error is relative to that diagonal. */
+mr_status mr_simplify_gltf_lods(const char *in_path, const char *out_path,
+                                const double *fractions, size_t count,
+                                const mr_simplify_options *options, size_t samples,
+                                mr_lod_level *levels, mr_error *err);
 
 /* Copy a glTF document into another (.gltf or .glb by out_path), as
  * mr_simplify_gltf writes it: the same document, its buffers joined into

@@ -702,8 +702,71 @@ static void test_document(void **state)
         }
         free(pos), free(jo), free(we), free(dz);
     }
-    free_doc(&a);
     free_doc(&c);
+    /* levels of detail in one document (MSFT_lod): the mesh twice more, each
+     * node with a mesh an LOD node per level, the rest as it was */
+    {
+        const char *lods = tu_tmp_path("gltf-doc-lods.glb");
+        mr_simplify_options lo;
+        mr_simplify_options_default(&lo);
+        const double fr[2] = {0.5, 0.2};
+        mr_lod_level lv[2];
+        if (mr_simplify_gltf_lods(in, lods, fr, 2, &lo, 20000, lv, &err) != MR_OK)
+            fail_msg("lods: %s", err.message);
+        validate(lods);
+        assert_true(lv[0].stats.output_triangles < lv[0].stats.input_triangles);
+        assert_true(lv[1].stats.output_triangles < lv[0].stats.output_triangles);
+        assert_true(lv[0].error_rel > 0 && lv[1].error_rel >= lv[0].error_rel);
+        assert_true(lv[1].error_rel == fmax(lv[0].hausdorff_rel, lv[1].hausdorff_rel));
+        load_doc(lods, &c);
+        const cJSON *meshes = cJSON_GetObjectItem(c.root, "meshes"),
+                    *nodes = cJSON_GetObjectItem(c.root, "nodes");
+        assert_int_equal(cJSON_GetArraySize(meshes), 3);
+        assert_true(cJSON_Compare(cJSON_GetArrayItem(meshes, 0),
+                                  cJSON_GetArrayItem(cJSON_GetObjectItem(a.root, "meshes"), 0),
+                                  true)); /* the input's mesh as it was */
+        assert_int_equal(cJSON_GetArraySize(nodes), 4 + 2 * 2);
+        const cJSON *used = cJSON_GetObjectItem(c.root, "extensionsUsed");
+        assert_int_equal(cJSON_GetArraySize(used), 2);
+        assert_string_equal(cJSON_GetArrayItem(used, 1)->valuestring, "MSFT_lod");
+        for (int n = 0; n < 2; n++) {
+            const cJSON *node = cJSON_GetArrayItem(nodes, n);
+            const cJSON *ids = cJSON_GetObjectItem(
+                cJSON_GetObjectItem(cJSON_GetObjectItem(node, "extensions"), "MSFT_lod"), "ids");
+            assert_int_equal(cJSON_GetArraySize(ids), 2);
+            for (int k = 0; k < 2; k++) {
+                const cJSON *lod = cJSON_GetArrayItem(nodes, cJSON_GetArrayItem(ids, k)->valueint);
+                assert_int_equal(num(lod, "mesh", -1), 1 + k);
+                assert_int_equal(num(lod, "skin", -1), num(node, "skin", -1));
+                const cJSON *t1 = cJSON_GetObjectItem(lod, "translation"),
+                            *t2 = cJSON_GetObjectItem(node, "translation");
+                assert_true(t1 == t2 || cJSON_Compare(t1, t2, true)); /* NULL for node 0 */
+                const cJSON *ex = cJSON_GetObjectItem(lod, "extras");
+                assert_int_equal(num(ex, "lod", -1), k + 1);
+                assert_true(cJSON_GetObjectItem(ex, "lod_error")->valuedouble == lv[k].error_rel);
+                /* the level's primitives: fewer vertices, their joints an
+                 * input vertex's */
+                const cJSON *pr = cJSON_GetArrayItem(
+                    cJSON_GetObjectItem(cJSON_GetArrayItem(meshes, 1 + k), "primitives"), 0);
+                const cJSON *at = cJSON_GetObjectItem(pr, "attributes");
+                size_t n1;
+                int c1;
+                double *jo = read_acc(&c, num(at, "JOINTS_0", -1), &n1, &c1);
+                assert_true(n1 < nv && c1 == 4);
+                for (size_t v = 0; v < n1; v++)
+                    assert_true((jo[4 * v] == 0 || jo[4 * v] == 1) && jo[4 * v + 1] == 0);
+                free(jo);
+            }
+        }
+        free_doc(&c);
+        /* a document with levels already is refused */
+        assert_int_equal(mr_simplify_gltf_lods(lods, tu_tmp_path("gltf-doc-lods2.glb"), fr, 2,
+                                               &lo, 20000, lv, &err),
+                         MR_ERR_UNSUPPORTED);
+        tu_assert_contains(err.message, "MSFT_lod");
+        assert_false(tu_file_exists(tu_tmp_path("gltf-doc-lods2.glb")));
+    }
+    free_doc(&a);
     /* without the unknown extension the old accessors go */
     char *plain = malloc(strlen(body) + 1);
     strcpy(plain, body);

@@ -76,7 +76,8 @@ from ._core import (  # noqa: F401  (re-exported)
 )
 
 __all__ = [
-    "Mesh", "Result", "simplify", "simplify_file", "read", "write", "compare", "info", "generate",
+    "Mesh", "Result", "simplify", "simplify_lods", "simplify_file", "read", "write", "compare",
+    "info", "generate",
     "weld", "cluster", "cluster_file", "render", "write_png",
     "Error", "InvalidArgumentError", "MeshIOError", "ParseError", "UnsupportedError",
     "EmptyMeshError", "TooLargeError", "NoMemoryError", "CancelledError", "features", "__version__", "library_version",
@@ -129,3 +130,55 @@ class Result:
 
 
 _core._register(Mesh, Result)
+
+
+def simplify_lods(vertices, triangles, levels, *, normals=None, texcoords=None, colors=None,
+                  samples=0, **options):
+    """Levels of detail, as `meshreduce simplify --lods` builds them
+    (mr_mesh_lods): level k keeps levels[k] of the input's triangles
+    (fractions in (0, 1), decreasing), simplified from level k - 1 with the
+    options of simplify() (no ratio, vertex_count or triangle_count: the
+    levels are the targets), and is measured against the input.
+
+    Returns a list of Results, one per level, each simplify()'s with
+    origin composed to the input's vertices, and hausdorff_rel, rms_rel
+    (its distances to the input relative to the input's bounding-box
+    diagonal, compare()'s with `samples` samples: 0 = its default) and
+    error_rel: the largest hausdorff_rel up to this level, never smaller
+    than the level before's."""
+    for k in ("ratio", "vertex_count", "triangle_count"):
+        if options.get(k) is not None:
+            raise ValueError("simplify_lods: the levels are the targets (no %s)" % k)
+    levels = [float(f) for f in levels]
+    if not levels:
+        raise ValueError("simplify_lods: no levels given")
+    for i, f in enumerate(levels):
+        if not (0 < f < 1) or (i and not f < levels[i - 1]):
+            raise ValueError("simplify_lods: level %d's fraction %g is not in (0, 1) below the "
+                             "level before's" % (i + 1, f))
+    import numpy as np
+    tri = np.asarray(triangles)
+    total = len(tri)
+    if total == 0:
+        raise EmptyMeshError("simplify_lods: the mesh has no triangles")
+    cmp = {"threads": options.get("threads", 0)}
+    if samples:
+        cmp["samples"] = samples
+    out, worst = [], 0.0
+    cur = (vertices, triangles, normals, texcoords, colors)
+    origin = None
+    for f in levels:
+        target = max(1, int(np.floor(f * total + 0.5)))  # llround
+        target = min(target, len(cur[1]))
+        r = simplify(cur[0], cur[1], normals=cur[2], texcoords=cur[3], colors=cur[4],
+                     triangle_count=target, **options)
+        if origin is not None:
+            r.origin = origin[r.origin]
+        origin = r.origin
+        d = compare(vertices, triangles, r.vertices, r.triangles, **cmp)
+        worst = max(worst, d["hausdorff_rel"])
+        r.target_triangles = target
+        r.hausdorff_rel, r.rms_rel, r.error_rel = d["hausdorff_rel"], d["rms_rel"], worst
+        out.append(r)
+        cur = (r.vertices, r.triangles, r.normals, r.texcoords, r.colors)
+    return out

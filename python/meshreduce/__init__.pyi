@@ -1,6 +1,6 @@
 # Type stub of the meshreduce module (the C extension meshreduce._core,
 # re-exported by meshreduce/__init__.py).
-from typing import Any, Callable, Dict, Literal, Optional, Union
+from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Union
 import os
 
 import numpy as np
@@ -106,6 +106,17 @@ def simplify(
     partitions: int = ...,
     attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
 ) -> Result: ...
+def simplify_lods(
+    vertices: _Floats,
+    triangles: npt.ArrayLike,
+    levels: Sequence[float],
+    *,
+    normals: Optional[_Floats] = ...,
+    texcoords: Optional[_Floats] = ...,
+    colors: Optional[_Floats] = ...,
+    samples: int = ...,
+    **options: Any,
+) -> List[Result]: ...
 def simplify_file(
     input: _Path,
     output: _Path,

@@ -442,6 +442,37 @@ def test_attribute_weights_match_cli(tmp_path):
 
 
 @needs_cli
+@pytest.mark.skipif(not os.path.exists(SPOT), reason=SPOT + " absent")
+def test_lods_match_cli(tmp_path):
+    # simplify_lods gives `simplify --lods`'s levels: the same bytes, the
+    # same distances, errors never decreasing, origins into the input
+    m = meshreduce.read(SPOT)
+    levels = meshreduce.simplify_lods(m.vertices, m.triangles, [0.5, 0.2, 0.05],
+                                      texcoords=m.texcoords, threads=1)
+    out = json.loads(cli("--threads", 1, "simplify", SPOT, "-o", tmp_path / "cli.ply",
+                         "--lods", "50%,20%,5%", "--json", "-q"))
+    assert len(levels) == len(out["levels"]) == 3
+    for k, (r, c) in enumerate(zip(levels, out["levels"])):
+        meshreduce.write(tmp_path / ("py.lod%d.ply" % (k + 1)), r)
+        assert (tmp_path / ("py.lod%d.ply" % (k + 1))).read_bytes() == \
+            (tmp_path / ("cli.lod%d.ply" % (k + 1))).read_bytes()
+        assert r.target_triangles == c["target_triangles"]
+        assert len(r.triangles) == c["triangles"] <= c["target_triangles"]
+        assert r.origin.max() < len(m.vertices)
+        # compare()'s figures are mr_compare_with's, bit for bit
+        assert r.hausdorff_rel == c["hausdorff_rel"] and r.rms_rel == c["rms_rel"]
+        if k:
+            assert r.error_rel >= levels[k - 1].error_rel
+            assert c["error_rel"] >= out["levels"][k - 1]["error_rel"]
+    # level 0 is the input, written as read
+    assert len(meshreduce.read(tmp_path / "cli.ply").triangles) == len(m.triangles)
+    with pytest.raises(ValueError, match="the levels are the targets"):
+        meshreduce.simplify_lods(m.vertices, m.triangles, [0.5], ratio=0.5)
+    with pytest.raises(ValueError, match="decreasing|below the level before"):
+        meshreduce.simplify_lods(m.vertices, m.triangles, [0.2, 0.5])
+
+
+@needs_cli
 def test_generated_matches_cli(tmp_path):
     src = tmp_path / "scan.ply"
     cli("generate", "scan", "--triangles", 30000, "-o", src, "-q")

@@ -63,6 +63,12 @@ size_t mr_gltf_dropped_tangents(const mr_gltf *g)
     (void)g;
     return 0;
 }
+mr_status mr_gltf_add_lod(mr_gltf *g, const mr_mesh *levels, const uint32_t *const *origins,
+                          size_t level, double error_rel, mr_error *err)
+{
+    (void)g, (void)levels, (void)origins, (void)level, (void)error_rel;
+    return not_built(err, NULL);
+}
 mr_status mr_gltf_write(mr_gltf *g, const char *path, mr_error *err)
 {
     (void)g;
@@ -127,6 +133,7 @@ struct mr_gltf {
     gl_blob *added;        /* the new bufferViews' bytes */
     size_t nadded, capadded;
     size_t dropped_tangents;
+    int input_meshes, input_nodes; /* the input's (mr_gltf_add_lod adds more) */
 };
 
 /* ---- small helpers ----------------------------------------------------------- */
@@ -542,6 +549,8 @@ mr_status mr_gltf_load(const void *data, size_t size, const char *name, const ch
     if (st == MR_OK)
         st = list_primitives(g, err);
     g->input_views = (size_t)array_size(member(g->root, "bufferViews"));
+    g->input_meshes = array_size(member(g->root, "meshes"));
+    g->input_nodes = array_size(member(g->root, "nodes"));
     if (st != MR_OK) {
         mr_gltf_free(g);
         return st;
@@ -1512,8 +1521,11 @@ static bool set_index(cJSON *o, const char *key, long long v)
     return cJSON_AddItemToObject(o, key, n);
 }
 
-mr_status mr_gltf_replace(mr_gltf *g, size_t i, const mr_mesh *m, const uint32_t *origin,
-                          mr_error *err)
+/* mr_gltf_replace into dst, a copy of primitive i's JSON (a level of
+ * detail's), or into primitive i itself (dst NULL): its data are read from
+ * primitive i as it is. */
+static mr_status replace_into(mr_gltf *g, size_t i, cJSON *dst, const mr_mesh *m,
+                              const uint32_t *origin, mr_error *err)
 {
     gl_prim_data p;
     mr_status st = prim_read(g, g->prims[i].mesh, g->prims[i].prim, &p, err);
@@ -1521,7 +1533,7 @@ mr_status mr_gltf_replace(mr_gltf *g, size_t i, const mr_mesh *m, const uint32_t
         prim_free(&p);
         return st;
     }
-    cJSON *prim = (cJSON *)p.json;
+    cJSON *prim = dst ? dst : (cJSON *)p.json;
     cJSON *attrs = member(prim, "attributes");
     const size_t n = m->vertex_count;
     uint32_t *from = mr_alloc_array(n + 1, sizeof *from); /* the primitive's own vertices */
@@ -1604,7 +1616,124 @@ mr_status mr_gltf_replace(mr_gltf *g, size_t i, const mr_mesh *m, const uint32_t
     return st;
 }
 
+mr_status mr_gltf_replace(mr_gltf *g, size_t i, const mr_mesh *m, const uint32_t *origin,
+                          mr_error *err)
+{
+    return replace_into(g, i, NULL, m, origin, err);
+}
+
 size_t mr_gltf_dropped_tangents(const mr_gltf *g) { return g ? g->dropped_tangents : 0; }
+
+/* Append value to the array root[key] (made where absent). */
+static bool append_to(cJSON *root, const char *key, cJSON *value)
+{
+    cJSON *a = member(root, key);
+    if (!a) {
+        a = cJSON_AddArrayToObject(root, key);
+        if (!a)
+            return false;
+    }
+    return cJSON_IsArray(a) && cJSON_AddItemToArray(a, value);
+}
+
+mr_status mr_gltf_add_lod(mr_gltf *g, const mr_mesh *levels, const uint32_t *const *origins,
+                          size_t level, double error_rel, mr_error *err)
+{
+    cJSON *meshes = member(g->root, "meshes"), *nodes = member(g->root, "nodes");
+    const int nm = g->input_meshes; /* the input's meshes and nodes, not the levels' */
+    if (level == 1) {
+        const cJSON *x;
+        cJSON_ArrayForEach(x, member(g->root, "extensionsUsed"))
+        {
+            if (cJSON_IsString(x) && strcmp(x->valuestring, "MSFT_lod") == 0)
+                return mr_fail_plain(err, MR_ERR_UNSUPPORTED, g->name,
+                                     "it has levels of detail already (MSFT_lod): simplify its "
+                                     "own levels instead");
+        }
+    }
+    long long *copy = mr_alloc_array((size_t)nm + 1, sizeof *copy);
+    if (!copy)
+        return mr_fail_nomem(err, g->name, (size_t)nm * 8);
+    mr_status st = MR_OK;
+    /* each mesh once more, its triangle primitives replaced by the level */
+    for (int j = 0; j < nm && st == MR_OK; j++) {
+        cJSON *dup = cJSON_Duplicate(cJSON_GetArrayItem(meshes, j), true);
+        copy[j] = array_size(meshes);
+        if (!dup || !cJSON_AddItemToArray(meshes, dup)) {
+            cJSON_Delete(dup);
+            st = mr_fail_nomem(err, g->name, 4096);
+            break;
+        }
+        const char *name = str(dup, "name");
+        char buf[512];
+        snprintf(buf, sizeof buf, "%s_lod%zu", name ? name : "mesh", level);
+        cJSON *nn = cJSON_CreateString(buf);
+        if (!nn || !(member(dup, "name") ? cJSON_ReplaceItemInObjectCaseSensitive(dup, "name", nn)
+                                          : cJSON_AddItemToObject(dup, "name", nn)))
+            st = mr_fail_nomem(err, g->name, 64);
+    }
+    for (size_t i = 0; i < g->nprims && st == MR_OK; i++) {
+        if (levels[i].triangle_count == 0)
+            continue; /* nothing to simplify: the copy keeps the primitive's own */
+        cJSON *dup = cJSON_GetArrayItem(meshes, (int)copy[g->prims[i].mesh]);
+        cJSON *prim = cJSON_GetArrayItem(member(dup, "primitives"), (int)g->prims[i].prim);
+        st = replace_into(g, i, prim, &levels[i], origins[i], err);
+    }
+    /* each node with a mesh: an LOD node (its transform, the level's mesh,
+     * its skin and weights; no children) listed by its MSFT_lod */
+    const int nn = g->input_nodes;
+    for (int n = 0; n < nn && st == MR_OK; n++) {
+        cJSON *node = cJSON_GetArrayItem(nodes, n);
+        long long mi;
+        if (get_index(node, "mesh", -1, &mi) < 0 || mi < 0 || mi >= nm)
+            continue;
+        cJSON *lod = cJSON_CreateObject();
+        static const char *const keep[] = {"matrix", "translation", "rotation", "scale", "skin",
+                                           "weights"};
+        bool ok = lod != NULL;
+        for (size_t k = 0; ok && k < sizeof keep / sizeof *keep; k++) {
+            const cJSON *v = member(node, keep[k]);
+            if (v) {
+                cJSON *d = cJSON_Duplicate(v, true);
+                ok = d && cJSON_AddItemToObject(lod, keep[k], d);
+            }
+        }
+        const char *name = str(node, "name");
+        char buf[512];
+        snprintf(buf, sizeof buf, "%s_lod%zu", name ? name : "node", level);
+        ok = ok && cJSON_AddStringToObject(lod, "name", buf) &&
+             cJSON_AddNumberToObject(lod, "mesh", (double)copy[mi]);
+        cJSON *extras = ok ? cJSON_AddObjectToObject(lod, "extras") : NULL;
+        ok = extras && cJSON_AddNumberToObject(extras, "lod", (double)level) &&
+             cJSON_AddNumberToObject(extras, "lod_error", error_rel);
+        const long long index = array_size(nodes);
+        if (!ok || !cJSON_AddItemToArray(nodes, lod)) {
+            cJSON_Delete(lod);
+            st = mr_fail_nomem(err, g->name, 4096);
+            break;
+        }
+        cJSON *ext = member(node, "extensions");
+        if (!ext)
+            ext = cJSON_AddObjectToObject(node, "extensions");
+        cJSON *msft = ext ? member(ext, "MSFT_lod") : NULL;
+        if (ext && !msft)
+            msft = cJSON_AddObjectToObject(ext, "MSFT_lod");
+        cJSON *id = cJSON_CreateNumber((double)index);
+        if (!msft || !id || !append_to(msft, "ids", id)) {
+            cJSON_Delete(id);
+            st = mr_fail_nomem(err, g->name, 64);
+        }
+    }
+    if (st == MR_OK && level == 1) {
+        cJSON *name = cJSON_CreateString("MSFT_lod");
+        if (!name || !append_to(g->root, "extensionsUsed", name)) {
+            cJSON_Delete(name);
+            st = mr_fail_nomem(err, g->name, 64);
+        }
+    }
+    free(copy);
+    return st;
+}
 
 /* ---- writing ---------------------------------------------------------------------- */
 
@@ -1617,7 +1746,7 @@ static bool known_extension(const char *name)
         "KHR_texture_transform", "KHR_lights_punctual", "KHR_mesh_quantization",
         "KHR_texture_basisu",    "EXT_texture_webp",    "EXT_texture_avif",
         "EXT_mesh_gpu_instancing", "KHR_xmp_json_ld",   "EXT_lights_image_based",
-        "KHR_animation_pointer"};
+        "KHR_animation_pointer",   "MSFT_lod"};
     if (strncmp(name, "KHR_materials_", 14) == 0)
         return true;
     for (size_t i = 0; i < sizeof known / sizeof *known; i++)

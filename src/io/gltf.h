@@ -52,6 +52,16 @@ mr_status mr_gltf_replace(mr_gltf *g, size_t i, const mr_mesh *m, const uint32_t
                           mr_error *err);
 size_t mr_gltf_dropped_tangents(const mr_gltf *g);
 
+/* Level of detail `level` (1, 2, ...: call them in order): every mesh
+ * once more (named NAME_lodK), its triangle primitives replaced by
+ * levels[i] for primitive i (origin as mr_gltf_replace's, into primitive
+ * i's vertices); every node with a mesh gets an LOD node (its transform,
+ * the copy's mesh, its skin and morph weights; no children; extras "lod"
+ * and "lod_error") appended to its MSFT_lod ids; MSFT_lod joins
+ * extensionsUsed. The document's primitives stay as they were. */
+mr_status mr_gltf_add_lod(mr_gltf *g, const mr_mesh *levels, const uint32_t *const *origins,
+                          size_t level, double error_rel, mr_error *err);
+
 /* Write the document: .glb by the path's extension (else .gltf, with its
  * buffer in PATH's name with .bin, and its external images copied beside
  * it where it goes to another folder; a .glb takes them into its buffer).
