@@ -4,7 +4,8 @@
  * alone (--attribute-weights none), on the same inputs and targets:
  * whole-process time and peak RSS (child processes, median of alternating
  * runs), and each output's distance and attribute deviation from its input
- * (meshreduce compare --json).
+ * (meshreduce compare --json; "tex dev": the texture deviation's RMS, % of
+ * the diagonal).
  *
  *   bench_attributes [--runs N] [--threads T] [--dir DIR] [--triangles N]
  *
@@ -99,10 +100,13 @@ static void row(const char *name, const char *in, const char *target, const char
             fprintf(stderr, "compare %s failed\n", out[k]);
             exit(1);
         }
-        printf("%-10s %-6s %-14s %7.3f %6.0fMB %9.4f %9.4f %8.3f %10.3g %10.3g\n", name,
+        printf("%-10s %-6s %-14s %7.3f %6.0fMB %9.4f %9.4f %8.3f %10.3g %10.4f %10.3g\n", name,
                k ? "none" : "cost", value, k ? b : a, rss[k] / 1e6,
-               100 * bench_json_number(r.out, "rms_rel"), 100 * bench_json_number(r.out, "hausdorff_rel"),
-               bench_json_number(r.out, "normal_rms_degrees"), bench_json_number(r.out, "texcoord_rms"),
+               100 * bench_json_number(r.out, "rms_rel"),
+               100 * bench_json_number(r.out, "hausdorff_rel"),
+               bench_json_number(r.out, "normal_rms_degrees"),
+               bench_json_number(r.out, "texcoord_rms"),
+               100 * bench_json_number(r.out, "texture_rms_rel"),
                bench_json_number(r.out, "color_rms"));
         free(r.out);
     }
@@ -136,8 +140,8 @@ int main(int argc, char **argv)
     printf("attribute cost (default weights) against interpolation (--attribute-weights none); "
            "%s thread(s), median of %d alternating runs, whole process\n\n",
            threads, runs);
-    printf("%-10s %-6s %-14s %7s %8s %9s %9s %8s %10s %10s\n", "input", "run", "target",
-           "s", "RSS", "RMS %", "Haus %", "nrm deg", "uv RMS", "col RMS");
+    printf("%-10s %-6s %-14s %7s %8s %9s %9s %8s %10s %10s %10s\n", "input", "run", "target",
+           "s", "RSS", "RMS %", "Haus %", "nrm deg", "uv RMS", "tex dev %", "col RMS");
     char scan[1024], seamed[1100], step[1024];
     snprintf(scan, sizeof scan, "%s/attr-scan-%s.ply", dir, tri);
     snprintf(seamed, sizeof seamed, "%s/attr-seamed-%s.ply", dir, tri);

@@ -19,7 +19,11 @@ static const char usage[] =
     "coordinates or colors, their deviation at the matched points too (each\n"
     "point's nearest point on the other surface, both interpolated there): the\n"
     "normals' angle in degrees, the UV distance, the RGBA distance; RMS and\n"
-    "largest (at a seam the largest is the seam's jump). The same meshes, samples\n"
+    "largest (at a seam the largest is the seam's jump). With texture\n"
+    "coordinates, the texture deviation too: from each point, the distance to the\n"
+    "nearest point of the other surface with the same UV (how far the texture\n"
+    "moved on the surface, free of the seams' jumps), over the points whose UV\n"
+    "the other map covers within 5 % of the diagonal. The same meshes, samples\n"
     "and seed give the same figures on any number of threads.\n"
     "\n"
     "  --samples N   surface samples per mesh besides its vertices (default 1M;\n"
@@ -142,6 +146,13 @@ static void print_table(const compare_args *a, const mr_mesh *ref, const mr_mesh
         if (e->attributes & MR_ATTR_COLORS)
             printf("  %-24s %14.7g   %12.7g\n", "color distance (rgba)", e->color_rms,
                    e->color_max);
+        if (e->attributes & MR_ATTR_TEXCOORDS) {
+            printf("\n  texture deviation (the distance to the point of equal UV; %.1f %% of "
+                   "the points, the others' UV not covered)\n",
+                   e->points ? 100.0 * (double)e->texture_points / (double)e->points : 0.0);
+            print_row("texture rms", e->texture_rms, r->diagonal);
+            print_row("texture max", e->texture_max, r->diagonal);
+        }
     }
     printf("\n%-18s compare %.3f s, read %.3f s, %d thread%s\n", "time", compare_s, read_s,
            threads_used(), threads_used() == 1 ? "" : "s");
@@ -176,8 +187,11 @@ static void print_json(const compare_args *a, const mr_mesh *ref, const mr_mesh 
         printf(", \"normal_rms_degrees\": %.17g, \"normal_max_degrees\": %.17g", e->normal_rms,
                e->normal_max);
     if (e->attributes & MR_ATTR_TEXCOORDS)
-        printf(", \"texcoord_rms\": %.17g, \"texcoord_max\": %.17g", e->texcoord_rms,
-               e->texcoord_max);
+        printf(", \"texcoord_rms\": %.17g, \"texcoord_max\": %.17g, \"texture_rms\": %.17g, "
+               "\"texture_max\": %.17g, \"texture_rms_rel\": %.17g, \"texture_max_rel\": %.17g, "
+               "\"texture_points\": %zu, \"attribute_points\": %zu",
+               e->texcoord_rms, e->texcoord_max, e->texture_rms, e->texture_max,
+               e->texture_rms_rel, e->texture_max_rel, e->texture_points, e->points);
     if (e->attributes & MR_ATTR_COLORS)
         printf(", \"color_rms\": %.17g, \"color_max\": %.17g", e->color_rms, e->color_max);
     printf(", \"threads\": %d, \"read_seconds\": %.6f, \"compare_seconds\": %.6f}\n",

@@ -869,6 +869,17 @@ typedef struct mr_attribute_error {
     double texcoord_rms, texcoord_max; /* UV units */
     double color_rms, color_max;       /* RGBA distance */
     size_t points;                /* matched points, both directions */
+    /* The texture deviation (with texture coordinates): from each point,
+     * the distance to the nearest point of the other surface that has its
+     * UV (where charts overlap in UV, the nearest of them): how far the
+     * texture moved on the surface, free of the seams' jumps. Model units,
+     * and relative to the reference's bounding-box diagonal; over the
+     * points whose UV the other map covers within 5 % of that diagonal
+     * (texture_points of `points`: a chart's rim that the other mesh's
+     * chart no longer reaches, whose equal-UV points are only another
+     * chart's far away, is not counted). */
+    double texture_rms, texture_max, texture_rms_rel, texture_max_rel;
+    size_t texture_points;
 } mr_attribute_error;
 
 mr_status mr_compare_attributes(const mr_mesh *ref, const mr_mesh *test,

@@ -815,6 +815,75 @@ static void test_compare_cli(void **state)
     free(out);
 }
 
+/* A flat n x n grid over [0, 100]^2 with UV = position / 100, in two
+ * charts: the right half's UVs moved by `jump` in u (a seam down the
+ * middle, its vertices split); every UV moved by `shift`. */
+static void uv_plane(int n, double jump, const double shift[2], mr_mesh *m)
+{
+    const int half = n / 2, cols = n + 1;
+    mr_mesh_init(m);
+    assert_int_equal(mr_mesh_alloc(m, (size_t)cols * n, 2 * (size_t)(n - 1) * (n - 1),
+                                   MR_ATTR_TEXCOORDS, NULL),
+                     MR_OK);
+    for (int y = 0; y < n; y++)
+        for (int c = 0; c < cols; c++) {
+            const int x = c <= half ? c : c - 1;
+            const size_t v = (size_t)y * cols + c;
+            m->positions[3 * v] = (float)(100.0 * x / (n - 1));
+            m->positions[3 * v + 1] = (float)(100.0 * y / (n - 1));
+            m->positions[3 * v + 2] = 0;
+            m->texcoords[2 * v] = (float)((double)x / (n - 1) + (c > half ? jump : 0) + shift[0]);
+            m->texcoords[2 * v + 1] = (float)((double)y / (n - 1) + shift[1]);
+        }
+    uint32_t *t = m->indices;
+    for (int y = 0; y + 1 < n; y++)
+        for (int x = 0; x + 1 < n; x++) {
+            const int c0 = x < half ? x : x + 1;
+            const uint32_t a = (uint32_t)(y * cols + c0), b = a + 1, c = a + (uint32_t)cols,
+                           d = c + 1;
+            const uint32_t q[6] = {a, b, d, a, d, c};
+            memcpy(t, q, sizeof q);
+            t += 6;
+        }
+}
+
+/* The texture deviation: 0 against itself across a seam whose UV jump
+ * the texcoord distance sees; 5 where the UVs moved by (0.03, 0.04) on a
+ * plane whose UV unit is 100 (the points of equal UV are (3, 4) away),
+ * over the points the other map covers; the same at 1, 2, 3 and 8
+ * threads. */
+static void test_texture_deviation(void **state)
+{
+    (void)state;
+    const double none[2] = {0, 0}, moved[2] = {0.03, 0.04};
+    mr_mesh a, b;
+    uv_plane(41, 2, none, &a);
+    uv_plane(41, 2, moved, &b);
+    mr_compare_options o;
+    mr_compare_options_default(&o);
+    o.samples = 20000;
+    mr_attribute_error e, first;
+    mr_error err;
+    assert_int_equal(mr_compare_attributes(&a, &a, &o, &e, &err), MR_OK);
+    assert_true(e.texture_max < 1e-9 && e.texture_points == e.points);
+    static const int threads[4] = {1, 2, 3, 8};
+    for (int t = 0; t < 4; t++) {
+        o.threads = threads[t];
+        assert_int_equal(mr_compare_attributes(&a, &b, &o, &e, &err), MR_OK);
+        if (t == 0)
+            first = e;
+        assert_memory_equal(&first, &e, sizeof e);
+    }
+    print_message("texture deviation %.6g (max %.6g) over %zu of %zu points; uv %.4g\n",
+                  e.texture_rms, e.texture_max, e.texture_points, e.points, e.texcoord_rms);
+    assert_true(fabs(e.texture_rms - 5) < 1e-3 && fabs(e.texture_max - 5) < 1e-3);
+    assert_true(fabs(e.texture_rms_rel - 5 / (100 * sqrt(2.0))) < 1e-5);
+    /* the rims whose moved UVs leave the other map are not counted */
+    assert_true(e.texture_points < e.points && e.texture_points > e.points * 8 / 10);
+    mr_mesh_free(&a);
+    mr_mesh_free(&b);
+}
+
 /* The attributes' deviation: a mesh against itself is 0; against a copy
  * whose texture coordinates are shifted by (0.03, 0.04), whose colors'
  * red is 0.2 higher and whose normals are turned by 10 degrees about z,
@@ -919,6 +988,7 @@ int main(void)
         cmocka_unit_test(test_vertex_similarity_large),
         cmocka_unit_test(test_compare_cli),
         cmocka_unit_test(test_attribute_deviation),
+        cmocka_unit_test(test_texture_deviation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -561,8 +561,187 @@ double mr_vertex_similarity(const float *a_positions, const uint32_t *a_origin,
 /* ---- attribute deviation ------------------------------------------------------ */
 
 typedef struct attr_partial {
-    double sum2[3], max[3];
+    double sum2[4], max[4]; /* normal, UV, colour; the texture deviation */
+    size_t texture_points;
 } attr_partial;
+
+/*
+ * A mesh's texture map as a grid over its UV box (about one cell a
+ * triangle): each cell lists the triangles whose UV box meets it; a
+ * triangle over more than UV_WIDE cells (a degenerate or wrapping map) is
+ * listed once, in `wide`, and tried for every point.
+ */
+#define UV_WIDE 1024
+
+typedef struct uv_grid {
+    double lo[2], cell[2];
+    size_t nx, ny;
+    size_t *start;   /* nx * ny + 1 */
+    uint32_t *tri;
+    uint32_t *wide;
+    size_t nwide;
+} uv_grid;
+
+static void uv_grid_free(uv_grid *g)
+{
+    free(g->start);
+    free(g->tri);
+    free(g->wide);
+    memset(g, 0, sizeof *g);
+}
+
+/* The cells [c0, c1] in x and y of triangle t's UV box. */
+static void uv_cells(const uv_grid *g, const mr_mesh *m, size_t t, size_t c[4])
+{
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 2; k++) {
+            const double u = m->texcoords[2 * (size_t)m->indices[3 * t + (size_t)j] + (size_t)k];
+            lo[k] = u < lo[k] ? u : lo[k];
+            hi[k] = u > hi[k] ? u : hi[k];
+        }
+    const size_t n[2] = {g->nx, g->ny};
+    for (int k = 0; k < 2; k++) {
+        double a = floor((lo[k] - g->lo[k]) / g->cell[k]), b = floor((hi[k] - g->lo[k]) / g->cell[k]);
+        a = a < 0 ? 0 : a > (double)(n[k] - 1) ? (double)(n[k] - 1) : a;
+        b = b < 0 ? 0 : b > (double)(n[k] - 1) ? (double)(n[k] - 1) : b;
+        c[2 * k] = (size_t)a;
+        c[2 * k + 1] = (size_t)b;
+    }
+}
+
+static mr_status uv_grid_build(uv_grid *g, const mr_mesh *m, mr_error *err)
+{
+    memset(g, 0, sizeof *g);
+    const size_t nt = m->triangle_count;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (size_t i = 0; i < 3 * nt; i++)
+        for (int k = 0; k < 2; k++) {
+            const double u = m->texcoords[2 * (size_t)m->indices[i] + (size_t)k];
+            if (isfinite(u)) {
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1]))
+        return MR_OK; /* no finite UV: no cell, nothing found */
+    const double side = ceil(sqrt((double)nt));
+    g->nx = g->ny = side < 1 ? 1 : side > 4096 ? 4096 : (size_t)side;
+    for (int k = 0; k < 2; k++) {
+        g->lo[k] = lo[k];
+        const double ext = hi[k] - lo[k];
+        g->cell[k] = (ext > 0 ? ext : 1) / (double)(k ? g->ny : g->nx) * (1 + 1e-9);
+    }
+    const size_t cells = g->nx * g->ny;
+    g->start = mr_calloc_array(cells + 1, sizeof *g->start);
+    if (!g->start)
+        return mr_fail_nomem(err, NULL, cells * sizeof *g->start);
+    size_t wide = 0;
+    for (size_t t = 0; t < nt; t++) { /* count */
+        size_t c[4];
+        uv_cells(g, m, t, c);
+        const size_t area = (c[1] - c[0] + 1) * (c[3] - c[2] + 1);
+        if (area > UV_WIDE) {
+            wide++;
+            continue;
+        }
+        for (size_t y = c[2]; y <= c[3]; y++)
+            for (size_t x = c[0]; x <= c[1]; x++)
+                g->start[y * g->nx + x + 1]++;
+    }
+    for (size_t i = 0; i < cells; i++)
+        g->start[i + 1] += g->start[i];
+    g->tri = mr_alloc_array(g->start[cells] + 1, sizeof *g->tri);
+    g->wide = mr_alloc_array(wide + 1, sizeof *g->wide);
+    size_t *fill = mr_alloc_array(cells + 1, sizeof *fill);
+    if (!g->tri || !g->wide || !fill) {
+        free(fill);
+        uv_grid_free(g);
+        return mr_fail_nomem(err, NULL, g->start ? g->start[cells] * 4 : 0);
+    }
+    memcpy(fill, g->start, cells * sizeof *fill);
+    for (size_t t = 0; t < nt; t++) { /* fill, in triangle order */
+        size_t c[4];
+        uv_cells(g, m, t, c);
+        if ((c[1] - c[0] + 1) * (c[3] - c[2] + 1) > UV_WIDE) {
+            g->wide[g->nwide++] = (uint32_t)t;
+            continue;
+        }
+        for (size_t y = c[2]; y <= c[3]; y++)
+            for (size_t x = c[0]; x <= c[1]; x++)
+                g->tri[fill[y * g->nx + x]++] = (uint32_t)t;
+    }
+    free(fill);
+    return MR_OK;
+}
+
+/* The position of m's triangle t at UV u, when u is inside t's UV
+ * triangle (a small tolerance at its edges): true and the point in p. */
+static bool uv_point(const mr_mesh *m, uint32_t t, const double u[2], double p[3])
+{
+    const uint32_t *tri = m->indices + 3 * (size_t)t;
+    const float *a = m->texcoords + 2 * (size_t)tri[0], *b = m->texcoords + 2 * (size_t)tri[1],
+                *c = m->texcoords + 2 * (size_t)tri[2];
+    const double e1[2] = {(double)b[0] - a[0], (double)b[1] - a[1]},
+                 e2[2] = {(double)c[0] - a[0], (double)c[1] - a[1]},
+                 d[2] = {u[0] - a[0], u[1] - a[1]};
+    const double det = e1[0] * e2[1] - e1[1] * e2[0];
+    if (!(fabs(det) > 0))
+        return false;
+    const double wb = (d[0] * e2[1] - d[1] * e2[0]) / det, wc = (e1[0] * d[1] - e1[1] * d[0]) / det;
+    const double tol = 1e-7;
+    if (!(wb >= -tol && wc >= -tol && wb + wc <= 1 + tol))
+        return false;
+    double pa[3], pb[3], pc[3];
+    load(m->positions, tri[0], pa);
+    load(m->positions, tri[1], pb);
+    load(m->positions, tri[2], pc);
+    for (int k = 0; k < 3; k++)
+        p[k] = (1 - wb - wc) * pa[k] + wb * pb[k] + wc * pc[k];
+    return true;
+}
+
+/* The farthest an equal-UV point counts, in reference diagonals: beyond,
+ * it is taken for another chart's (UVs that overlap: mirrored halves, the
+ * two sides of a planar projection) and the point is not counted. */
+#define TEXTURE_REACH 0.05
+
+/* The texture deviation at a point x of one mesh whose UV is u: the
+ * distance from x to the nearest point of the other mesh m (grid g) with
+ * the same UV (several where charts overlap in UV) within `reach`; false
+ * where none. */
+static bool texture_deviation(const uv_grid *g, const mr_mesh *m, const double u[2],
+                              const double x[3], double reach, double *dist)
+{
+    if (!g->start)
+        return false;
+    double best = reach * reach;
+    const double fx = floor((u[0] - g->lo[0]) / g->cell[0]),
+                 fy = floor((u[1] - g->lo[1]) / g->cell[1]);
+    if (fx >= 0 && fy >= 0 && fx < (double)g->nx && fy < (double)g->ny) {
+        const size_t cell = (size_t)fy * g->nx + (size_t)fx;
+        for (size_t i = g->start[cell]; i < g->start[cell + 1]; i++) {
+            double p[3];
+            if (uv_point(m, g->tri[i], u, p)) {
+                const double d2 = (p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]) +
+                                  (p[2] - x[2]) * (p[2] - x[2]);
+                best = d2 < best ? d2 : best;
+            }
+        }
+    }
+    for (size_t i = 0; i < g->nwide; i++) {
+        double p[3];
+        if (uv_point(m, g->wide[i], u, p)) {
+            const double d2 = (p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]) +
+                              (p[2] - x[2]) * (p[2] - x[2]);
+            best = d2 < best ? d2 : best;
+        }
+    }
+    if (!(best < reach * reach))
+        return false;
+    *dist = sqrt(best);
+    return true;
+}
 
 /* The attributes of mesh m at weights w of triangle t (a vertex: t is
  * MR_NO_HINT and v the vertex). */
@@ -611,6 +790,7 @@ typedef struct attr_job {
     const surface *surf[2];
     const mr_mesh *mesh[2];
     const mr_tri_bvh *tree[2];
+    const uv_grid *uv[2]; /* with texture coordinates */
     size_t count[2], blocks[3];
 } attr_job;
 
@@ -655,6 +835,14 @@ static attr_partial attr_block(const attr_job *jb, size_t b)
             r.sum2[k] += e[k] * e[k];
             r.max[k] = e[k] > r.max[k] ? e[k] : r.max[k];
         }
+        double td;
+        if (jb->uv[1 - kind] &&
+            texture_deviation(jb->uv[1 - kind], dm, u0, p, TEXTURE_REACH * jb->surf[0]->diagonal,
+                              &td)) {
+            r.sum2[3] += td * td;
+            r.max[3] = td > r.max[3] ? td : r.max[3];
+            r.texture_points++;
+        }
     }
     return r;
 }
@@ -690,8 +878,17 @@ mr_status mr_compare_attributes(const mr_mesh *ref, const mr_mesh *test,
         if (st == MR_OK)
             st = mr_tri_bvh_build(&t1, s1.pos, s1.idx, s1.triangle_count, nt, err);
     }
+    uv_grid g0, g1;
+    memset(&g0, 0, sizeof g0);
+    memset(&g1, 0, sizeof g1);
+    const bool uv = (out->attributes & MR_ATTR_TEXCOORDS) != 0;
+    if (st == MR_OK && uv)
+        st = uv_grid_build(&g0, ref, err);
+    if (st == MR_OK && uv)
+        st = uv_grid_build(&g1, test, err);
     if (st == MR_OK && out->attributes) {
-        attr_job jb = {{&s0, &s1}, {ref, test}, {&t0, &t1}, {0, 0}, {0, 0, 0}};
+        attr_job jb = {{&s0, &s1}, {ref, test}, {&t0, &t1}, {uv ? &g0 : NULL, uv ? &g1 : NULL},
+                       {0, 0}, {0, 0, 0}};
         jb.count[0] = s0.samples ? s0.samples : s0.vert_count;
         jb.count[1] = s1.samples ? s1.samples : s1.vert_count;
         jb.blocks[1] = (jb.count[0] + BLOCK - 1) / BLOCK;
@@ -706,22 +903,35 @@ mr_status mr_compare_attributes(const mr_mesh *ref, const mr_mesh *test,
                 part[b] = attr_block(&jb, b);
             attr_partial total;
             memset(&total, 0, sizeof total);
-            for (size_t b = 0; b < nb; b++) /* in block order: the same sums on any threads */
-                for (int k = 0; k < 3; k++) {
+            for (size_t b = 0; b < nb; b++) { /* in block order: the same sums on any threads */
+                for (int k = 0; k < 4; k++) {
                     total.sum2[k] += part[b].sum2[k];
                     total.max[k] = part[b].max[k] > total.max[k] ? part[b].max[k] : total.max[k];
                 }
+                total.texture_points += part[b].texture_points;
+            }
             free(part);
             const double n = (double)(jb.count[0] + jb.count[1]);
             out->points = jb.count[0] + jb.count[1];
             if (out->attributes & MR_ATTR_NORMALS)
                 out->normal_rms = sqrt(total.sum2[0] / n), out->normal_max = total.max[0];
-            if (out->attributes & MR_ATTR_TEXCOORDS)
+            if (out->attributes & MR_ATTR_TEXCOORDS) {
                 out->texcoord_rms = sqrt(total.sum2[1] / n), out->texcoord_max = total.max[1];
+                out->texture_points = total.texture_points;
+                if (total.texture_points) {
+                    out->texture_rms = sqrt(total.sum2[3] / (double)total.texture_points);
+                    out->texture_max = total.max[3];
+                    const double d = s0.diagonal > 0 ? s0.diagonal : 1;
+                    out->texture_rms_rel = out->texture_rms / d;
+                    out->texture_max_rel = out->texture_max / d;
+                }
+            }
             if (out->attributes & MR_ATTR_COLORS)
                 out->color_rms = sqrt(total.sum2[2] / n), out->color_max = total.max[2];
         }
     }
+    uv_grid_free(&g0);
+    uv_grid_free(&g1);
     mr_tri_bvh_free(&t0);
     mr_tri_bvh_free(&t1);
     surface_free(&s0);
