@@ -118,7 +118,7 @@ static const char usage[] =
     "                        deviation times W counts as that fraction of the\n"
     "                        bounding-box diagonal (normals per unit vector, UVs\n"
     "                        per unit of their larger extent, colours per unit);\n"
-    "                        defaults normal=0.25,uv=0.25,color=1; 0 or none: only\n"
+    "                        defaults normal=0.5,uv=0.25,color=1; 0 or none: only\n"
     "                        interpolated (the errors reported include them)\n"
     "\n"
     "inputs larger than memory (binary PLY, binary STL, OBJ; others are read whole):\n"

@@ -518,7 +518,7 @@ typedef struct mr_simplify_options {
     double normal_weight, uv_weight, color_weight;
 } mr_simplify_options;
 
-#define MR_NORMAL_WEIGHT 0.25
+#define MR_NORMAL_WEIGHT 0.5
 #define MR_UV_WEIGHT 0.25
 #define MR_COLOR_WEIGHT 1.0
 

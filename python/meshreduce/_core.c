@@ -672,7 +672,7 @@ static int simplify_options_from(mr_simplify_options *o, PyObject *ratio, PyObje
          * keep their defaults */
         if (!PyDict_Check(weights))
             return format_error(PyExc_TypeError,
-                                "attribute_weights must be a dict such as {'normal': 0.25}, "
+                                "attribute_weights must be a dict such as {'normal': 0.5}, "
                                 "got %.80s",
                                 Py_TYPE(weights)->tp_name);
         PyObject *key, *value;
@@ -788,7 +788,7 @@ PyDoc_STRVAR(simplify_doc,
 "normals (N, 3), texcoords (N, 2), colors (N, 4): per-vertex attributes carried\n"
 "through; attribute seams (vertices split at one position) are kept.\n"
 "attribute_weights: their part in the collapse cost, a dict such as\n"
-"{'normal': 0.25, 'uv': 0.25, 'color': 1.0} (those are the defaults; a name not\n"
+"{'normal': 0.5, 'uv': 0.25, 'color': 1.0} (those are the defaults; a name not\n"
 "given keeps its default, 0 leaves an attribute out: it is interpolated), as\n"
 "`meshreduce simplify --attribute-weights`.\n"
 "\n"
