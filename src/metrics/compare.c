@@ -603,8 +603,8 @@ static void uv_cells(const uv_grid *g, const mr_mesh *m, size_t t, size_t c[4])
     const size_t n[2] = {g->nx, g->ny};
     for (int k = 0; k < 2; k++) {
         double a = floor((lo[k] - g->lo[k]) / g->cell[k]), b = floor((hi[k] - g->lo[k]) / g->cell[k]);
-        a = a < 0 ? 0 : a > (double)(n[k] - 1) ? (double)(n[k] - 1) : a;
-        b = b < 0 ? 0 : b > (double)(n[k] - 1) ? (double)(n[k] - 1) : b;
+        a = !(a >= 0) ? 0 : a > (double)(n[k] - 1) ? (double)(n[k] - 1) : a; /* NaN: 0 */
+        b = !(b >= 0) ? 0 : b > (double)(n[k] - 1) ? (double)(n[k] - 1) : b;
         c[2 * k] = (size_t)a;
         c[2 * k + 1] = (size_t)b;
     }
