@@ -7,7 +7,7 @@ CMAKE     ?= cmake
 FUZZ_SECONDS ?= 60
 
 # Debian packages each goal needs (installed by scripts/need-packages.sh).
-BUILD_PKGS = cmake gcc libc6-dev make libpng-dev libcjson-dev
+BUILD_PKGS = cmake gcc libc6-dev make libpng-dev libjpeg62-turbo-dev libcjson-dev
 TEST_PKGS  = $(BUILD_PKGS) libcmocka-dev pkg-config python3-dev python3-numpy python3-pytest \
              python3-matplotlib libopenmpi-dev openmpi-bin
 # The report's plots (bench/plots.py): Debian's matplotlib, run by Debian's
@@ -90,12 +90,13 @@ serial: build
 pip-check: build
 	scripts/check-pip-install.sh
 
-# Each reader's libFuzzer target for FUZZ_SECONDS under ASan + UBSan.
+# Each reader's libFuzzer target, and the texture decoders' (image), for
+# FUZZ_SECONDS under ASan + UBSan.
 fuzz: deps-build deps-fuzz
 	CC=clang $(CMAKE) -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DMR_FUZZ=ON \
 	    -DMR_BUILD_TESTS=OFF -DMR_BUILD_BENCH=OFF
 	$(CMAKE) --build build-fuzz -j $(JOBS)
-	@for f in obj ply stl xyz gltf; do \
+	@for f in obj ply stl xyz gltf image; do \
 	    mkdir -p build-fuzz/corpus/$$f; \
 	    cp tests/fuzz/seeds/*.$$f build-fuzz/corpus/$$f/ 2>/dev/null || true; \
 	    echo "fuzz_$$f: $(FUZZ_SECONDS) s"; \

@@ -233,8 +233,9 @@ static int write_sheet(const report *r, int mi, const double *targets, int nt, i
     int np = 0, rc = 0;
     snprintf(caption[0], sizeof caption[0], "%s (original)\n%.0f triangles", name,
              (double)in.triangle_count);
-    panels[np++] = (mr_sheet_panel){in.positions, in.vertex_count, in.indices,
-                                    in.triangle_count, caption[0], NULL, NULL};
+    panels[np++] = (mr_sheet_panel){.positions = in.positions, .vertex_count = in.vertex_count,
+                                    .indices = in.indices, .triangle_count = in.triangle_count,
+                                    .caption = caption[0]};
     /* Reductions from the largest target to the smallest. */
     for (int k = 0; k < nt && k < 8; k++) {
         mr_simplify_options o;
@@ -267,8 +268,11 @@ static int write_sheet(const report *r, int mi, const double *targets, int nt, i
         else
             snprintf(caption[k + 1], sizeof caption[k + 1], "%g%% of the vertices\n%s triangles",
                      100 * targets[k], cnt);
-        panels[np++] = (mr_sheet_panel){out[k].positions, out[k].vertex_count, out[k].indices,
-                                        out[k].triangle_count, caption[k + 1], heat[k], NULL};
+        panels[np++] = (mr_sheet_panel){.positions = out[k].positions,
+                                        .vertex_count = out[k].vertex_count,
+                                        .indices = out[k].indices,
+                                        .triangle_count = out[k].triangle_count,
+                                        .caption = caption[k + 1], .face_scalar = heat[k]};
     }
     if (rc == 0) {
         mr_sheet_options so;

@@ -162,10 +162,12 @@ static int write_sheet(const mr_mesh *mesh, const char *dir, char *out, size_t o
         snprintf(caption[1], sizeof caption[1], "10%% of the vertices (QEM)\n%s triangles",
                  cli_count(a, sizeof a, low.triangle_count));
         mr_sheet_panel panels[2] = {
-            {mesh->positions, mesh->vertex_count, mesh->indices, mesh->triangle_count,
-             caption[0], NULL, NULL},
-            {low.positions, low.vertex_count, low.indices, low.triangle_count, caption[1], heat,
-             NULL}};
+            {.positions = mesh->positions, .vertex_count = mesh->vertex_count,
+             .indices = mesh->indices, .triangle_count = mesh->triangle_count,
+             .caption = caption[0]},
+            {.positions = low.positions, .vertex_count = low.vertex_count,
+             .indices = low.indices, .triangle_count = low.triangle_count,
+             .caption = caption[1], .face_scalar = heat}};
         mr_sheet_options so;
         mr_sheet_options_default(&so);
         so.scalar_max = heat_max > 0 ? heat_max : 1e-6 * diag;

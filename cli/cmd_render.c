@@ -10,12 +10,18 @@ static const char usage[] =
     "                         [--yaw DEG] [--pitch DEG] [--size WxH] [--wire]\n"
     "                         [--supersample K] [--point-size PX] [--error-to REF]\n"
     "                         [--error-max PCT] [--samples N] [--columns N]\n"
-    "                         [--title TEXT] [--json] [-q]\n"
+    "                         [--title TEXT] [--plain] [--json] [-q]\n"
     "\n"
     "Render meshes with a software rasterizer: z-buffered, flat-shaded triangles\n"
     "lit from the camera, an orthographic camera framed on the bounding box,\n"
     "supersampled anti-aliasing; point clouds as shaded splats. The PNG is the\n"
     "same, byte for byte, at any thread count.\n"
+    "\n"
+    "A surface is drawn as its file shows it: a glTF's materials (base colour and\n"
+    "base-colour texture), an OBJ's usemtl materials from its mtllib files (Kd and\n"
+    "map_Kd), and vertex colours of any format; textures are PNG or JPEG, sampled\n"
+    "bilinearly at the texture coordinates. A mesh without them is light\n"
+    "grey-blue. A heat map (--error-to) colours by distance instead.\n"
     "\n"
     "One input gives one picture. Several inputs give a comparison sheet: one\n"
     "panel per input, all from the same camera, each captioned with its file,\n"
@@ -43,6 +49,8 @@ static const char usage[] =
     "  --samples N       surface samples for the caption's distances (default 100k)\n"
     "  --columns N       panels per row of a sheet (default: all in one row)\n"
     "  --title TEXT      a title line above a sheet's panels\n"
+    "  --plain           one colour for every surface: no materials, textures or\n"
+    "                    vertex colours (nor their files read)\n"
     "  --json            print what was written as one JSON object\n"
     "  -q, --quiet       no summary line on success (errors and --json still\n"
     "                    print)\n";
@@ -57,7 +65,7 @@ typedef struct render_args {
     int size_given, columns;
     double error_max_pct;
     uint64_t samples;
-    bool json, quiet;
+    bool json, quiet, plain;
 } render_args;
 
 static int parse_size(const char *v, int *w, int *h)
@@ -94,6 +102,8 @@ static int parse(int argc, char **argv, render_args *a)
         long long n;
         if (cli_flag(argc, argv, &i, "--wire")) {
             a->ro.wire = 1;
+        } else if (cli_flag(argc, argv, &i, "--plain")) {
+            a->plain = true;
         } else if (cli_flag(argc, argv, &i, "--json")) {
             a->json = true;
         } else if (cli_flag(argc, argv, &i, "-q") || cli_flag(argc, argv, &i, "--quiet")) {
@@ -187,7 +197,7 @@ static const char *base_name(const char *path)
 }
 
 typedef struct panel_data {
-    mr_mesh mesh;
+    mr_look look;          /* look.mesh: the mesh */
     float *heat;           /* per face (or point), or NULL */
     double heat_max;
     int has_error;         /* hausdorff/rms below are measured */
@@ -209,6 +219,34 @@ static int read_mesh(const char *path, mr_mesh *m)
     return CLI_OK;
 }
 
+/* A panel's mesh with its look (its materials, textures and vertex
+ * colours), or the mesh alone with --plain. */
+static int read_look(const char *path, bool plain, mr_look *look)
+{
+    mr_error err;
+    memset(look, 0, sizeof *look);
+    if (plain)
+        return read_mesh(path, &look->mesh);
+    if (mr_look_read(path, look, &err) != MR_OK)
+        return cli_fail_err(&err);
+    const mr_mesh *m = &look->mesh;
+    if (m->vertex_count == 0) {
+        mr_look_free(look);
+        return cli_fail("%s: has no vertices: nothing to render", path);
+    }
+    return CLI_OK;
+}
+
+/* The look's arrays into render options (or a sheet panel's fields). */
+#define SET_LOOK(dst, lk)                                   \
+    do {                                                    \
+        (dst).texcoords = (lk).mesh.texcoords;              \
+        (dst).vertex_colors = (lk).mesh.colors;             \
+        (dst).face_material = (lk).face_material;           \
+        (dst).materials = (lk).materials;                   \
+        (dst).material_count = (lk).material_count;         \
+    } while (0)
+
 /* The distances of panel p (read from `path`) to the reference, prepared
  * once for every panel (its hierarchy, its samples), whose bounding box has
  * diagonal diag: the heat values (when asked) and the caption's error
@@ -217,7 +255,7 @@ static int measure(const mr_reference *ref, double diag, const char *path, panel
                    int heat)
 {
     mr_error err;
-    const mr_mesh *m = &p->mesh;
+    const mr_mesh *m = &p->look.mesh;
     size_t n = m->triangle_count ? m->triangle_count : m->vertex_count;
     float *d = NULL;
     if (heat || !m->triangle_count) {
@@ -261,7 +299,7 @@ static int measure(const mr_reference *ref, double diag, const char *path, panel
 static void make_caption(const char *path, panel_data *p, int is_reference)
 {
     char count[32], err_line[160] = "";
-    const mr_mesh *m = &p->mesh;
+    const mr_mesh *m = &p->look.mesh;
     if (p->has_error)
         snprintf(err_line, sizeof err_line, "\n%s %.3f%%  RMS %.3f%%",
                  p->one_sided ? "max" : "Hausdorff", 100 * p->hausdorff_rel, 100 * p->rms_rel);
@@ -295,7 +333,7 @@ static int run(int argc, char **argv)
     if (!p)
         return cli_fail("%s: out of memory", a.out);
     for (int i = 0; i < a.n_inputs && rc < 0; i++)
-        if (read_mesh(a.inputs[i], &p[i].mesh) != CLI_OK)
+        if (read_look(a.inputs[i], a.plain, &p[i].look) != CLI_OK)
             rc = CLI_FAIL;
 
     /* The reference: --error-to, else the first input of a sheet. */
@@ -310,8 +348,8 @@ static int run(int argc, char **argv)
                           a.error_to);
         refm = &ref;
         ref_path = a.error_to;
-    } else if (rc < 0 && sheet && p[0].mesh.triangle_count) {
-        refm = &p[0].mesh;
+    } else if (rc < 0 && sheet && p[0].look.mesh.triangle_count) {
+        refm = &p[0].look.mesh;
         ref_path = a.inputs[0];
     }
     /* The reference, prepared once (its bounding box, its hierarchy and
@@ -356,9 +394,13 @@ static int run(int argc, char **argv)
         so.title = a.title;
         mr_sheet_panel panels[MAX_INPUTS];
         for (int i = 0; i < a.n_inputs; i++) {
-            const mr_mesh *m = &p[i].mesh;
-            panels[i] = (mr_sheet_panel){m->positions, m->vertex_count, m->indices,
-                                         m->triangle_count, p[i].caption, p[i].heat, NULL};
+            const mr_mesh *m = &p[i].look.mesh;
+            panels[i] = (mr_sheet_panel){.positions = m->positions,
+                                         .vertex_count = m->vertex_count,
+                                         .indices = m->indices,
+                                         .triangle_count = m->triangle_count,
+                                         .caption = p[i].caption, .face_scalar = p[i].heat};
+            SET_LOOK(panels[i], p[i].look);
         }
         char label[512], lo[32], hi[64];
         if (a.error_to) {
@@ -383,9 +425,13 @@ static int run(int argc, char **argv)
         img = malloc((size_t)w * (size_t)h * 4);
         if (!img)
             rc = cli_fail("%s: out of memory for a %dx%d image", a.out, w, h);
-        else if (mr_render(p[0].mesh.positions, p[0].mesh.vertex_count, p[0].mesh.indices,
-                           p[0].mesh.triangle_count, &a.ro, img, 0, &err) != MR_OK)
-            rc = cli_fail_in(a.inputs[0], "render", &err);
+        else {
+            const mr_mesh *m = &p[0].look.mesh;
+            SET_LOOK(a.ro, p[0].look);
+            if (mr_render(m->positions, m->vertex_count, m->indices, m->triangle_count, &a.ro,
+                          img, 0, &err) != MR_OK)
+                rc = cli_fail_in(a.inputs[0], "render", &err);
+        }
     }
     if (rc < 0 && mr_png_write(a.out, img, w, h, &err) != MR_OK)
         rc = cli_fail_err(&err);
@@ -399,8 +445,8 @@ static int run(int argc, char **argv)
             for (int i = 0; i < a.n_inputs; i++) {
                 printf("%s{\"file\": ", i ? ", " : "");
                 cli_json_string(stdout, a.inputs[i]);
-                printf(", \"vertices\": %zu, \"triangles\": %zu", p[i].mesh.vertex_count,
-                       p[i].mesh.triangle_count);
+                printf(", \"vertices\": %zu, \"triangles\": %zu", p[i].look.mesh.vertex_count,
+                       p[i].look.mesh.triangle_count);
                 if (p[i].has_error)
                     printf(", \"hausdorff_rel\": %.9g, \"rms_rel\": %.9g", p[i].hausdorff_rel,
                            p[i].rms_rel);
@@ -418,7 +464,7 @@ static int run(int argc, char **argv)
     }
     free(img);
     for (int i = 0; i < a.n_inputs; i++) {
-        mr_mesh_free(&p[i].mesh);
+        mr_look_free(&p[i].look);
         free(p[i].heat);
     }
     free(p);

@@ -82,7 +82,10 @@ typedef struct mr_mesh {
     size_t triangle_count;
     float *positions;   /* 3 * vertex_count: x y z */
     float *normals;     /* 3 * vertex_count, or NULL */
-    float *texcoords;   /* 2 * vertex_count: u v, or NULL */
+    float *texcoords;   /* 2 * vertex_count: u v, or NULL; v = 0 is the
+                           image's bottom row (OBJ's and PLY's way: glTF's
+                           v, which points down, is flipped on reading and
+                           writing) */
     float *colors;      /* 4 * vertex_count: r g b a in [0, 1], or NULL */
     uint32_t *indices;  /* 3 * triangle_count, counter-clockwise */
 } mr_mesh;
@@ -1106,6 +1109,33 @@ typedef enum mr_view {
  * *view, or -1 for an unknown name. */
 int mr_view_from_name(const char *name, mr_view *view);
 
+/* How texture coordinates outside [0, 1] find a texel (glTF's sampler
+ * wrap modes). */
+typedef enum mr_wrap {
+    MR_WRAP_REPEAT = 0,
+    MR_WRAP_CLAMP,
+    MR_WRAP_MIRROR
+} mr_wrap;
+
+/* A decoded image: height rows of width RGBA pixels (4 bytes each, rows
+ * 4 * width bytes apart, the first row at the top). */
+typedef struct mr_image {
+    int width, height;
+    uint8_t *rgba;
+} mr_image;
+
+/* A surface's look for the renderer: a base colour (sRGB display values,
+ * each 0..1; glTF's linear baseColorFactor is converted when read) times
+ * a texture sampled at the vertices' texture coordinates (bilinear, the
+ * wrap modes), times the vertex colours where given. */
+typedef struct mr_render_material {
+    float color[4];
+    const mr_image *texture;   /* or NULL: the colour alone */
+    mr_wrap wrap_s, wrap_t;
+    int v_up;                  /* texture coordinate v = 0 is the image's
+                                  bottom row (OBJ), else its top (glTF) */
+} mr_render_material;
+
 typedef struct mr_render_options {
     int width, height;          /* pixels (default 1024 x 768; 1 .. 16384) */
     mr_view view;               /* MR_VIEW_ISO by default */
@@ -1135,6 +1165,19 @@ typedef struct mr_render_options {
     const float *face_scalar;
     const float *vertex_scalar;
     double scalar_min, scalar_max;
+    /* The surface's own look, drawn when no heat values are given (a
+     * mesh, not a point cloud's splats, for textures): each face's
+     * material (face_material[f] indexes materials; UINT32_MAX or a NULL
+     * face_material with no materials: the plain `color`; NULL with
+     * materials: material 0), the texture coordinates (2 floats a vertex)
+     * its texture is sampled at, and vertex colours (4 floats a vertex,
+     * rgba as display values 0..1) that multiply it. All NULL (the
+     * default): every face in `color`, as before. */
+    const float *texcoords;
+    const float *vertex_colors;
+    const uint32_t *face_material;
+    const mr_render_material *materials;
+    size_t material_count;
 } mr_render_options;
 
 void mr_render_options_default(mr_render_options *options);
@@ -1207,6 +1250,12 @@ typedef struct mr_sheet_panel {
     const char *caption;
     const float *face_scalar;
     const float *vertex_scalar;
+    /* the panel's look, as in mr_render_options (all NULL: plain) */
+    const float *texcoords;
+    const float *vertex_colors;
+    const uint32_t *face_material;
+    const mr_render_material *materials;
+    size_t material_count;
 } mr_sheet_panel;
 
 typedef struct mr_sheet_options {
@@ -1234,6 +1283,47 @@ void mr_sheet_options_default(mr_sheet_options *options);
 mr_status mr_render_sheet(const mr_sheet_panel *panels, size_t panel_count,
                           const mr_sheet_options *options, uint8_t **rgba, int *width,
                           int *height, mr_error *err);
+
+/* ---- a mesh with its look ------------------------------------------------ */
+
+/*
+ * A mesh as mr_mesh_read gives it, with what the renderer needs to draw
+ * it as its file shows it: for glTF, each triangle's material (its
+ * primitive's baseColorFactor and baseColorTexture with the texture's
+ * sampler; texture coordinates kept where any primitive has them, zero
+ * elsewhere; COLOR_0 converted to display values); for OBJ, each face's
+ * `usemtl` material from the `mtllib` files (Kd, d and map_Kd). Images
+ * are PNG or JPEG, read relative to the file's folder (glTF: also
+ * data: URIs and the .glb's buffer). Other formats (and an OBJ without
+ * mtllib) have no materials: vertex colours only, where present.
+ * A texture that cannot be read is an error naming the material and the
+ * file; a texture set other than TEXCOORD_0, or an image format other
+ * than PNG and JPEG, leaves that material untextured (its colour).
+ */
+typedef struct mr_look {
+    mr_mesh mesh;
+    uint32_t *face_material;          /* triangle_count, or NULL */
+    mr_render_material *materials;    /* their textures point into images */
+    size_t material_count;
+    mr_image *images;
+    size_t image_count;
+} mr_look;
+
+mr_status mr_look_read(const char *path, mr_look *look, mr_error *err);
+void mr_look_free(mr_look *look);
+
+/* ---- images: PNG and JPEG ------------------------------------------------ */
+
+/* Decode a PNG (libpng) or JPEG (libjpeg-turbo) image from memory, told
+ * apart by its first bytes, into 8-bit RGBA (grey, palette and 16-bit
+ * PNGs converted; a JPEG's alpha is 255). `name` names it in messages.
+ * Built without the library the format needs, MR_ERR_UNSUPPORTED says
+ * which. */
+mr_status mr_image_decode(const void *data, size_t size, const char *name, mr_image *image,
+                          mr_error *err);
+/* The same from a file. */
+mr_status mr_image_read(const char *path, mr_image *image, mr_error *err);
+void mr_image_free(mr_image *image);
 
 /* ---- PNG ------------------------------------------------------------------ */
 

@@ -974,6 +974,106 @@ static void test_samples(void **state)
     }
 }
 
+/* Texture coordinates have v up in the mesh (glTF's v points down): read
+ * flipped, written flipped back, so glTF -> OBJ -> glTF keeps them; and
+ * the look: each triangle's material, its base-colour texture from a
+ * data: URI, a texture on TEXCOORD_1 left out. */
+static void test_texcoords_and_look(void **state)
+{
+    (void)state;
+    blob b = {NULL, 0, 0};
+    const float pos[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+    const float uv[8] = {0.25f, 0.125f, 0.75f, 0.5f, 0.5f, 1.0f, 1.0f, 0.0f};
+    const uint16_t idx[6] = {0, 1, 2, 1, 3, 2};
+    const size_t op = put(&b, pos, sizeof pos), ou = put(&b, uv, sizeof uv),
+                 oi = put(&b, idx, sizeof idx);
+    /* a 3 x 2 PNG as a data: URI */
+    const uint8_t px[24] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255,
+                            9, 9, 9, 255, 99, 99, 99, 255, 199, 199, 199, 255};
+    const char *png = tu_tmp_path("look-tex.png");
+    mr_error err;
+    assert_int_equal(mr_png_write(png, px, 3, 2, &err), MR_OK);
+    size_t pn;
+    char *pbytes = tu_read_file(png, &pn);
+    char *p64 = base64((const uint8_t *)pbytes, pn);
+    free(pbytes);
+    char *body = malloc(strlen(p64) + 4096);
+    sprintf(body,
+            "{\"asset\":{\"version\":\"2.0\"},"
+            "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":48},"
+            "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":32},"
+            "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":12}],"
+            "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":"
+            "\"VEC3\",\"min\":[0,0,0],\"max\":[1,1,0]},"
+            "{\"bufferView\":1,\"componentType\":5126,\"count\":4,\"type\":\"VEC2\"},"
+            "{\"bufferView\":2,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"},"
+            "{\"bufferView\":2,\"byteOffset\":6,\"componentType\":5123,\"count\":3,"
+            "\"type\":\"SCALAR\"}],"
+            "\"images\":[{\"uri\":\"data:image/png;base64,%s\"}],"
+            "\"samplers\":[{\"wrapS\":33071,\"wrapT\":33648}],"
+            "\"textures\":[{\"source\":0,\"sampler\":0}],"
+            "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.5,1,1,1],"
+            "\"baseColorTexture\":{\"index\":0}}},"
+            "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0,\"texCoord\":1}}}],"
+            "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},"
+            "\"indices\":2,\"material\":1},"
+            "{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"indices\":3,\"material\":0}]}],"
+            "\"nodes\":[{\"mesh\":0}],\"scenes\":[{\"nodes\":[0]}],\"scene\":0}",
+            op, ou, oi, p64);
+    const char *path = tu_tmp_path("look.gltf");
+    write_doc(path, body, &b);
+    free(body);
+    free(p64);
+    free(b.d);
+
+    mr_mesh m;
+    assert_int_equal(mr_mesh_read(path, NULL, &m, &err), MR_OK);
+    assert_non_null(m.texcoords);
+    /* the first primitive's vertex 0 is input vertex 0: (0.25, 1 - 0.125) */
+    assert_float_equal(m.texcoords[0], 0.25, 0);
+    assert_float_equal(m.texcoords[1], 0.875, 0);
+    /* into OBJ: vt as the mesh has them; back into glTF and read: the same */
+    const char *obj = tu_tmp_path("look-uv.obj"), *back = tu_tmp_path("look-back.glb");
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s' -q", path, obj), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s' -q", obj, back), NULL), 0);
+    char *text = tu_read_file(obj, NULL);
+    tu_assert_contains(text, "vt 0.25 0.875");
+    free(text);
+    mr_mesh m2;
+    assert_int_equal(mr_mesh_read(back, NULL, &m2, &err), MR_OK);
+    assert_int_equal(m2.triangle_count, m.triangle_count);
+    for (size_t c = 0; c < 3 * m.triangle_count; c++) /* each corner's, bit for bit */
+        assert_memory_equal(m2.texcoords + 2 * m2.indices[c], m.texcoords + 2 * m.indices[c], 8);
+    mr_mesh_free(&m2);
+
+    mr_look look;
+    assert_int_equal(mr_look_read(path, &look, &err), MR_OK);
+    assert_int_equal(look.mesh.triangle_count, 2);
+    assert_memory_equal(look.mesh.texcoords, m.texcoords, 8 * m.vertex_count);
+    assert_int_equal(look.material_count, 2);
+    assert_int_equal(look.face_material[0], 1);
+    assert_int_equal(look.face_material[1], 0);
+    const mr_render_material *mat = &look.materials[0];
+    assert_non_null(mat->texture);
+    assert_int_equal(mat->texture->width, 3);
+    assert_int_equal(mat->texture->height, 2);
+    assert_memory_equal(mat->texture->rgba, px, sizeof px);
+    assert_int_equal(mat->wrap_s, MR_WRAP_CLAMP);
+    assert_int_equal(mat->wrap_t, MR_WRAP_MIRROR);
+    assert_int_equal(mat->v_up, 1);
+    /* linear 0.5 is display 0.7354 */
+    assert_float_equal(mat->color[0], 0.7354, 1e-3);
+    assert_float_equal(mat->color[1], 1, 0);
+    assert_null(look.materials[1].texture); /* TEXCOORD_1 */
+    mr_look_free(&look);
+    mr_mesh_free(&m);
+    /* and it renders */
+    const char *out = tu_tmp_path("look-gltf.png");
+    assert_int_equal(tu_run_cli(tu_fmt("render '%s' -o '%s' --size 60x60 -q", path, out), NULL),
+                     0);
+    assert_true(tu_file_exists(out));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -981,6 +1081,7 @@ int main(void)
         cmocka_unit_test(test_document),
         cmocka_unit_test(test_malformed),
         cmocka_unit_test(test_samples),
+        cmocka_unit_test(test_texcoords_and_look),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

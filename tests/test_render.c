@@ -615,9 +615,10 @@ static void test_fan_heat_and_sheet(void **state)
     assert_float_equal(mx, dz, 1e-9);
 
     mr_sheet_panel panels[2] = {
-        {lifted.positions, lifted.vertex_count, lifted.indices, lifted.triangle_count, "lifted",
-         NULL, NULL},
-        {fan.positions, fan.vertex_count, fan.indices, fan.triangle_count, "fan", d, NULL}};
+        {.positions = lifted.positions, .vertex_count = lifted.vertex_count,
+         .indices = lifted.indices, .triangle_count = lifted.triangle_count, .caption = "lifted"},
+        {.positions = fan.positions, .vertex_count = fan.vertex_count, .indices = fan.indices,
+         .triangle_count = fan.triangle_count, .caption = "fan", .face_scalar = d}};
     mr_sheet_options so;
     mr_sheet_options_default(&so);
     so.render.width = 160;
@@ -670,8 +671,10 @@ static void test_sheet_same_camera(void **state)
     for (size_t i = 0; i < m.triangle_count; i++)
         heat[i] = 0.5f;
     mr_sheet_panel panels[2] = {
-        {m.positions, m.vertex_count, m.indices, m.triangle_count, "first\nline 2", NULL, NULL},
-        {m.positions, m.vertex_count, m.indices, m.triangle_count, "second", NULL, NULL}};
+        {.positions = m.positions, .vertex_count = m.vertex_count, .indices = m.indices,
+         .triangle_count = m.triangle_count, .caption = "first\nline 2"},
+        {.positions = m.positions, .vertex_count = m.vertex_count, .indices = m.indices,
+         .triangle_count = m.triangle_count, .caption = "second"}};
     mr_sheet_options so;
     mr_sheet_options_default(&so);
     so.render.width = 120;
@@ -804,6 +807,326 @@ static void test_png_round_trip(void **state)
     free(img);
 }
 
+/* ---- textures, materials, vertex colours ------------------------------------------------ */
+
+/* A 16 x 8 JPEG (quality 95, no chroma subsampling): its left half
+ * (200, 40, 40), its right half (30, 60, 210). */
+static const uint8_t two_colours_jpeg[] = {
+    0xff, 0xd8, 0xff, 0xe0, 0x00, 0x10, 0x4a, 0x46, 0x49, 0x46, 0x00, 0x01, 0x01, 0x00, 0x00,
+    0x01, 0x00, 0x01, 0x00, 0x00, 0xff, 0xdb, 0x00, 0x43, 0x00, 0x02, 0x01, 0x01, 0x01, 0x01,
+    0x01, 0x02, 0x01, 0x01, 0x01, 0x02, 0x02, 0x02, 0x02, 0x02, 0x04, 0x03, 0x02, 0x02, 0x02,
+    0x02, 0x05, 0x04, 0x04, 0x03, 0x04, 0x06, 0x05, 0x06, 0x06, 0x06, 0x05, 0x06, 0x06, 0x06,
+    0x07, 0x09, 0x08, 0x06, 0x07, 0x09, 0x07, 0x06, 0x06, 0x08, 0x0b, 0x08, 0x09, 0x0a, 0x0a,
+    0x0a, 0x0a, 0x0a, 0x06, 0x08, 0x0b, 0x0c, 0x0b, 0x0a, 0x0c, 0x09, 0x0a, 0x0a, 0x0a, 0xff,
+    0xdb, 0x00, 0x43, 0x01, 0x02, 0x02, 0x02, 0x02, 0x02, 0x02, 0x05, 0x03, 0x03, 0x05, 0x0a,
+    0x07, 0x06, 0x07, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a,
+    0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a,
+    0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a,
+    0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0x0a, 0xff, 0xc0, 0x00, 0x11, 0x08, 0x00, 0x08,
+    0x00, 0x10, 0x03, 0x01, 0x11, 0x00, 0x02, 0x11, 0x01, 0x03, 0x11, 0x01, 0xff, 0xc4, 0x00,
+    0x15, 0x00, 0x01, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+    0x00, 0x00, 0x00, 0x07, 0x08, 0xff, 0xc4, 0x00, 0x14, 0x10, 0x01, 0x00, 0x00, 0x00, 0x00,
+    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xff, 0xc4, 0x00,
+    0x15, 0x01, 0x01, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+    0x00, 0x00, 0x00, 0x09, 0x07, 0xff, 0xc4, 0x00, 0x14, 0x11, 0x01, 0x00, 0x00, 0x00, 0x00,
+    0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xff, 0xda, 0x00,
+    0x0c, 0x03, 0x01, 0x00, 0x02, 0x11, 0x03, 0x11, 0x00, 0x3f, 0x00, 0x97, 0xd1, 0x32, 0x80,
+    0x2f, 0x35, 0x81, 0x4d, 0xff, 0xd9
+};
+
+static int near_rgb(uint32_t c, int r, int g, int b, int tol)
+{
+    return abs((int)(c >> 16 & 255) - r) <= tol && abs((int)(c >> 8 & 255) - g) <= tol &&
+           abs((int)(c & 255) - b) <= tol;
+}
+
+/* Colour c is mostly channel ch (0 red, 1 green, 2 blue; 3: white). */
+static int mostly(uint32_t c, int ch)
+{
+    const int v[3] = {(int)(c >> 16 & 255), (int)(c >> 8 & 255), (int)(c & 255)};
+    for (int k = 0; k < 3; k++)
+        if (ch == 3 || k == ch ? v[k] < 200 : v[k] > 90)
+            return 0;
+    return 1;
+}
+
+static void test_image_decode(void **state)
+{
+    (void)state;
+    mr_image im;
+    mr_error err;
+    /* JPEG: the two halves */
+    assert_int_equal(mr_image_decode(two_colours_jpeg, sizeof two_colours_jpeg, "two.jpg", &im,
+                                     &err),
+                     MR_OK);
+    assert_int_equal(im.width, 16);
+    assert_int_equal(im.height, 8);
+    assert_true(near_rgb(pixel(im.rgba, 16, 2, 4), 200, 40, 40, 6));
+    assert_true(near_rgb(pixel(im.rgba, 16, 13, 4), 30, 60, 210, 6));
+    assert_int_equal(im.rgba[3], 255);
+    mr_image_free(&im);
+
+    /* PNG: what mr_png_write wrote comes back */
+    uint8_t px[4 * 6] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255,
+                         10, 20, 30, 255, 40, 50, 60, 255, 70, 80, 90, 255};
+    const char *path = tu_tmp_path("decode.png");
+    assert_int_equal(mr_png_write(path, px, 3, 2, &err), MR_OK);
+    assert_int_equal(mr_image_read(path, &im, &err), MR_OK);
+    assert_int_equal(im.width, 3);
+    assert_int_equal(im.height, 2);
+    assert_memory_equal(im.rgba, px, sizeof px);
+    mr_image_free(&im);
+
+    /* Damaged and unknown data: one clear error each, no pixels */
+    size_t n;
+    char *png = tu_read_file(path, &n);
+    assert_int_equal(mr_image_decode(png, n / 2, "half.png", &im, &err), MR_ERR_PARSE);
+    tu_assert_contains(err.message, "half.png");
+    assert_null(im.rgba);
+    free(png);
+    assert_int_equal(mr_image_decode(two_colours_jpeg, 100, "cut.jpg", &im, &err),
+                     MR_ERR_PARSE);
+    tu_assert_contains(err.message, "cut.jpg");
+    assert_null(im.rgba);
+    assert_int_equal(mr_image_decode("GIF89a....", 10, "x.gif", &im, &err), MR_ERR_UNSUPPORTED);
+    tu_assert_contains(err.message, "neither a PNG nor a JPEG");
+    assert_int_equal(mr_image_read("/nonexistent/t.png", &im, &err), MR_ERR_IO);
+}
+
+/* The unit square in the xy plane as two triangles, texture coordinates
+ * equal to the positions (u right, v up). */
+static const float quad_pos[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+static const float quad_uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+static const uint32_t quad_idx[6] = {0, 1, 2, 0, 2, 3};
+
+static void test_textured_render(void **state)
+{
+    (void)state;
+    /* a 2 x 2 texture, top row red, green; bottom row blue, white */
+    uint8_t tex[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255};
+    mr_image im = {2, 2, tex};
+    mr_render_material mat = {{1, 1, 1, 1}, &im, MR_WRAP_CLAMP, MR_WRAP_CLAMP, 1};
+    mr_render_options o;
+    front_options(&o, 64);
+    o.texcoords = quad_uv;
+    o.materials = &mat;
+    o.material_count = 1;
+    /* facing the camera (full light): each quarter shows its texel */
+    uint8_t *img = render(quad_pos, 4, quad_idx, 2, &o);
+    assert_true(near_rgb(pixel(img, 64, 8, 8), 255, 0, 0, 2));     /* top left */
+    assert_true(near_rgb(pixel(img, 64, 56, 8), 0, 255, 0, 2));    /* top right */
+    assert_true(near_rgb(pixel(img, 64, 8, 56), 0, 0, 255, 2));    /* bottom left */
+    assert_true(near_rgb(pixel(img, 64, 56, 56), 255, 255, 255, 2));
+    assert_true(mostly(pixel(img, 64, 16, 16), 0));
+    assert_true(mostly(pixel(img, 64, 48, 48), 3));
+    /* bilinear: between two texels, their blend */
+    uint32_t mid = pixel(img, 64, 32, 16);
+    assert_true((mid >> 16 & 255) > 60 && (mid >> 8 & 255) > 60);
+    /* the same bytes at any thread count */
+    o.threads = 1;
+    uint8_t *one = render(quad_pos, 4, quad_idx, 2, &o);
+    o.threads = 3;
+    uint8_t *three = render(quad_pos, 4, quad_idx, 2, &o);
+    assert_memory_equal(img, one, 64 * 64 * 4);
+    assert_memory_equal(img, three, 64 * 64 * 4);
+    free(one);
+    free(three);
+    free(img);
+
+    /* v down (glTF's way): the image upside down */
+    mat.v_up = 0;
+    img = render(quad_pos, 4, quad_idx, 2, &o);
+    assert_true(near_rgb(pixel(img, 64, 8, 8), 0, 0, 255, 2));
+    assert_true(near_rgb(pixel(img, 64, 8, 56), 255, 0, 0, 2));
+    free(img);
+
+    /* repeat: coordinates 0..2 show the texture twice across */
+    mat.v_up = 1;
+    mat.wrap_s = mat.wrap_t = MR_WRAP_REPEAT;
+    const float uv2[8] = {0, 0, 2, 0, 2, 2, 0, 2};
+    o.texcoords = uv2;
+    img = render(quad_pos, 4, quad_idx, 2, &o);
+    assert_true(mostly(pixel(img, 64, 8, 8), 0));
+    assert_true(mostly(pixel(img, 64, 40, 8), 0));
+    assert_true(mostly(pixel(img, 64, 24, 8), 1));
+    assert_true(mostly(pixel(img, 64, 56, 56), 3));
+    free(img);
+
+    /* the material's colour multiplies the texture */
+    o.texcoords = quad_uv;
+    mat.wrap_s = mat.wrap_t = MR_WRAP_CLAMP;
+    mat.color[1] = 0; /* (1, 0, 1): white becomes magenta, green black */
+    img = render(quad_pos, 4, quad_idx, 2, &o);
+    assert_true(near_rgb(pixel(img, 64, 56, 56), 255, 0, 255, 2));
+    assert_true(near_rgb(pixel(img, 64, 56, 8), 0, 0, 0, 2));
+    free(img);
+
+    /* a texture without pixels is refused */
+    mr_image empty = {0, 0, NULL};
+    mat.texture = &empty;
+    uint8_t buf[64 * 64 * 4];
+    mr_error err;
+    assert_int_equal(mr_render(quad_pos, 4, quad_idx, 2, &o, buf, 0, &err),
+                     MR_ERR_INVALID_ARGUMENT);
+    tu_assert_contains(err.message, "texture");
+}
+
+static void test_materials_and_vertex_colors(void **state)
+{
+    (void)state;
+    mr_render_options o;
+    front_options(&o, 64);
+    /* per-face materials: the lower-right triangle red, the other plain */
+    mr_render_material red = {{1, 0, 0, 1}, NULL, MR_WRAP_REPEAT, MR_WRAP_REPEAT, 0};
+    const uint32_t fm[2] = {0, UINT32_MAX};
+    o.materials = &red;
+    o.material_count = 1;
+    o.face_material = fm;
+    uint8_t *img = render(quad_pos, 4, quad_idx, 2, &o);
+    assert_true(near_rgb(pixel(img, 64, 56, 56), 255, 0, 0, 2));
+    mr_render_options plain;
+    front_options(&plain, 64);
+    uint8_t *p = render(quad_pos, 4, quad_idx, 2, &plain);
+    const uint32_t grey = pixel(p, 64, 8, 8);
+    free(p);
+    /* the plain face in the surface colour (in linear light, full light:
+     * the colour itself) */
+    assert_true(near_rgb(pixel(img, 64, 8, 8), (int)(grey >> 16), (int)(grey >> 8 & 255),
+                         (int)(grey & 255), 2));
+    free(img);
+
+    /* vertex colours: interpolated across the face */
+    const float vc[16] = {1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 1};
+    mr_render_options v;
+    front_options(&v, 64);
+    v.vertex_colors = vc;
+    img = render(quad_pos, 4, quad_idx, 2, &v);
+    assert_true(mostly(pixel(img, 64, 32, 60), 0)); /* bottom: red */
+    assert_true(mostly(pixel(img, 64, 32, 3), 2));  /* top: blue */
+    assert_true(pixel(img, 64, 32, 32) != pixel(img, 64, 32, 40)); /* a gradient */
+    free(img);
+    /* and on a point cloud's splats */
+    v.point_radius = 3;
+    img = render(quad_pos, 4, NULL, 0, &v);
+    size_t red_px = 0, blue_px = 0;
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 64; x++) {
+            red_px += near_rgb(pixel(img, 64, x, y), 255, 0, 0, 40);
+            blue_px += near_rgb(pixel(img, 64, x, y), 0, 0, 255, 40);
+        }
+    assert_true(red_px > 4 && blue_px > 4);
+    free(img);
+}
+
+/* An OBJ's mtllib and usemtl: each face's material, Kd, map_Kd. */
+static void test_obj_look(void **state)
+{
+    (void)state;
+    const char *jpg = tu_tmp_path("look-two.jpg");
+    tu_write_file(jpg, two_colours_jpeg, sizeof two_colours_jpeg);
+    const char *mtl = tu_tmp_path("look.mtl");
+    const char *m = "# two materials\nnewmtl plain\nKd 0.2 0.4 0.6\n\n"
+                    "newmtl photo\nKd 1 1 1\nmap_Kd -clamp on look-two.jpg\n";
+    tu_write_file(mtl, m, strlen(m));
+    const char *obj = tu_tmp_path("look.obj");
+    const char *o = "mtllib look.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                    "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                    "f 1/1 2/2 3/3\nusemtl photo\nf 1/1 2/2 3/3 4/4\nusemtl nothing\n"
+                    "f 1/1 3/3 4/4\nusemtl plain\nf 1/1 2/2 3/3\n";
+    tu_write_file(obj, o, strlen(o));
+    mr_look look;
+    mr_error err;
+    assert_int_equal(mr_look_read(obj, &look, &err), MR_OK);
+    assert_int_equal(look.mesh.triangle_count, 5);
+    assert_int_equal(look.material_count, 2);
+    assert_non_null(look.face_material);
+    const uint32_t want[5] = {UINT32_MAX, 1, 1, UINT32_MAX, 0};
+    for (int i = 0; i < 5; i++)
+        assert_int_equal(look.face_material[i], want[i]);
+    assert_float_equal(look.materials[0].color[1], 0.4, 1e-6);
+    assert_null(look.materials[0].texture);
+    assert_non_null(look.materials[1].texture);
+    assert_int_equal(look.materials[1].texture->width, 16);
+    assert_int_equal(look.materials[1].wrap_s, MR_WRAP_CLAMP);
+    assert_int_equal(look.materials[1].v_up, 1);
+    mr_look_free(&look);
+
+    /* a texture file missing: an error naming the material and the file */
+    const char *m2 = "newmtl photo\nmap_Kd gone.png\n";
+    tu_write_file(mtl, m2, strlen(m2));
+    assert_int_equal(mr_look_read(obj, &look, &err), MR_ERR_IO);
+    tu_assert_contains(err.message, "photo");
+    tu_assert_contains(err.message, "gone.png");
+    assert_null(look.mesh.positions);
+    /* the library missing too */
+    remove(mtl);
+    assert_int_equal(mr_look_read(obj, &look, &err), MR_ERR_IO);
+    tu_assert_contains(err.message, "look.mtl");
+    /* render says so, and draws it --plain */
+    const char *png = tu_tmp_path("look.png");
+    char *out;
+    assert_int_equal(tu_run_cli(tu_fmt("render '%s' -o '%s' --size 40x40", obj, png), &out), 1);
+    tu_assert_contains(out, "look.mtl");
+    assert_false(tu_file_exists(png));
+    free(out);
+    assert_int_equal(tu_run_cli(tu_fmt("render '%s' -o '%s' --size 40x40 --plain -q", obj, png),
+                                NULL),
+                     0);
+    assert_true(tu_file_exists(png));
+}
+
+/* A glTF sample with a texture (when the shared data is there): its
+ * material and texture read, and the render shows the texture's colours
+ * where --plain shows one colour. */
+static void test_gltf_look(void **state)
+{
+    (void)state;
+    const char *duck = tu_shared_data("gltf/Duck/glTF-Binary/Duck.glb");
+    if (!duck || !tu_file_exists(duck)) {
+        skip();
+        return;
+    }
+    mr_look look;
+    mr_error err;
+    mr_status st = mr_look_read(duck, &look, &err);
+    if (st == MR_ERR_UNSUPPORTED) {
+        skip(); /* built without glTF */
+        return;
+    }
+    assert_int_equal(st, MR_OK);
+    assert_int_equal(look.material_count, 1);
+    assert_non_null(look.materials[0].texture);
+    assert_true(look.materials[0].texture->width >= 64);
+    assert_non_null(look.mesh.texcoords);
+    for (size_t t = 0; t < look.mesh.triangle_count; t++)
+        assert_int_equal(look.face_material[t], 0);
+    mr_render_options o;
+    mr_render_options_default(&o);
+    o.width = o.height = 96;
+    uint8_t *plain = render(look.mesh.positions, look.mesh.vertex_count, look.mesh.indices,
+                            look.mesh.triangle_count, &o);
+    o.texcoords = look.mesh.texcoords;
+    o.face_material = look.face_material;
+    o.materials = look.materials;
+    o.material_count = look.material_count;
+    uint8_t *tex = render(look.mesh.positions, look.mesh.vertex_count, look.mesh.indices,
+                          look.mesh.triangle_count, &o);
+    /* the duck is yellow: red and green well above blue where drawn */
+    size_t yellow = 0, drawn = 0;
+    for (int i = 0; i < 96 * 96; i++) {
+        const uint8_t *p = tex + 4 * i;
+        if (pixel(plain, 96, i % 96, i / 96) == 0xffffff)
+            continue;
+        drawn++;
+        yellow += p[0] > p[2] + 60 && p[1] > p[2] + 60;
+    }
+    assert_true(drawn > 1000);
+    assert_true(yellow > drawn / 2);
+    free(plain);
+    free(tex);
+    mr_look_free(&look);
+}
+
 /* ---- the command-line tool ------------------------------------------------------------ */
 
 static void test_cli_render(void **state)
@@ -917,6 +1240,11 @@ int main(void)
         cmocka_unit_test(test_png_round_trip),
         cmocka_unit_test(test_cli_render),
         cmocka_unit_test(test_cli_render_bad_input),
+        cmocka_unit_test(test_image_decode),
+        cmocka_unit_test(test_textured_render),
+        cmocka_unit_test(test_materials_and_vertex_colors),
+        cmocka_unit_test(test_obj_look),
+        cmocka_unit_test(test_gltf_look),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -42,6 +42,12 @@ size_t mr_gltf_primitive_count(const mr_gltf *g)
     (void)g;
     return 0;
 }
+mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err)
+{
+    (void)g;
+    memset(look, 0, sizeof *look);
+    return not_built(err, NULL);
+}
 mr_status mr_gltf_primitive_mesh(const mr_gltf *g, size_t i, mr_mesh *out, mr_error *err)
 {
     (void)g, (void)i, (void)out;
@@ -350,9 +356,14 @@ static mr_status uri_bytes(const mr_gltf *g, const char *uri, const char *what, 
     if (st != MR_OK)
         return st;
     st = read_whole(path, g->name, b, err);
-    if (st != MR_OK)
+    if (st != MR_OK && err) {
+        char why[sizeof err->message]; /* copied first: the two share the buffer */
+        snprintf(why, sizeof why, "%s", err->message);
         return mr_fail_plain(err, MR_ERR_IO, g->name, "%s: cannot read \"%.200s\" (%s)", what,
-                             uri, err->message);
+                             uri, why);
+    }
+    if (st != MR_OK)
+        return st;
     return MR_OK;
 }
 
@@ -1197,9 +1208,30 @@ static mr_status node_matrix(const mr_gltf *g, const cJSON *node, long long n, d
 typedef struct scene_acc {
     const mr_gltf *g;
     mr_mesh *parts;
+    long long *material; /* each part's material, or -1 */
     size_t nparts, cap;
     uint8_t *on_path; /* per node: on the current path (a cycle) */
 } scene_acc;
+
+/* Room for one more part; its mesh empty, its material -1. */
+static mr_status more_parts(scene_acc *s, mr_error *err)
+{
+    if (s->nparts == s->cap) {
+        const size_t nc = s->cap ? 2 * s->cap : 8;
+        mr_mesh *np = realloc(s->parts, nc * sizeof *np);
+        if (np)
+            s->parts = np;
+        long long *nm = realloc(s->material, nc * sizeof *nm);
+        if (nm)
+            s->material = nm;
+        if (!np || !nm)
+            return mr_fail_nomem(err, s->g->name, nc * sizeof *np);
+        s->cap = nc;
+    }
+    mr_mesh_init(&s->parts[s->nparts]);
+    s->material[s->nparts] = -1;
+    return MR_OK;
+}
 
 static mr_status visit(scene_acc *s, long long n, const double *parent, int depth, mr_error *err)
 {
@@ -1230,18 +1262,10 @@ static mr_status visit(scene_acc *s, long long n, const double *parent, int dept
             get_index(cJSON_GetArrayItem(prims, p), "mode", 4, &mode);
             if (!is_triangles(mode))
                 continue;
-            if (s->nparts == s->cap) {
-                const size_t nc = s->cap ? 2 * s->cap : 8;
-                mr_mesh *np = realloc(s->parts, nc * sizeof *np);
-                if (!np) {
-                    st = mr_fail_nomem(err, g->name, nc * sizeof *np);
-                    break;
-                }
-                s->parts = np;
-                s->cap = nc;
-            }
+            if ((st = more_parts(s, err)) != MR_OK)
+                break;
             gl_prim_data pd;
-            mr_mesh_init(&s->parts[s->nparts]);
+            get_index(cJSON_GetArrayItem(prims, p), "material", -1, &s->material[s->nparts]);
             st = prim_read(g, (size_t)mi, (size_t)p, &pd, err);
             /* (an identity transform leaves the positions' bits as they are) */
             static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -1265,10 +1289,15 @@ static mr_status visit(scene_acc *s, long long n, const double *parent, int dept
     return st;
 }
 
-mr_status mr_gltf_scene_mesh(const mr_gltf *g, mr_mesh *out, mr_error *err)
+/* The default scene joined into one mesh (mr_gltf_scene_mesh). With
+ * face_material (the look), texture coordinates are kept where any part
+ * has them (zero elsewhere), colours become display values, and
+ * *face_material receives each triangle's material (UINT32_MAX: none). */
+static mr_status scene_join(const mr_gltf *g, mr_mesh *out, uint32_t **face_material,
+                            mr_error *err)
 {
     mr_mesh_init(out);
-    scene_acc s = {g, NULL, 0, 0, NULL};
+    scene_acc s = {g, NULL, NULL, 0, 0, NULL};
     const int nnodes = array_size(member(g->root, "nodes"));
     s.on_path = calloc((size_t)nnodes + 1, 1);
     if (!s.on_path)
@@ -1293,16 +1322,12 @@ mr_status mr_gltf_scene_mesh(const mr_gltf *g, mr_mesh *out, mr_error *err)
     } else if (st == MR_OK) {
         /* no scene: every mesh once, as it is */
         for (size_t i = 0; st == MR_OK && i < g->nprims; i++) {
-            if (s.nparts == s.cap) {
-                const size_t nc = s.cap ? 2 * s.cap : 8;
-                mr_mesh *np = realloc(s.parts, nc * sizeof *np);
-                if (!np) {
-                    st = mr_fail_nomem(err, g->name, nc * sizeof *np);
-                    break;
-                }
-                s.parts = np;
-                s.cap = nc;
-            }
+            if ((st = more_parts(&s, err)) != MR_OK)
+                break;
+            const cJSON *prim = cJSON_GetArrayItem(
+                member(item(g->root, "meshes", (long long)g->prims[i].mesh), "primitives"),
+                (int)g->prims[i].prim);
+            get_index(prim, "material", -1, &s.material[s.nparts]);
             st = mr_gltf_primitive_mesh(g, i, &s.parts[s.nparts++], err);
         }
     }
@@ -1321,32 +1346,170 @@ mr_status mr_gltf_scene_mesh(const mr_gltf *g, mr_mesh *out, mr_error *err)
                            "%zu vertices in the scene exceed the 32-bit index limit", nv);
     if (st == MR_OK && nt == 0)
         st = mr_fail_plain(err, MR_ERR_EMPTY, g->name, "its scene holds no triangles");
-    const unsigned flags = all | (any & MR_ATTR_COLORS);
+    const unsigned flags = face_material ? (all & MR_ATTR_NORMALS) |
+                                               (any & (MR_ATTR_TEXCOORDS | MR_ATTR_COLORS))
+                                         : all | (any & MR_ATTR_COLORS);
     if (st == MR_OK)
         st = mr_mesh_alloc(out, nv, nt, flags, err);
+    if (st == MR_OK && face_material) {
+        *face_material = malloc(nt * sizeof **face_material);
+        if (!*face_material)
+            st = mr_fail_nomem(err, g->name, nt * sizeof **face_material);
+    }
     size_t v0 = 0, t0 = 0;
     for (size_t i = 0; st == MR_OK && i < s.nparts; i++) {
         const mr_mesh *m = &s.parts[i];
         memcpy(out->positions + 3 * v0, m->positions, 12 * m->vertex_count);
         if (out->normals)
             memcpy(out->normals + 3 * v0, m->normals, 12 * m->vertex_count);
-        if (out->texcoords)
-            memcpy(out->texcoords + 2 * v0, m->texcoords, 8 * m->vertex_count);
+        /* v up, as OBJ and PLY have it: glTF's v points down the image */
+        for (size_t v = 0; out->texcoords && m->texcoords && v < m->vertex_count; v++) {
+            out->texcoords[2 * (v0 + v)] = m->texcoords[2 * v];
+            out->texcoords[2 * (v0 + v) + 1] = 1.0f - m->texcoords[2 * v + 1];
+        }
+        if (out->texcoords && !m->texcoords)
+            memset(out->texcoords + 2 * v0, 0, 8 * m->vertex_count);
         for (size_t v = 0; out->colors && v < m->vertex_count; v++)
-            for (int k = 0; k < 4; k++)
-                out->colors[4 * (v0 + v) + (size_t)k] =
-                    m->colors ? m->colors[4 * v + (size_t)k] : 1.0f;
+            for (int k = 0; k < 4; k++) {
+                float c = m->colors ? m->colors[4 * v + (size_t)k] : 1.0f;
+                if (face_material && k < 3) /* linear light to display values */
+                    c = c <= 0 ? 0 : c >= 1 ? 1 : c <= 0.0031308f
+                        ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+                out->colors[4 * (v0 + v) + (size_t)k] = c;
+            }
         for (size_t c = 0; c < 3 * m->triangle_count; c++)
             out->indices[3 * t0 + c] = m->indices[c] + (uint32_t)v0;
+        for (size_t t = 0; face_material && t < m->triangle_count; t++)
+            (*face_material)[t0 + t] = s.material[i] >= 0 ? (uint32_t)s.material[i] : UINT32_MAX;
         v0 += m->vertex_count;
         t0 += m->triangle_count;
     }
     for (size_t i = 0; i < s.nparts; i++)
         mr_mesh_free(&s.parts[i]);
     free(s.parts);
+    free(s.material);
     free(s.on_path);
-    if (st != MR_OK)
+    if (st != MR_OK) {
         mr_mesh_free(out);
+        if (face_material) {
+            free(*face_material);
+            *face_material = NULL;
+        }
+    }
+    return st;
+}
+
+mr_status mr_gltf_scene_mesh(const mr_gltf *g, mr_mesh *out, mr_error *err)
+{
+    return scene_join(g, out, NULL, err);
+}
+
+/* ---- the look: materials and their base-colour textures ---------------------- */
+
+static mr_wrap wrap_of(const cJSON *sampler, const char *key)
+{
+    long long w;
+    get_index(sampler, key, 10497, &w);
+    return w == 33071 ? MR_WRAP_CLAMP : w == 33648 ? MR_WRAP_MIRROR : MR_WRAP_REPEAT;
+}
+
+/* images[i]'s bytes: its URI's or its buffer view's (*owned set when the
+ * bytes were read and must be freed). */
+static mr_status image_bytes(const mr_gltf *g, long long i, const char *what, gl_blob *b,
+                             bool *owned, mr_error *err)
+{
+    const cJSON *img = item(g->root, "images", i);
+    *owned = false;
+    if (!img)
+        return mr_fail_plain(err, MR_ERR_PARSE, g->name, "%s: images[%lld], there is none", what,
+                             i);
+    const char *uri = str(img, "uri");
+    long long view;
+    if (uri) {
+        *owned = true;
+        return uri_bytes(g, uri, what, b, err);
+    }
+    if (get_index(img, "bufferView", -1, &view) != 1)
+        return mr_fail_plain(err, MR_ERR_PARSE, g->name,
+                             "%s: images[%lld] has neither a uri nor a bufferView", what, i);
+    const uint8_t *bytes;
+    size_t len, stride;
+    mr_status st = view_bytes(g, view, &bytes, &len, &stride, err);
+    b->data = (uint8_t *)bytes;
+    b->size = len;
+    return st;
+}
+
+mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err)
+{
+    memset(look, 0, sizeof *look);
+    mr_status st = scene_join(g, &look->mesh, &look->face_material, err);
+    const cJSON *mats = member(g->root, "materials");
+    const int nm = array_size(mats), ni = array_size(member(g->root, "images"));
+    if (st == MR_OK && nm) {
+        look->materials = calloc((size_t)nm, sizeof *look->materials);
+        look->images = calloc((size_t)ni + 1, sizeof *look->images);
+        if (!look->materials || !look->images)
+            st = mr_fail_nomem(err, g->name, (size_t)nm * sizeof *look->materials);
+        else
+            look->material_count = (size_t)nm;
+    }
+    for (int m = 0; st == MR_OK && m < nm; m++) {
+        mr_render_material *rm = &look->materials[m];
+        const cJSON *mat = cJSON_GetArrayItem(mats, m);
+        const cJSON *pbr = member(mat, "pbrMetallicRoughness");
+        double f[4] = {1, 1, 1, 1};
+        numbers(member(pbr, "baseColorFactor"), 4, f);
+        for (int k = 0; k < 4; k++) {
+            double c = f[k] <= 0 ? 0 : f[k] >= 1 ? 1 : f[k];
+            if (k < 3) /* linear light to display values */
+                c = c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1 / 2.4) - 0.055;
+            rm->color[k] = (float)c;
+        }
+        const cJSON *info = member(pbr, "baseColorTexture");
+        long long ti, set, src, smp;
+        if (!info || get_index(info, "index", -1, &ti) != 1)
+            continue;
+        get_index(info, "texCoord", 0, &set);
+        const cJSON *tex = item(g->root, "textures", ti);
+        /* TEXCOORD_0 only (the mesh carries one set); a source that only
+         * an extension names (KTX2, WebP) is drawn in the colour alone */
+        if (set != 0 || !tex || get_index(tex, "source", -1, &src) != 1)
+            continue;
+        const cJSON *sampler = get_index(tex, "sampler", -1, &smp) == 1
+                                   ? item(g->root, "samplers", smp) : NULL;
+        rm->v_up = 1; /* the joined mesh's v points up */
+        rm->wrap_s = wrap_of(sampler, "wrapS");
+        rm->wrap_t = wrap_of(sampler, "wrapT");
+        if (src < 0 || src >= ni)
+            continue;
+        mr_image *im = &look->images[src];
+        if (!im->rgba) {
+            char what[96];
+            snprintf(what, sizeof what, "materials[%d]'s base colour texture", m);
+            gl_blob b = {NULL, 0};
+            bool owned = false;
+            st = image_bytes(g, src, what, &b, &owned, err);
+            if (st == MR_OK) {
+                char name[160];
+                snprintf(name, sizeof name, "%s: %s, images[%lld]", g->name, what, src);
+                st = mr_image_decode(b.data, b.size, name, im, err);
+                if (st == MR_ERR_UNSUPPORTED) {
+                    /* another image format, or one not built: the colour
+                     * alone */
+                    st = MR_OK;
+                    mr_error_clear(err);
+                    continue;
+                }
+            }
+            if (owned)
+                free(b.data);
+        }
+        rm->texture = im;
+    }
+    look->image_count = look->images ? (size_t)ni : 0;
+    if (st != MR_OK)
+        mr_look_free(look);
     return st;
 }
 
@@ -2239,7 +2402,15 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
         st = acc < 0 || !set_index(attrs, "NORMAL", acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
     if (st == MR_OK && m->texcoords && options->write_texcoords) {
-        acc = float_accessor(g, m->texcoords, n, 2, false, GL_ARRAY_BUFFER, err);
+        /* the mesh's v points up (OBJ's way); glTF's points down */
+        float *uv = mr_alloc_array(2 * n, sizeof *uv);
+        for (size_t i = 0; uv && i < n; i++) {
+            uv[2 * i] = m->texcoords[2 * i];
+            uv[2 * i + 1] = 1.0f - m->texcoords[2 * i + 1];
+        }
+        acc = uv ? float_accessor(g, uv, n, 2, false, GL_ARRAY_BUFFER, err)
+                 : (mr_fail_nomem(err, path, 8 * n), -1);
+        free(uv);
         st = acc < 0 || !set_index(attrs, "TEXCOORD_0", acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
     if (st == MR_OK && m->colors && options->write_colors) {

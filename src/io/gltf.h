@@ -31,6 +31,10 @@ void mr_gltf_free(mr_gltf *g);
  * (COLOR_0; white where a primitive has none) where one has. */
 mr_status mr_gltf_scene_mesh(const mr_gltf *g, mr_mesh *out, mr_error *err);
 
+/* The same with each triangle's material (the document's materials in
+ * order, their base-colour textures decoded): mr_look_read. */
+mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err);
+
 /* The triangle primitives of every mesh (each mesh once, however many
  * nodes instance it), in the order of meshes and their primitives. */
 size_t mr_gltf_primitive_count(const mr_gltf *g);

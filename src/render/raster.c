@@ -323,7 +323,127 @@ typedef struct ctx {
     uint32_t *band_list;
     int nbands, band_rows;
     float base[3], bg[3], wire[3];
+    int look;            /* texcoords, vertex colours or materials given */
+    float base_lin[3];   /* `color` in linear light */
+    float texel_lin[256]; /* the 8-bit texel values in linear light */
 } ctx;
+
+/* ---- the surface's look: textures, materials, vertex colours ---------------- */
+
+/* sRGB display value (0..1) to linear light and back (IEC 61966-2-1). */
+static float srgb_to_linear(float v)
+{
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    return v <= 0.04045f ? v / 12.92f : powf((v + 0.055f) / 1.055f, 2.4f);
+}
+
+static float linear_to_srgb(float v)
+{
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
+}
+
+/* Texel index i of a side of n texels under a wrap mode. */
+static int wrap_index(int i, int n, mr_wrap mode)
+{
+    if (mode == MR_WRAP_CLAMP)
+        return i < 0 ? 0 : i >= n ? n - 1 : i;
+    if (mode == MR_WRAP_MIRROR) {
+        int m = i % (2 * n);
+        m = m < 0 ? m + 2 * n : m;
+        return m < n ? m : 2 * n - 1 - m;
+    }
+    int m = i % n;
+    return m < 0 ? m + n : m;
+}
+
+/* A texture coordinate brought into the range its wrap mode repeats. */
+static double wrap_coord(double t, mr_wrap mode)
+{
+    if (!isfinite(t))
+        return 0;
+    if (mode == MR_WRAP_CLAMP)
+        return t < -1 ? -1 : t > 2 ? 2 : t;
+    if (mode == MR_WRAP_MIRROR)
+        return t - 2 * floor(t / 2);
+    return t - floor(t);
+}
+
+/* The texture's colour at (u, v), bilinear, in linear light. */
+static void texture_sample(const ctx *c, const mr_render_material *m, double u, double v,
+                           float out[3])
+{
+    const mr_image *im = m->texture;
+    u = wrap_coord(u, m->wrap_s);
+    v = wrap_coord(v, m->wrap_t);
+    if (m->v_up)
+        v = 1 - v;
+    const double x = u * im->width - 0.5, y = v * im->height - 0.5;
+    const double fx0 = floor(x), fy0 = floor(y);
+    const float fx = (float)(x - fx0), fy = (float)(y - fy0);
+    const int x0 = (int)fx0, y0 = (int)fy0;
+    const int xs[2] = {wrap_index(x0, im->width, m->wrap_s),
+                       wrap_index(x0 + 1, im->width, m->wrap_s)};
+    const int ys[2] = {wrap_index(y0, im->height, m->wrap_t),
+                       wrap_index(y0 + 1, im->height, m->wrap_t)};
+    const float wx[2] = {1 - fx, fx}, wy[2] = {1 - fy, fy};
+    out[0] = out[1] = out[2] = 0;
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 2; i++) {
+            const uint8_t *t = im->rgba + 4 * ((size_t)ys[j] * (size_t)im->width + (size_t)xs[i]);
+            const float w = wx[i] * wy[j];
+            for (int k = 0; k < 3; k++)
+                out[k] += w * c->texel_lin[t[k]];
+        }
+}
+
+/* Face f's material, or NULL for the plain colour. */
+static const mr_render_material *face_material(const ctx *c, size_t f)
+{
+    const mr_render_options *o = c->o;
+    if (!o->materials || !o->material_count)
+        return NULL;
+    const uint32_t m = o->face_material ? o->face_material[f] : 0;
+    return m < o->material_count ? &o->materials[m] : NULL;
+}
+
+/* The albedo (linear light) of face id at the point whose weights of the
+ * face's vertices cv are w / area. */
+static void surface_albedo(const ctx *c, uint32_t id, const uint32_t cv[3], const double w[3],
+                           double area, float out[3])
+{
+    const mr_render_options *o = c->o;
+    const mr_render_material *m = c->nt ? face_material(c, id) : NULL;
+    if (m) {
+        for (int k = 0; k < 3; k++)
+            out[k] = srgb_to_linear(m->color[k]);
+        if (m->texture && m->texture->rgba && o->texcoords) {
+            double u = 0, v = 0;
+            for (int i = 0; i < 3; i++) {
+                u += w[i] * (double)o->texcoords[2 * (size_t)cv[i]];
+                v += w[i] * (double)o->texcoords[2 * (size_t)cv[i] + 1];
+            }
+            float t[3];
+            texture_sample(c, m, u / area, v / area, t);
+            for (int k = 0; k < 3; k++)
+                out[k] *= t[k];
+        }
+    } else if (o->vertex_colors) {
+        out[0] = out[1] = out[2] = 1;
+    } else {
+        for (int k = 0; k < 3; k++)
+            out[k] = c->base_lin[k];
+        return;
+    }
+    if (o->vertex_colors) {
+        for (int k = 0; k < 3; k++) {
+            double s = 0;
+            for (int i = 0; i < 3; i++)
+                s += w[i] * (double)o->vertex_colors[4 * (size_t)cv[i] + (size_t)k];
+            out[k] *= srgb_to_linear((float)(s / area));
+        }
+    }
+}
 
 static void rgb_of(uint32_t c, float out[3])
 {
@@ -710,6 +830,8 @@ static void shade_sample(const ctx *c, uint32_t id, int x, int y, int acc[3])
     }
     const double px = (x + 0.5) * SUB_ONE, py = (y + 0.5) * SUB_ONE;
     double light;
+    float albedo[3];
+    int lit = 0; /* albedo holds the surface's look */
     int heat = 0;
     double value = 0;
     int on_wire = 0;
@@ -719,7 +841,8 @@ static void shade_sample(const ctx *c, uint32_t id, int x, int y, int acc[3])
             heat = 1;
             value = o->face_scalar[id];
         }
-        if (o->vertex_scalar || o->wire) {
+        const int look = c->look && !o->face_scalar && !o->vertex_scalar;
+        if (o->vertex_scalar || o->wire || look) {
             tri_setup t;
             const uint32_t *tri = c->idx + 3 * (size_t)id;
             /* Non-zero area: the sample was drawn from this setup; the
@@ -728,11 +851,15 @@ static void shade_sample(const ctx *c, uint32_t id, int x, int y, int acc[3])
             double w[3];
             for (int i = 0; i < 3; i++)
                 w[i] = (double)t.e[i].a * px + (double)t.e[i].b * py + (double)t.e[i].c;
+            /* e[i] weighs set-up vertex i; the setup may have swapped
+             * the input's corners 1 and 2. */
+            const uint32_t cv[3] = {tri[0], t.swapped ? tri[2] : tri[1],
+                                    t.swapped ? tri[1] : tri[2]};
+            if (look) {
+                surface_albedo(c, id, cv, w, (double)t.area, albedo);
+                lit = 1;
+            }
             if (o->vertex_scalar) {
-                /* e[i] weighs set-up vertex i; the setup may have
-                 * swapped the input's corners 1 and 2. */
-                uint32_t cv[3] = {tri[0], t.swapped ? tri[2] : tri[1],
-                                  t.swapped ? tri[1] : tri[2]};
                 double sum = 0;
                 for (int i = 0; i < 3; i++)
                     sum += w[i] * (double)o->vertex_scalar[cv[i]];
@@ -761,11 +888,22 @@ static void shade_sample(const ctx *c, uint32_t id, int x, int y, int acc[3])
         if (s) {
             heat = 1;
             value = s[id];
+        } else if (o->vertex_colors) {
+            for (int k = 0; k < 3; k++)
+                albedo[k] = srgb_to_linear(o->vertex_colors[4 * (size_t)id + (size_t)k]);
+            lit = 1;
         }
     }
     if (on_wire) {
         for (int i = 0; i < 3; i++)
             acc[i] += (int)lrintf(c->wire[i] * 255.0f);
+        return;
+    }
+    if (lit) {
+        /* in linear light, then back to display values */
+        const float f = (float)(0.15 + 0.85 * light);
+        for (int i = 0; i < 3; i++)
+            acc[i] += (int)lrintf(linear_to_srgb(albedo[i] * f) * 255.0f);
         return;
     }
     float f;
@@ -827,6 +965,12 @@ static mr_status check_options(const mr_render_options *o, mr_error *err)
         !isfinite(o->point_radius))
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, "render",
                              "camera angles and point radius must be finite (radius >= 0)");
+    for (size_t i = 0; o->materials && i < o->material_count; i++) {
+        const mr_image *t = o->materials[i].texture;
+        if (t && (!t->rgba || t->width < 1 || t->height < 1))
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, "render",
+                                 "material %zu: its texture has no pixels", i);
+    }
     if (o->use_bounds)
         for (int i = 0; i < 3; i++)
             if (!isfinite(o->bounds_lo[i]) || !isfinite(o->bounds_hi[i]) ||
@@ -889,6 +1033,11 @@ mr_status mr_render_framed(const float *positions, size_t vertex_count, const ui
     rgb_of(options->color, c.base);
     rgb_of(options->background, c.bg);
     rgb_of(options->wire_color, c.wire);
+    c.look = options->texcoords || options->vertex_colors || options->materials;
+    for (int i = 0; i < 3; i++)
+        c.base_lin[i] = srgb_to_linear(c.base[i]);
+    for (int i = 0; c.look && i < 256; i++)
+        c.texel_lin[i] = srgb_to_linear((float)i / 255.0f);
     const int nthreads = mr_thread_count(options->threads);
 
     double lo[3], hi[3];

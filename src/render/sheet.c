@@ -157,6 +157,11 @@ mr_status mr_render_sheet(const mr_sheet_panel *panels, size_t panel_count,
         fill_rect(img, w, h, cx, cy, cx + cell_w, cy + ph + 2, FRAME_COLOR);
         ro.face_scalar = p->face_scalar;
         ro.vertex_scalar = p->vertex_scalar;
+        ro.texcoords = p->texcoords;
+        ro.vertex_colors = p->vertex_colors;
+        ro.face_material = p->face_material;
+        ro.materials = p->materials;
+        ro.material_count = p->material_count;
         uint8_t *sub = img + 4 * ((size_t)(cy + 1) * (size_t)w + (size_t)(cx + 1));
         mr_status st = mr_render_framed(p->positions, p->vertex_count, p->indices,
                                         p->triangle_count, &ro, ro.use_bounds ? NULL : &frame,
