@@ -13,7 +13,10 @@
 # -si RATIO and -se 1 (no error limit: the ratio is the target, as for
 # meshreduce). FILE...: default, the .glb sample models of
 # ../shared/data/gltf that use no compression. meshreduce is build/meshreduce
-# (MR_CLI to change it), at its default threads.
+# (MR_CLI to change it), at its default threads. With MR_SHEETS=DIR, each
+# model's render sheet (input, gltfpack's, meshreduce's; textured, from one
+# camera, each captioned with its distance to the input) goes to
+# DIR/MODEL.png.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 modules=${1:?usage: gltf_peers.sh NODE_MODULES [RATIO] [RUNS] [FILE...]}
@@ -70,4 +73,11 @@ for f in "${files[@]}"; do
             "$(field "$work/$tool.json" normal_rms_degrees)" \
             "$(pct "$(field "$work/$tool.json" texture_rms_rel)")"
     done
+    if [ -n "${MR_SHEETS:-}" ]; then
+        mkdir -p "$MR_SHEETS"
+        cp "$work/gp.glb" "$work/gltfpack.glb"
+        cp "$work/mr.glb" "$work/meshreduce.glb"
+        "$mr" render "$f" "$work/gltfpack.glb" "$work/meshreduce.glb" -o "$MR_SHEETS/$name.png" \
+            --size 400x400 --title "$name at gltfpack's triangle count ($ratio)" -q
+    fi
 done
