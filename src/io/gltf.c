@@ -42,10 +42,24 @@ size_t mr_gltf_primitive_count(const mr_gltf *g)
     (void)g;
     return 0;
 }
-mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err)
+mr_status mr_gltf_scene_look(const mr_gltf *g, mr_mesh *mesh, uint32_t **face_material,
+                             mr_gltf_material **materials, size_t *material_count,
+                             size_t *image_count, mr_error *err)
 {
     (void)g;
-    memset(look, 0, sizeof *look);
+    mr_mesh_init(mesh);
+    *face_material = NULL;
+    *materials = NULL;
+    *material_count = *image_count = 0;
+    return not_built(err, NULL);
+}
+mr_status mr_gltf_image(const mr_gltf *g, long long i, const char *what, uint8_t **bytes,
+                        size_t *size, bool *owned, mr_error *err)
+{
+    (void)g, (void)i, (void)what;
+    *bytes = NULL;
+    *size = 0;
+    *owned = false;
     return not_built(err, NULL);
 }
 mr_status mr_gltf_primitive_mesh(const mr_gltf *g, size_t i, mr_mesh *out, mr_error *err)
@@ -1440,22 +1454,35 @@ static mr_status image_bytes(const mr_gltf *g, long long i, const char *what, gl
     return st;
 }
 
-mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err)
+mr_status mr_gltf_image(const mr_gltf *g, long long i, const char *what, uint8_t **bytes,
+                        size_t *size, bool *owned, mr_error *err)
 {
-    memset(look, 0, sizeof *look);
-    mr_status st = scene_join(g, &look->mesh, &look->face_material, err);
+    gl_blob b = {NULL, 0};
+    mr_status st = image_bytes(g, i, what, &b, owned, err);
+    *bytes = b.data;
+    *size = b.size;
+    return st;
+}
+
+mr_status mr_gltf_scene_look(const mr_gltf *g, mr_mesh *mesh, uint32_t **face_material,
+                             mr_gltf_material **materials, size_t *material_count,
+                             size_t *image_count, mr_error *err)
+{
+    *materials = NULL;
+    *material_count = 0;
+    *image_count = (size_t)array_size(member(g->root, "images"));
+    mr_status st = scene_join(g, mesh, face_material, err);
     const cJSON *mats = member(g->root, "materials");
-    const int nm = array_size(mats), ni = array_size(member(g->root, "images"));
+    const int nm = array_size(mats);
     if (st == MR_OK && nm) {
-        look->materials = calloc((size_t)nm, sizeof *look->materials);
-        look->images = calloc((size_t)ni + 1, sizeof *look->images);
-        if (!look->materials || !look->images)
-            st = mr_fail_nomem(err, g->name, (size_t)nm * sizeof *look->materials);
+        *materials = calloc((size_t)nm, sizeof **materials);
+        if (!*materials)
+            st = mr_fail_nomem(err, g->name, (size_t)nm * sizeof **materials);
         else
-            look->material_count = (size_t)nm;
+            *material_count = (size_t)nm;
     }
     for (int m = 0; st == MR_OK && m < nm; m++) {
-        mr_render_material *rm = &look->materials[m];
+        mr_gltf_material *gm = &(*materials)[m];
         const cJSON *mat = cJSON_GetArrayItem(mats, m);
         const cJSON *pbr = member(mat, "pbrMetallicRoughness");
         double f[4] = {1, 1, 1, 1};
@@ -1464,8 +1491,9 @@ mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err)
             double c = f[k] <= 0 ? 0 : f[k] >= 1 ? 1 : f[k];
             if (k < 3) /* linear light to display values */
                 c = c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1 / 2.4) - 0.055;
-            rm->color[k] = (float)c;
+            gm->color[k] = (float)c;
         }
+        gm->image = -1;
         const cJSON *info = member(pbr, "baseColorTexture");
         long long ti, set, src, smp;
         if (!info || get_index(info, "index", -1, &ti) != 1)
@@ -1478,38 +1506,19 @@ mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err)
             continue;
         const cJSON *sampler = get_index(tex, "sampler", -1, &smp) == 1
                                    ? item(g->root, "samplers", smp) : NULL;
-        rm->v_up = 1; /* the joined mesh's v points up */
-        rm->wrap_s = wrap_of(sampler, "wrapS");
-        rm->wrap_t = wrap_of(sampler, "wrapT");
-        if (src < 0 || src >= ni)
-            continue;
-        mr_image *im = &look->images[src];
-        if (!im->rgba) {
-            char what[96];
-            snprintf(what, sizeof what, "materials[%d]'s base colour texture", m);
-            gl_blob b = {NULL, 0};
-            bool owned = false;
-            st = image_bytes(g, src, what, &b, &owned, err);
-            if (st == MR_OK) {
-                char name[160];
-                snprintf(name, sizeof name, "%s: %s, images[%lld]", g->name, what, src);
-                st = mr_image_decode(b.data, b.size, name, im, err);
-                if (st == MR_ERR_UNSUPPORTED) {
-                    /* another image format, or one not built: the colour
-                     * alone */
-                    st = MR_OK;
-                    mr_error_clear(err);
-                    continue;
-                }
-            }
-            if (owned)
-                free(b.data);
-        }
-        rm->texture = im;
+        gm->wrap_s = wrap_of(sampler, "wrapS");
+        gm->wrap_t = wrap_of(sampler, "wrapT");
+        if (src >= 0 && (size_t)src < *image_count)
+            gm->image = src;
     }
-    look->image_count = look->images ? (size_t)ni : 0;
-    if (st != MR_OK)
-        mr_look_free(look);
+    if (st != MR_OK) {
+        mr_mesh_free(mesh);
+        free(*face_material);
+        *face_material = NULL;
+        free(*materials);
+        *materials = NULL;
+        *material_count = 0;
+    }
     return st;
 }
 

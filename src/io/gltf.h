@@ -31,9 +31,27 @@ void mr_gltf_free(mr_gltf *g);
  * (COLOR_0; white where a primitive has none) where one has. */
 mr_status mr_gltf_scene_mesh(const mr_gltf *g, mr_mesh *out, mr_error *err);
 
-/* The same with each triangle's material (the document's materials in
- * order, their base-colour textures decoded): mr_look_read. */
-mr_status mr_gltf_scene_look(const mr_gltf *g, mr_look *look, mr_error *err);
+/* A material as the renderer draws it (mr_look_read): its base colour
+ * (display values) and its base-colour texture's image and sampler. */
+typedef struct mr_gltf_material {
+    float color[4];
+    long long image;   /* images[] of its baseColorTexture on TEXCOORD_0, or -1 */
+    mr_wrap wrap_s, wrap_t;
+} mr_gltf_material;
+
+/* The scene mesh for the look: texture coordinates where any primitive
+ * has them (zero elsewhere), colours as display values; each triangle's
+ * material (*face_material: an index into *materials, the document's
+ * materials in order, or UINT32_MAX); *image_count the document's
+ * images. */
+mr_status mr_gltf_scene_look(const mr_gltf *g, mr_mesh *mesh, uint32_t **face_material,
+                             mr_gltf_material **materials, size_t *material_count,
+                             size_t *image_count, mr_error *err);
+/* images[i]'s bytes (its URI's, or its buffer view's in the document):
+ * *owned says whether they were read for this call (free them). `what`
+ * names the asker in messages. */
+mr_status mr_gltf_image(const mr_gltf *g, long long i, const char *what, uint8_t **bytes,
+                        size_t *size, bool *owned, mr_error *err);
 
 /* The triangle primitives of every mesh (each mesh once, however many
  * nodes instance it), in the order of meshes and their primitives. */

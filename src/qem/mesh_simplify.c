@@ -18,7 +18,16 @@
  *   - seam vertices with more than two wedges, other than two seam edges,
  *     or on an open boundary (seams meeting, corners) are locked;
  *   - where a seam turns sharply between straight runs, its vertex is a
- *     corner (MR_VF_CORNER), kept in place as a boundary's corners are.
+ *     corner (MR_VF_CORNER), kept in place as a boundary's corners are;
+ *   - a collapse at a seam vertex may turn a triangle by up to 90 degrees
+ *     (seam_limits), where the others keep the options' limit;
+ *   - when the run ends short of its targets with all this (and the
+ *     corners released), the seam vertices off the open boundaries that
+ *     no caller locked are freed for a last stage (attr_release): they
+ *     may leave their seams onto other seam vertices, any vertex may go
+ *     onto them, and the wedges that lose their place are priced by the
+ *     attribute quadrics (meshoptimizer's permissive mode; only with
+ *     weighted attributes, which price it).
  * On a full collapse the survivor's wedges take the attributes
  * interpolated along the edge at the target's projection parameter
  * (normals renormalised). The output keeps the split: one output vertex
@@ -42,6 +51,11 @@ typedef struct attr_ctx {
     bool lerp_normals, lerp_texcoords, lerp_colors; /* those interpolated */
     uint32_t *wedge;      /* with aq: a vertex's one wedge (no seam vertex's:
                              a vertex off the seams keeps its wedge) */
+    uint8_t *loose;       /* per vertex: a seam vertex off the open
+                             boundaries that no caller locked, which the
+                             last stage frees (attr_release) */
+    bool permissive;      /* that stage: loose vertices move off their
+                             seams, every wedge priced */
 } attr_ctx;
 
 
@@ -78,6 +92,15 @@ static bool seam_edge(const mr_simplifier *s, uint32_t a, uint32_t b, const uint
 
 static bool attr_valid(const mr_simplifier *s, uint32_t r, uint32_t k)
 {
+    const attr_ctx *a = s->attr;
+    if (a->permissive) {
+        /* a loose vertex goes onto another seam vertex (which stays one);
+         * any vertex may go onto a loose one */
+        if (a->loose[r])
+            return (s->m.flags[k] & MR_VF_SEAM) != 0;
+        if (a->loose[k])
+            return true;
+    }
     uint32_t et[2];
     uint32_t n = edge_tris(s, r, k, et);
     if (n != 2)
@@ -102,8 +125,39 @@ static void lerp_attr(float *a, const float *b, int n, double t, bool normalise)
     }
 }
 
+/* The wedges of u other than those of its corners on edge (u, w)'s
+ * triangles et[0..n): they go to w's wedge on et[0]'s side (attr_apply).
+ * Up to `cap` distinct ones into out; their count. */
+static uint32_t other_wedges(const mr_simplifier *s, uint32_t u, uint32_t w, const uint32_t *et,
+                             uint32_t n, uint32_t *out, uint32_t cap)
+{
+    const attr_ctx *a = s->attr;
+    const mr_collapse_mesh *m = &s->m;
+    uint32_t on_edge[2] = {NONE, NONE};
+    for (uint32_t j = 0; j < n; j++)
+        on_edge[j] = wedge_at(s, et[j], u);
+    const uint32_t *list = mr_collapse_vertex_tris(m, u);
+    uint32_t found = 0;
+    for (uint32_t i = 0; i < m->count[u] && found < cap; i++) {
+        const uint32_t c = list[i];
+        const uint32_t *tri = m->tris + (c - c % 3);
+        if (tri[0] == NONE || tri[0] == w || tri[1] == w || tri[2] == w)
+            continue;
+        const uint32_t x = a->corner[c];
+        bool seen = x == on_edge[0] || x == on_edge[1];
+        for (uint32_t f = 0; f < found && !seen; f++)
+            seen = out[f] == x;
+        if (!seen)
+            out[found++] = x;
+    }
+    return found;
+}
+
+#define MAX_OTHER_WEDGES 32
+
 /* The attributes' part of a collapse of edge (u, w) (the core's
- * attr_cost): each wedge of u with w's on the same side of the edge. */
+ * attr_cost): each wedge of u with w's on the same side of the edge; in
+ * the permissive stage, u's other wedges too, with w's on et[0]'s side. */
 static void attr_cost(const mr_simplifier *s, uint32_t u, uint32_t w, mr_quadric *q)
 {
     const attr_ctx *a = s->attr;
@@ -123,6 +177,13 @@ static void attr_cost(const mr_simplifier *s, uint32_t u, uint32_t w, mr_quadric
         mr_attr_pair_quadric(&a->aq, fa, tb, o, q);
         pa = fa;
         pb = tb;
+    }
+    if (a->permissive && n) {
+        uint32_t other[MAX_OTHER_WEDGES];
+        const uint32_t no = other_wedges(s, u, w, et, n, other, MAX_OTHER_WEDGES);
+        const uint32_t t0 = wedge_at(s, et[0], w);
+        for (uint32_t i = 0; i < no; i++)
+            mr_attr_pair_quadric(&a->aq, other[i], t0, o, q);
     }
 }
 
@@ -145,14 +206,22 @@ static void attr_apply(const mr_simplifier *s, uint32_t r, uint32_t k, const dou
         to[j] = wedge_at(s, et[j], k);
     }
     /* The weighted attributes: each pair's quadrics merged, the survivor's
-     * values at their best at the target. */
-    if (a->aq.channels)
+     * values at their best at the target (in the permissive stage, r's
+     * other wedges' into to[0] too). */
+    if (a->aq.channels) {
+        if (a->permissive && n) {
+            uint32_t other[MAX_OTHER_WEDGES];
+            const uint32_t no = other_wedges(s, r, k, et, n, other, MAX_OTHER_WEDGES);
+            for (uint32_t i = 0; i < no; i++)
+                mr_attr_merge(&a->aq, other[i], to[0]);
+        }
         for (uint32_t j = 0; j < n; j++) {
             if (j == 1 && from[1] == from[0] && to[1] == to[0])
                 break;
             mr_attr_merge(&a->aq, from[j], to[j]);
             mr_attr_place(&a->aq, to[j], target);
         }
+    }
     /* Interpolate the survivor's wedges at the target's place on the edge. */
     double pk[3], pr[3];
     mr_collapse_load(m, k, pk);
@@ -222,6 +291,9 @@ static size_t setup_seams(mr_simplifier *s)
         }
         if (w1 == NONE)
             continue;
+        /* free to leave its seam in the last stage: off the open
+         * boundaries, and locked by no caller */
+        a->loose[v] = !(m->flags[v] & (MR_VF_BOUNDARY | MR_VF_LOCKED));
         m->flags[v] |= MR_VF_SEAM;
         seam_vertices++;
         /* Count seam edges and add their constraint planes. */
@@ -259,6 +331,28 @@ static size_t setup_seams(mr_simplifier *s)
             m->flags[v] |= MR_VF_LOCKED;
     }
     return seam_vertices;
+}
+
+/* The last stage (the core's attr_release), when the run ends short of
+ * its targets with the seams kept: the loose seam vertices are freed --
+ * they may move off their seams, the wedges that lose their place priced
+ * by the attributes' quadrics -- as meshoptimizer's permissive mode frees
+ * its seam and complex vertices. Without weighted attributes nothing
+ * would price that: no stage. */
+static bool attr_release(mr_simplifier *s)
+{
+    attr_ctx *a = s->attr;
+    mr_collapse_mesh *m = &s->m;
+    if (a->permissive || !a->aq.channels)
+        return false;
+    size_t freed = 0;
+    for (size_t v = 0; v < m->vertex_count; v++)
+        if (a->loose[v] && !(m->flags[v] & MR_VF_REMOVED)) {
+            m->flags[v] &= (uint8_t)~MR_VF_LOCKED;
+            freed++;
+        }
+    a->permissive = freed > 0;
+    return a->permissive;
 }
 
 /* A seam's edge (mr_simplifier_mark_corners' polyline). */
@@ -312,6 +406,7 @@ static void free_ctx(attr_ctx *a)
     free(a->colors);
     mr_attr_quadrics_free(&a->aq);
     free(a->wedge);
+    free(a->loose);
 }
 
 static float *dup_floats(const float *src, size_t n)
@@ -509,6 +604,15 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         free(s.order);
         s.order = NULL;
     }
+    a.loose = mr_calloc_array(vc ? vc : 1, 1);
+    if (!a.loose) {
+        mr_simplify_discard(&s);
+        free(geo);
+        free(gidx);
+        free_ctx(&a);
+        geo_marks_free(&gm);
+        return mr_fail_nomem(err, NULL, vc);
+    }
     s.attr = &a;
     /* Without seams every geometric vertex has one wedge: the attribute
      * rules cannot refuse a collapse, and without attributes the only
@@ -520,6 +624,17 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         mr_simplifier_mark_corners(&s, MR_VF_SEAM, seam_line_edge);
     s.attr_valid = has_seams ? attr_valid : NULL;
     s.attr_apply = has_seams || has_attributes ? attr_apply : NULL;
+    s.attr_release = has_seams ? attr_release : NULL;
+    /* A collapse at a seam may turn a triangle by up to 90 degrees (or
+     * the options' limit where it is larger): a seam vertex slides only
+     * along its seam and a vertex that goes onto one takes its place, so
+     * such collapses turn their triangles more than free ones do, and at
+     * 60 degrees an atlas-heavy asset (the Khronos DamagedHelmet at 25 %)
+     * had its free regions collapsed instead, at four times the RMS. */
+    mr_collapse_limits seam_limits = s.limits;
+    if (seam_limits.min_cos_turn > 0)
+        seam_limits.min_cos_turn = 0;
+    s.seam_limits = has_seams ? &seam_limits : NULL;
     /* The weighted attributes in the cost (their quadrics from the
      * triangles as set up: before any collapse). */
     st = attr_cost_setup(&s, &a, in, &o, nth, err);
@@ -554,6 +669,8 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     a.wedge = NULL;
     s.attr_cost = NULL;
     s.attr_prefetch = NULL;
+    s.attr_release = NULL;
+    s.seam_limits = NULL; /* on this frame */
     float *before = NULL; /* a chunk's: where the collapses left the vertices */
     if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
         if (cm) {

@@ -112,15 +112,40 @@ void mr_simplify_discard(mr_simplifier *s)
 }
 
 /*
- * The strategy's run, in up to two stages. The first keeps the corners
- * (MR_VF_CORNER: may_go_onto's rule) in place; when it ends short of the
- * targets -- every other collapse within the error bound made or refused
- * -- the corners are released and the strategy goes on from there (with
- * its queue filled anew where its state went with the first stage), so a
- * corner moves only where the target cannot be reached without it.
- * Without corners (a closed mesh, ragged boundaries) the run is one
- * stage.
+ * The strategy's run, in up to three stages. The first keeps the corners
+ * (MR_VF_CORNER: may_go_onto's rule) in place and the attribute rules
+ * (mr_mesh_simplify's seams) whole. When it ends short of the targets --
+ * every other collapse within the error bound made or refused -- the
+ * corners are released and the strategy goes on from there (with its
+ * queue filled anew where its state went with the stage before); when
+ * that too ends short, the attribute rules are loosened (attr_release)
+ * and it goes on again. So a corner moves only where the target cannot
+ * be reached without moving it, and a seam vertex leaves its seam only
+ * where it cannot be reached with the seams. (The other order, seams
+ * before corners, gave the Khronos Fox at gltfpack's 10 % a Hausdorff
+ * distance 30 % larger.) A stage with nothing to release (no seams; a
+ * closed mesh or ragged boundaries: no corners) is left out.
  */
+static size_t next_stage(mr_simplifier *s, const mr_strategy_ops *run, double *worst)
+{
+    /* the lists clean for a fresh start (a lazy run leaves deleted
+     * triangles in them); no memory for it: the run ends there */
+    bool go = !run->one_run;
+    if (!go) {
+        mr_collapse_mesh *m = &s->m;
+        for (size_t v = 0; v < m->vertex_count; v++)
+            mr_collapse_clean(m, (uint32_t)v);
+        mr_error ignored;
+        go = run->start(s, &ignored) == MR_OK;
+    }
+    if (!go)
+        return 0;
+    double w2;
+    const size_t done = run->run(s, &w2);
+    *worst = w2 > *worst ? w2 : *worst;
+    return done;
+}
+
 size_t mr_simplify_run(mr_simplifier *s, double *max_error)
 {
     const mr_strategy_ops *run = mr_simplify_strategy(s);
@@ -128,22 +153,10 @@ size_t mr_simplify_run(mr_simplifier *s, double *max_error)
     size_t done = run->run(s, &worst);
     if (s->corners && !s->cancelled && !mr_simplifier_reached(s)) {
         mr_simplifier_release_corners(s);
-        /* the lists clean for a fresh start (a lazy run leaves deleted
-         * triangles in them); no memory for it: the run ends there */
-        bool go = !run->one_run;
-        if (!go) {
-            mr_collapse_mesh *m = &s->m;
-            for (size_t v = 0; v < m->vertex_count; v++)
-                mr_collapse_clean(m, (uint32_t)v);
-            mr_error ignored;
-            go = run->start(s, &ignored) == MR_OK;
-        }
-        if (go) {
-            double w2;
-            done += run->run(s, &w2);
-            worst = w2 > worst ? w2 : worst;
-        }
+        done += next_stage(s, run, &worst);
     }
+    if (s->attr_release && !s->cancelled && !mr_simplifier_reached(s) && s->attr_release(s))
+        done += next_stage(s, run, &worst);
     mr_simplifier_progress(s, 1.0);
     /* in the memoryless mode the costs are no distances */
     *max_error = mr_simplifier_error(s, s->memoryless ? mr_simplifier_vertex_error(s) : worst);

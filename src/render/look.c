@@ -321,6 +321,61 @@ static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
     return st;
 }
 
+/* ---- glTF: its materials, their base-colour textures decoded ---------------- */
+
+static mr_status gltf_look(const mr_gltf *g, const char *path, mr_look *look, mr_error *err)
+{
+    mr_gltf_material *gm = NULL;
+    size_t nm = 0, ni = 0;
+    mr_status st = mr_gltf_scene_look(g, &look->mesh, &look->face_material, &gm, &nm, &ni, err);
+    if (st == MR_OK && nm) {
+        look->materials = calloc(nm, sizeof *look->materials);
+        look->images = calloc(ni + 1, sizeof *look->images);
+        if (!look->materials || !look->images)
+            st = mr_fail_nomem(err, NULL, nm * sizeof *look->materials);
+        else {
+            look->material_count = nm;
+            look->image_count = ni;
+        }
+    }
+    for (size_t m = 0; st == MR_OK && m < nm; m++) {
+        mr_render_material *rm = &look->materials[m];
+        memcpy(rm->color, gm[m].color, sizeof rm->color);
+        rm->wrap_s = gm[m].wrap_s;
+        rm->wrap_t = gm[m].wrap_t;
+        rm->v_up = 1; /* the scene mesh's v points up */
+        const long long src = gm[m].image;
+        if (src < 0)
+            continue;
+        mr_image *im = &look->images[src];
+        if (!im->rgba) {
+            char what[96];
+            snprintf(what, sizeof what, "materials[%zu]'s base colour texture", m);
+            uint8_t *bytes;
+            size_t size;
+            bool owned;
+            st = mr_gltf_image(g, src, what, &bytes, &size, &owned, err);
+            if (st == MR_OK) {
+                char name[1200];
+                snprintf(name, sizeof name, "%.1000s: %s, images[%lld]", path, what, src);
+                st = mr_image_decode(bytes, size, name, im, err);
+            }
+            if (owned)
+                free(bytes);
+            if (st == MR_ERR_UNSUPPORTED) {
+                /* another image format, or one not built: the colour */
+                st = MR_OK;
+                mr_error_clear(err);
+                continue;
+            }
+        }
+        if (st == MR_OK)
+            rm->texture = im;
+    }
+    free(gm);
+    return st;
+}
+
 mr_status mr_look_read(const char *path, mr_look *look, mr_error *err)
 {
     mr_error_clear(err);
@@ -333,8 +388,10 @@ mr_status mr_look_read(const char *path, mr_look *look, mr_error *err)
         mr_gltf *g;
         st = mr_gltf_load_file(path, &g, err);
         if (st == MR_OK)
-            st = mr_gltf_scene_look(g, look, err);
+            st = gltf_look(g, path, look, err);
         mr_gltf_free(g);
+        if (st != MR_OK)
+            mr_look_free(look);
         return st;
     }
     st = mr_mesh_read(path, NULL, &look->mesh, err);
