@@ -94,6 +94,11 @@ static const char usage[] =
     "                        4 threads, 2 up to 8, 3 up to 16, 4 up to 32)\n"
     "  --multiqueue-factor C multiqueue: C heaps per thread (default 2)\n"
     "  --lock-border         never move boundary vertices\n"
+    "  --free-seams          let seam vertices leave their seams from the start,\n"
+    "                        priced by the attribute cost (meshoptimizer's\n"
+    "                        permissive mode; by default seams hold until the\n"
+    "                        target cannot be reached with them): better on\n"
+    "                        atlas-heavy assets\n"
     "  --prune               drop the disconnected pieces no larger than the error\n"
     "                        bound (--max-error, or the largest collapse error made;\n"
     "                        their bounding-box diagonal), never the largest piece\n"
@@ -424,6 +429,8 @@ static int option(int argc, char **argv, int *i, void *user)
         o->lock_border = 1;
     } else if (cli_flag(argc, argv, i, "--prune")) {
         o->prune = 1;
+    } else if (cli_flag(argc, argv, i, "--free-seams")) {
+        o->free_seams = 1;
     } else if (cli_value(argc, argv, i, "--lock", &v)) {
         if (!v || !*v)
             return cli_usage_error("simplify", "--lock needs a file of vertex indices");

@@ -336,6 +336,22 @@ static void test_atlas_release(void **state)
         tu_assert_mesh_equal(&out, &again);
         mr_mesh_free(&again);
     }
+    /* free from the start (free_seams): the target too, the same bytes
+     * at any thread count, and another path than the stages' */
+    mr_simplify_options of = o;
+    of.free_seams = 1;
+    mr_mesh freed;
+    assert_int_equal(mr_mesh_simplify(&m, &of, &freed, NULL, &st, NULL), MR_OK);
+    assert_true(st.target_reached);
+    assert_true(freed.triangle_count <= 200);
+    assert_true(freed.vertex_count != out.vertex_count ||
+                memcmp(freed.positions, out.positions, 12 * out.vertex_count) != 0);
+    of.threads = 3;
+    mr_mesh again;
+    assert_int_equal(mr_mesh_simplify(&m, &of, &again, NULL, NULL, NULL), MR_OK);
+    tu_assert_mesh_equal(&freed, &again);
+    mr_mesh_free(&again);
+    mr_mesh_free(&freed);
     mr_mesh_free(&strict);
     mr_mesh_free(&out);
     mr_mesh_free(&m);

@@ -651,6 +651,8 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
                 geo[v] = w;
         }
     }
+    if (st == MR_OK && o.free_seams && s.attr_release)
+        s.attr_release(&s); /* the seams free from the start */
     if (st == MR_OK)
         st = mr_simplifier_fill_queue(&s, err);
     if (st != MR_OK) {
