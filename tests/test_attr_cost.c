@@ -357,6 +357,107 @@ static void test_atlas_release(void **state)
     mr_mesh_free(&m);
 }
 
+/* A closed surface cut into a cube-map atlas: each triangle's island is
+ * the axis its normal points along most (six islands, planar UVs), its
+ * corners the wedges of (vertex, island) -- seams where three islands
+ * meet too. */
+static void cube_atlas(mr_generator kind, size_t triangles, mr_mesh *out)
+{
+    mr_mesh g;
+    mr_mesh_init(&g);
+    assert_int_equal(mr_generate(kind, triangles, 7, &g, NULL), MR_OK);
+    const size_t nv = g.vertex_count, nt = g.triangle_count;
+    uint32_t *wedge = malloc(6 * nv * sizeof *wedge);
+    assert_non_null(wedge);
+    for (size_t i = 0; i < 6 * nv; i++)
+        wedge[i] = UINT32_MAX;
+    uint8_t *island = malloc(nt);
+    size_t count = 0;
+    for (size_t t = 0; t < nt; t++) {
+        const float *a = g.positions + 3 * g.indices[3 * t], *b = g.positions + 3 * g.indices[3 * t + 1],
+                    *c = g.positions + 3 * g.indices[3 * t + 2];
+        double n[3], u[3], w[3];
+        for (int k = 0; k < 3; k++) {
+            u[k] = b[k] - a[k];
+            w[k] = c[k] - a[k];
+        }
+        n[0] = u[1] * w[2] - u[2] * w[1];
+        n[1] = u[2] * w[0] - u[0] * w[2];
+        n[2] = u[0] * w[1] - u[1] * w[0];
+        int axis = 0;
+        for (int k = 1; k < 3; k++)
+            if (fabs(n[k]) > fabs(n[axis]))
+                axis = k;
+        island[t] = (uint8_t)(2 * axis + (n[axis] < 0));
+        for (int k = 0; k < 3; k++) {
+            uint32_t *x = &wedge[6 * (size_t)g.indices[3 * t + (size_t)k] + island[t]];
+            if (*x == UINT32_MAX)
+                *x = (uint32_t)count++;
+        }
+    }
+    mr_mesh_init(out);
+    assert_int_equal(mr_mesh_alloc(out, count, nt, MR_ATTR_TEXCOORDS, NULL), MR_OK);
+    for (size_t v = 0; v < nv; v++)
+        for (int i = 0; i < 6; i++) {
+            const uint32_t x = wedge[6 * v + (size_t)i];
+            if (x == UINT32_MAX)
+                continue;
+            memcpy(out->positions + 3 * (size_t)x, g.positions + 3 * v, 12);
+            /* the island's plane, placed in its cell of a 3 x 2 atlas */
+            const int axis = i / 2, s = (axis + 1) % 3, r = (axis + 2) % 3;
+            const float *p = g.positions + 3 * v;
+            out->texcoords[2 * (size_t)x] = (float)((i % 3) + 0.5 + 0.4 * p[s] / 80.0) / 3.0f;
+            out->texcoords[2 * (size_t)x + 1] = (float)((i / 3) + 0.5 + 0.4 * p[r] / 80.0) / 2.0f;
+        }
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 3; k++)
+            out->indices[3 * t + (size_t)k] = wedge[6 * (size_t)g.indices[3 * t + (size_t)k] + island[t]];
+    free(wedge);
+    free(island);
+    mr_mesh_free(&g);
+}
+
+/* A closed genus-0 surface stays closed, manifold and of genus 0 through
+ * the attribute path, with the seams held, freed in the last stage, or
+ * free from the start. */
+static void test_closed_atlas(void **state)
+{
+    (void)state;
+    mr_mesh m;
+    cube_atlas(MR_GEN_SCAN, 20000, &m);
+    mr_stats in;
+    assert_int_equal(mr_stats_compute(m.positions, 0, m.vertex_count, m.indices, m.triangle_count,
+                                      &in, NULL),
+                     MR_OK);
+    assert_true(in.closed && in.manifold);
+    assert_true(in.split_vertices > 0);
+    const size_t targets[] = {2000, 150};
+    for (int free_seams = 0; free_seams < 2; free_seams++)
+        for (size_t i = 0; i < 2; i++) {
+            mr_simplify_options o;
+            mr_simplify_options_default(&o);
+            o.target_triangles = targets[i];
+            o.free_seams = free_seams;
+            mr_mesh out;
+            mr_simplify_stats st;
+            assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);
+            mr_stats s;
+            assert_int_equal(mr_stats_compute(out.positions, 0, out.vertex_count, out.indices,
+                                              out.triangle_count, &s, NULL),
+                             MR_OK);
+            print_message("cube atlas to %zu (free seams %d): %zu triangles, closed %d, "
+                          "manifold %d, euler %lld\n",
+                          targets[i], free_seams, out.triangle_count, s.closed, s.manifold,
+                          s.euler_characteristic);
+            assert_true(s.closed);
+            assert_true(s.manifold);
+            assert_int_equal(s.euler_characteristic, in.euler_characteristic);
+            assert_true(out.triangle_count <= targets[i] + 2);
+            mr_mesh_free(&out);
+        }
+    mr_mesh_free(&m);
+}
+
 /* The same bytes at 1, 2, 3 and 8 threads, for each deterministic
  * strategy: a grid above the 65,536 vertices and triangles from which the
  * records' build and the strategies' loops run on several threads (under
@@ -458,6 +559,7 @@ int main(void)
         cmocka_unit_test(test_uv_seamed_grid),
         cmocka_unit_test(test_threads),
         cmocka_unit_test(test_atlas_release),
+        cmocka_unit_test(test_closed_atlas),
         cmocka_unit_test(test_bad_weights),
         cmocka_unit_test(test_cli),
     };

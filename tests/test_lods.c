@@ -43,6 +43,14 @@ static void test_chain(void **state)
             assert_true(l->hausdorff_rel > 0 && l->rms_rel > 0 &&
                         l->rms_rel <= l->hausdorff_rel);
             worst = fmax(worst, l->hausdorff_rel);
+            /* the closed genus-0 scan stays closed and manifold, genus 0 */
+            mr_stats st;
+            assert_int_equal(mr_stats_compute(l->mesh.positions, 0, l->mesh.vertex_count,
+                                              l->mesh.indices, l->mesh.triangle_count, &st,
+                                              NULL),
+                             MR_OK);
+            assert_true(st.closed && st.manifold);
+            assert_int_equal(st.euler_characteristic, 2);
             assert_true(l->error_rel == worst);
             if (k)
                 assert_true(l->error_rel >= lv[k - 1].error_rel);
