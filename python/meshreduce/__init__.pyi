@@ -105,6 +105,7 @@ def simplify(
     quality: Literal["default", "best"] = ...,
     partitions: int = ...,
     attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
+    free_seams: bool = ...,
 ) -> Result: ...
 def simplify_lods(
     vertices: _Floats,
@@ -152,6 +153,7 @@ def simplify_file(
     temp_dir: Optional[_Path] = ...,
     temp_budget: Optional[int] = ...,
     attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
+    free_seams: bool = ...,
 ) -> dict[str, Any]: ...
 def read(path: _Path, *, format: Optional[str] = ..., threads: int = ...) -> Mesh: ...
 def write(

@@ -443,6 +443,20 @@ def test_attribute_weights_match_cli(tmp_path):
 
 @needs_cli
 @pytest.mark.skipif(not os.path.exists(SPOT), reason=SPOT + " absent")
+def test_free_seams_match_cli(tmp_path):
+    # free_seams=True is --free-seams: the same bytes, and other bytes than
+    # the seams held (spot's seams give way at 2 %)
+    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.02", "--free-seams"],
+                           ratio=0.02, free_seams=True)
+    assert_same(tmp_path, out, r)
+    free = r.vertices.copy()
+    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.02"], ratio=0.02)
+    assert_same(tmp_path, out, r)
+    assert free.shape != r.vertices.shape or not np.array_equal(free, r.vertices)
+
+
+@needs_cli
+@pytest.mark.skipif(not os.path.exists(SPOT), reason=SPOT + " absent")
 def test_lods_match_cli(tmp_path):
     # simplify_lods gives `simplify --lods`'s levels: the same bytes, the
     # same distances, errors never decreasing, origins into the input
