@@ -398,6 +398,31 @@ int cli_run_job(const cli_io *io, const cli_job *job, void *user)
     return rc;
 }
 
+int cli_obj_materials(const cli_io *io, mr_obj_materials *m)
+{
+    memset(m, 0, sizeof *m);
+    const mr_format out = io->write.format != MR_FORMAT_AUTO ? io->write.format
+                                                              : mr_format_from_path(io->out);
+    if (!io->in || mr_format_from_path(io->in) != MR_FORMAT_OBJ || out != MR_FORMAT_OBJ)
+        return CLI_OK;
+    mr_error err;
+    if (mr_obj_materials_read(io->in, m, &err) != MR_OK)
+        return cli_fail_err(&err);
+    if (!m->face_material) /* no usemtl: nothing to keep but the library line */
+        m->count = 0;
+    return CLI_OK;
+}
+
+void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m,
+                           const uint32_t *face_material)
+{
+    const bool on = face_material && m->count;
+    w->mtllib = on ? m->mtllib : NULL;
+    w->material_names = on ? (const char *const *)m->names : NULL;
+    w->material_count = on ? m->count : 0;
+    w->face_material = on ? face_material : NULL;
+}
+
 void cli_summary(const char *out, size_t vertices, size_t triangles, const char *fmt, ...)
 {
     char a[32], b[32], detail[256];

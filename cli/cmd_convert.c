@@ -53,6 +53,8 @@ typedef struct clean_job {
     bool clean; /* run the steps; else the mesh is written as read */
     cli_choice weld_option; /* --no-weld and --weld-attributes exclude each other */
     clean_counts counts;
+    mr_obj_materials mats;  /* an OBJ into an OBJ: its materials (convert) */
+    mr_write_options *write; /* where they go: the io's write options */
 } clean_job;
 
 /* The attributes the output leaves out (--no-normals, --no-texcoords,
@@ -92,6 +94,9 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     if (rc == CLI_OK) {
         *result = *mesh;
         mr_mesh_init(mesh);
+        /* the usemtl groups, face for face as read */
+        if (job->write && job->mats.count && job->mats.triangle_count == result->triangle_count)
+            cli_obj_materials_use(job->write, &job->mats, job->mats.face_material);
     }
     return rc;
 }
@@ -158,7 +163,15 @@ static int run_convert(int argc, char **argv)
                     io.out, prims, prims == 1 ? "" : "s", cli_now() - t0);
         return CLI_OK;
     }
-    return rc == CLI_OK ? cli_run_job(&io, &clean_and_write, &job) : rc;
+    /* an OBJ into an OBJ keeps its mtllib and usemtl groups (the faces
+     * as read; --clean drops triangles, and the groups with them) */
+    if (rc == CLI_OK && !job.clean)
+        rc = cli_obj_materials(&io, &job.mats);
+    job.write = &io.write;
+    if (rc == CLI_OK)
+        rc = cli_run_job(&io, &clean_and_write, &job);
+    mr_obj_materials_free(&job.mats);
+    return rc;
 }
 
 static const char clean_usage[] =

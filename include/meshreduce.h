@@ -149,7 +149,35 @@ typedef struct mr_write_options {
     int write_normals;     /* write the normals when the mesh has them (1) */
     int write_texcoords;   /* likewise for texture coordinates (1) */
     int write_colors;      /* likewise for colors (1) */
+    /* OBJ only: its materials (all NULL/0 by default: none written). An
+     * `mtllib` line with `mtllib` (the library file names, as the input's
+     * mtllib lines gave them), and a `usemtl NAME` line before each run
+     * of faces of one material: face_material[t] indexes
+     * material_names (UINT32_MAX: no material; such faces go first, as
+     * OBJ cannot switch back to none). */
+    const char *mtllib;
+    const char *const *material_names;
+    size_t material_count;
+    const uint32_t *face_material;
 } mr_write_options;
+
+/* An OBJ file's materials: its mtllib lines' file names and each
+ * triangle's usemtl (a face line of n corners is n - 2 triangles, in file
+ * order, as mr_mesh_read reads them). */
+typedef struct mr_obj_materials {
+    char *mtllib;             /* the mtllib lines' file names, blank-separated,
+                                 or NULL */
+    char **names;             /* the usemtl names, in order of first use */
+    size_t count;
+    uint32_t *face_material;  /* triangle_count: an index into names, or
+                                 UINT32_MAX before any usemtl */
+    size_t triangle_count;
+} mr_obj_materials;
+
+/* Read an OBJ file's materials (a pass over its lines; no mesh). An OBJ
+ * without usemtl lines gives count 0 and a NULL face_material. */
+mr_status mr_obj_materials_read(const char *path, mr_obj_materials *materials, mr_error *err);
+void mr_obj_materials_free(mr_obj_materials *materials);
 
 void mr_read_options_default(mr_read_options *options);
 void mr_write_options_default(mr_write_options *options);
@@ -1303,8 +1331,11 @@ mr_status mr_render_sheet(const mr_sheet_panel *panels, size_t panel_count,
  * it as its file shows it: for glTF, each triangle's material (its
  * primitive's baseColorFactor and baseColorTexture with the texture's
  * sampler; texture coordinates kept where any primitive has them, zero
- * elsewhere; COLOR_0 converted to display values); for OBJ, each face's
- * `usemtl` material from the `mtllib` files (Kd, d and map_Kd). Images
+ * elsewhere; COLOR_0 converted to display values; the materials in the
+ * document's order); for OBJ, each face's `usemtl` material from the
+ * `mtllib` files (Kd and map_Kd; the materials in the order of the
+ * usemtl names, mr_obj_materials_read's, and a face whose name no
+ * library defines is plain). Images
  * are PNG or JPEG, read relative to the file's folder (glTF: also
  * data: URIs and the .glb's buffer). Other formats (and an OBJ without
  * mtllib) have no materials: vertex colours only, where present.

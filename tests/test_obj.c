@@ -1060,6 +1060,100 @@ static void test_bunny(void **state)
     mr_mesh_free(&m);
 }
 
+/* An OBJ's mtllib and usemtl groups through simplify and convert: a
+ * sphere whose upper half is material "top" and lower half "bottom" (the
+ * faces interleaved in the file, a few before any usemtl) keeps both
+ * groups, one usemtl line each, the material border where it was (every
+ * "top" triangle above the equator, every "bottom" one below), and stays
+ * closed; convert keeps the groups face for face. */
+static void test_materials_kept(void **state)
+{
+    (void)state;
+    mr_mesh g;
+    mr_mesh_init(&g);
+    assert_int_equal(mr_generate(MR_GEN_SPHERE, 5000, 0, &g, NULL), MR_OK);
+    const char *in = tu_tmp_path("mat-sphere.obj"), *out = tu_tmp_path("mat-sphere-10.obj"),
+               *conv = tu_tmp_path("mat-sphere-conv.obj");
+    FILE *f = fopen(in, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib mat.mtl\n");
+    for (size_t v = 0; v < g.vertex_count; v++)
+        fprintf(f, "v %.9g %.9g %.9g\n", g.positions[3 * v], g.positions[3 * v + 1],
+                g.positions[3 * v + 2]);
+    /* the material of a face: its centroid's side of the equator (y) */
+    int last = -1;
+    size_t loose = 0;
+    for (size_t t = 0; t < g.triangle_count; t++) {
+        const uint32_t *tri = g.indices + 3 * t;
+        const double y = g.positions[3 * tri[0] + 1] + g.positions[3 * tri[1] + 1] +
+                         g.positions[3 * tri[2] + 1];
+        const int top = y > 0;
+        if (t >= 3 && top != last) {
+            fprintf(f, "usemtl %s\n", top ? "top" : "bottom");
+            last = top;
+        } else if (t < 3) {
+            loose++; /* before any usemtl: no material (all on one side?) */
+        }
+        fprintf(f, "f %u %u %u\n", tri[0] + 1, tri[1] + 1, tri[2] + 1);
+    }
+    fclose(f);
+    (void)loose;
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 10%% -q", in, out), NULL),
+                     0);
+    mr_obj_materials om;
+    mr_error err;
+    assert_int_equal(mr_obj_materials_read(out, &om, &err), MR_OK);
+    assert_non_null(om.mtllib);
+    assert_string_equal(om.mtllib, "mat.mtl");
+    assert_int_equal(om.count, 2);
+    mr_mesh m;
+    assert_int_equal(mr_mesh_read(out, NULL, &m, &err), MR_OK);
+    assert_int_equal(om.triangle_count, m.triangle_count);
+    /* one run per material (none first), and the border kept */
+    char *text = tu_read_file(out, NULL);
+    size_t lines = 0;
+    for (const char *p = text; (p = strstr(p, "usemtl ")) != NULL; p++)
+        lines++;
+    free(text);
+    assert_int_equal(lines, 2);
+    size_t none = 0;
+    for (size_t t = 0; t < m.triangle_count; t++) {
+        const uint32_t gi = om.face_material[t];
+        if (gi == UINT32_MAX) {
+            assert_int_equal(none, t); /* the ungrouped ones first */
+            none++;
+            continue;
+        }
+        const bool top = !strcmp(om.names[gi], "top");
+        for (int k = 0; k < 3; k++) {
+            const float y = m.positions[3 * m.indices[3 * t + (size_t)k] + 1];
+            assert_true(top ? y > -0.05f : y < 0.05f);
+        }
+    }
+    mr_stats st;
+    assert_int_equal(mr_stats_compute(m.positions, 0, m.vertex_count, m.indices,
+                                      m.triangle_count, &st, NULL),
+                     MR_OK);
+    assert_true(st.closed && st.manifold);
+    mr_mesh_free(&m);
+    mr_obj_materials_free(&om);
+
+    /* convert: face for face */
+    assert_int_equal(tu_run_cli(tu_fmt("convert '%s' '%s' -q", in, conv), NULL), 0);
+    mr_obj_materials a, b;
+    assert_int_equal(mr_obj_materials_read(in, &a, &err), MR_OK);
+    assert_int_equal(mr_obj_materials_read(conv, &b, &err), MR_OK);
+    assert_int_equal(a.count, b.count);
+    assert_int_equal(a.triangle_count, b.triangle_count);
+    for (size_t t = 0; t < a.triangle_count; t++) {
+        const uint32_t x = a.face_material[t], y = b.face_material[t];
+        assert_true(x == UINT32_MAX ? y == UINT32_MAX : !strcmp(a.names[x], b.names[y]));
+    }
+    mr_obj_materials_free(&a);
+    mr_obj_materials_free(&b);
+    mr_mesh_free(&g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1097,6 +1191,7 @@ int main(void)
         cmocka_unit_test(test_beast),
         cmocka_unit_test(test_spot),
         cmocka_unit_test(test_bunny),
+        cmocka_unit_test(test_materials_kept),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

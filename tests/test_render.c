@@ -1038,17 +1038,19 @@ static void test_obj_look(void **state)
     mr_error err;
     assert_int_equal(mr_look_read(obj, &look, &err), MR_OK);
     assert_int_equal(look.mesh.triangle_count, 5);
-    assert_int_equal(look.material_count, 2);
+    /* the materials in the order of the usemtl names: photo, nothing
+     * (no library defines it: its faces plain), plain */
+    assert_int_equal(look.material_count, 3);
     assert_non_null(look.face_material);
-    const uint32_t want[5] = {UINT32_MAX, 1, 1, UINT32_MAX, 0};
+    const uint32_t want[5] = {UINT32_MAX, 0, 0, UINT32_MAX, 2};
     for (int i = 0; i < 5; i++)
         assert_int_equal(look.face_material[i], want[i]);
-    assert_float_equal(look.materials[0].color[1], 0.4, 1e-6);
-    assert_null(look.materials[0].texture);
-    assert_non_null(look.materials[1].texture);
-    assert_int_equal(look.materials[1].texture->width, 16);
-    assert_int_equal(look.materials[1].wrap_s, MR_WRAP_CLAMP);
-    assert_int_equal(look.materials[1].v_up, 1);
+    assert_float_equal(look.materials[2].color[1], 0.4, 1e-6);
+    assert_null(look.materials[2].texture);
+    assert_non_null(look.materials[0].texture);
+    assert_int_equal(look.materials[0].texture->width, 16);
+    assert_int_equal(look.materials[0].wrap_s, MR_WRAP_CLAMP);
+    assert_int_equal(look.materials[0].v_up, 1);
     mr_look_free(&look);
 
     /* a texture file missing: an error naming the material and the file */

@@ -889,6 +889,7 @@ mr_status mr_read_obj(const char *data, size_t size, const char *name, int threa
 typedef struct obj_writer {
     const mr_mesh *m;
     bool normals, texcoords, colors;
+    const mr_write_options *o; /* its materials */
 } obj_writer;
 
 typedef size_t (*format_fn)(const obj_writer *w, size_t first, size_t count, char *out);
@@ -945,10 +946,31 @@ static size_t format_vn(const obj_writer *w, size_t first, size_t count, char *o
     return (size_t)(p - out);
 }
 
+/* Face i's material, or UINT32_MAX. */
+static uint32_t face_group(const obj_writer *w, size_t i)
+{
+    const mr_write_options *o = w->o;
+    if (!o->face_material || !o->material_names)
+        return UINT32_MAX;
+    const uint32_t g = o->face_material[i];
+    return g < o->material_count ? g : UINT32_MAX;
+}
+
 static size_t format_f(const obj_writer *w, size_t first, size_t count, char *out)
 {
     char *p = out;
     for (size_t i = first; i < first + count; i++) {
+        /* a usemtl line where the material changes (decided from the
+         * faces alone: the same lines whatever the blocks) */
+        const uint32_t g = face_group(w, i);
+        if (g != UINT32_MAX && (i == 0 || face_group(w, i - 1) != g)) {
+            const char *name = w->o->material_names[g];
+            const size_t n = strlen(name);
+            memcpy(p, "usemtl ", 7);
+            memcpy(p + 7, name, n);
+            p += 7 + n;
+            *p++ = '\n';
+        }
         *p++ = 'f';
         for (int k = 0; k < 3; k++) {
             /* attributes are per vertex: the same index for v, vt, vn */
@@ -1001,6 +1023,9 @@ static mr_status write_all(FILE *f, const obj_writer *w, char **bufs, int nbuf,
                      mr_version(), m->vertex_count, m->triangle_count);
     if (fwrite(head, 1, (size_t)n, f) != (size_t)n)
         return mr_fail_write(err, name, errno);
+    if (w->o->mtllib && w->o->mtllib[0] &&
+        fprintf(f, "mtllib %s\n", w->o->mtllib) < 0)
+        return mr_fail_write(err, name, errno);
     mr_status st = write_section(f, w, m->vertex_count, format_v, bufs, nbuf, name, err);
     if (st == MR_OK && w->texcoords)
         st = write_section(f, w, m->vertex_count, format_vt, bufs, nbuf, name, err);
@@ -1021,7 +1046,17 @@ mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
     }
     obj_writer w = {mesh, options->write_normals && mesh->normals,
                     options->write_texcoords && mesh->texcoords,
-                    options->write_colors && mesh->colors};
+                    options->write_colors && mesh->colors, options};
+    /* a face line may follow a usemtl line: room for the longest name */
+    size_t longest = 0;
+    for (size_t i = 0; options->face_material && options->material_names &&
+                       i < options->material_count; i++) {
+        const size_t n = options->material_names[i] ? strlen(options->material_names[i]) : 0;
+        if (!options->material_names[i] || memchr(options->material_names[i], '\n', n))
+            return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, name,
+                                 "material %zu has no name, or a line break in it", i);
+        longest = n > longest ? n : longest;
+    }
 
     size_t elements = mesh->vertex_count > mesh->triangle_count ? mesh->vertex_count
                                                                 : mesh->triangle_count;
@@ -1033,7 +1068,7 @@ mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
         nbuf = blocks ? (int)blocks : 1;
 
     char *bufs[OBJ_WRITE_MAX_THREADS] = {0};
-    const size_t bufsize = (size_t)OBJ_WRITE_BLOCK * OBJ_WRITE_MAX_LINE;
+    const size_t bufsize = (size_t)OBJ_WRITE_BLOCK * (OBJ_WRITE_MAX_LINE + longest + 8);
     mr_status st = MR_OK;
     for (int i = 0; i < nbuf && st == MR_OK; i++)
         if (!(bufs[i] = malloc(bufsize)))

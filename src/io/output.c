@@ -27,6 +27,7 @@ void mr_read_options_default(mr_read_options *options)
 
 void mr_write_options_default(mr_write_options *options)
 {
+    memset(options, 0, sizeof *options); /* no materials */
     options->format = MR_FORMAT_AUTO;
     options->encoding = MR_ENCODING_DEFAULT;
     options->write_normals = 1;

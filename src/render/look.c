@@ -199,112 +199,72 @@ static mr_status read_mtl(const char *path, mat_list *ml, mr_error *err)
     return st;
 }
 
-static long find_mat(const mat_list *ml, const char *s, const char *e)
+static long find_mat(const mat_list *ml, const char *name)
 {
     /* the last definition of a name wins, as later libraries override */
     for (size_t i = ml->n; i-- > 0;)
-        if (strlen(ml->m[i].name) == (size_t)(e - s) && !memcmp(ml->m[i].name, s, (size_t)(e - s)))
+        if (!strcmp(ml->m[i].name, name))
             return (long)i;
     return -1;
 }
 
-/* Corners of a face line's rest (tokens up to a '#'). */
-static size_t corner_count(const char *s, const char *e)
-{
-    size_t n = 0;
-    bool blank = true;
-    for (; s < e && *s != '#'; s++) {
-        bool b = isspace((unsigned char)*s);
-        n += blank && !b;
-        blank = b;
-    }
-    return n;
-}
-
 static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
 {
-    mr_mapped_file f;
-    mr_status st = mr_map_file(path, &f, err);
+    mr_obj_materials om;
+    mr_status st = mr_obj_materials_read(path, &om, err);
     if (st != MR_OK)
         return st;
     char dir[NAME_MAX_LEN];
     dir_of(path, dir, sizeof dir);
     mat_list ml = {NULL, 0, 0};
-    /* pass 1: the libraries */
-    for (const char *p = f.data, *end = f.data + f.size; p < end && st == MR_OK;) {
-        const char *e = memchr(p, '\n', (size_t)(end - p));
-        e = e ? e : end;
-        const char *s = p, *le = e, *rest;
-        p = e + 1;
-        trim(&s, &le);
-        if (!keyword(s, le, "mtllib", &rest))
-            continue;
-        /* several names, blank-separated */
-        for (const char *t = rest; t < le && st == MR_OK;) {
-            const char *te = t;
-            while (te < le && !isspace((unsigned char)*te))
-                te++;
-            char lib[NAME_MAX_LEN * 2];
-            if (!join_path(dir, t, te, lib, sizeof lib))
-                st = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path, "mtllib path too long");
-            else
-                st = read_mtl(lib, &ml, err);
-            if (st != MR_OK)
-                st = rewrap(err, st, path, "its material library");
-            t = te;
-            while (t < le && isspace((unsigned char)*t))
-                t++;
-        }
+    /* the libraries, blank-separated */
+    for (const char *t = om.mtllib; t && *t && st == MR_OK;) {
+        const char *te = t;
+        while (*te && !isspace((unsigned char)*te))
+            te++;
+        char lib[NAME_MAX_LEN * 2];
+        if (!join_path(dir, t, te, lib, sizeof lib))
+            st = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path, "mtllib path too long");
+        else
+            st = read_mtl(lib, &ml, err);
+        if (st != MR_OK)
+            st = rewrap(err, st, path, "its material library");
+        t = te;
+        while (*t && isspace((unsigned char)*t))
+            t++;
     }
     const size_t nt = look->mesh.triangle_count;
-    if (st == MR_OK && ml.n) {
+    /* each usemtl name's definition; faces of a name no library defines
+     * are plain (and faces that do not line up with the reader's: all) */
+    long *def = NULL;
+    if (st == MR_OK && om.face_material && om.triangle_count == nt && om.count) {
+        def = malloc(om.count * sizeof *def);
         look->face_material = malloc((nt ? nt : 1) * sizeof *look->face_material);
-        if (!look->face_material)
+        look->materials = calloc(om.count, sizeof *look->materials);
+        look->images = calloc(om.count, sizeof *look->images);
+        if (!def || !look->face_material || !look->materials || !look->images)
             st = mr_fail_nomem(err, path, nt * sizeof *look->face_material);
-    }
-    /* pass 2: each face's usemtl, as the reader's triangles (a fan of
-     * corners - 2 per face line, in file order) */
-    size_t t = 0;
-    uint32_t cur = UINT32_MAX;
-    for (const char *p = f.data, *end = f.data + f.size;
-         look->face_material && p < end && st == MR_OK;) {
-        const char *e = memchr(p, '\n', (size_t)(end - p));
-        e = e ? e : end;
-        const char *s = p, *le = e, *rest;
-        p = e + 1;
-        trim(&s, &le);
-        if (keyword(s, le, "usemtl", &rest)) {
-            long m = find_mat(&ml, rest, le);
-            cur = m >= 0 ? (uint32_t)m : UINT32_MAX;
-        } else if (keyword(s, le, "f", &rest)) {
-            size_t c = corner_count(rest, le);
-            for (size_t k = 2; k < c && t < nt; k++)
-                look->face_material[t++] = cur;
-        }
-    }
-    mr_unmap_file(&f);
-    if (st == MR_OK && look->face_material && t != nt) {
-        /* the faces did not line up with the reader's: no materials */
-        free(look->face_material);
-        look->face_material = NULL;
-        ml.n = 0;
-    }
-    if (st == MR_OK && ml.n) {
-        look->materials = calloc(ml.n, sizeof *look->materials);
-        look->images = calloc(ml.n, sizeof *look->images);
-        if (!look->materials || !look->images)
-            st = mr_fail_nomem(err, path, ml.n * sizeof *look->materials);
         else
-            look->material_count = look->image_count = ml.n;
+            look->material_count = look->image_count = om.count;
     }
-    for (size_t i = 0; st == MR_OK && i < look->material_count; i++) {
-        mr_render_material *rm = &look->materials[i];
-        memcpy(rm->color, ml.m[i].color, sizeof rm->color);
-        rm->wrap_s = rm->wrap_t = ml.m[i].wrap;
+    for (size_t g = 0; st == MR_OK && g < look->material_count; g++)
+        def[g] = find_mat(&ml, om.names[g]);
+    for (size_t t = 0; st == MR_OK && look->face_material && t < nt; t++) {
+        const uint32_t g = om.face_material[t];
+        look->face_material[t] = g != UINT32_MAX && def[g] >= 0 ? g : UINT32_MAX;
+    }
+    for (size_t g = 0; st == MR_OK && g < look->material_count; g++) {
+        mr_render_material *rm = &look->materials[g];
         rm->v_up = 1;
-        if (!ml.m[i].texture[0] || !look->mesh.texcoords)
+        rm->color[0] = rm->color[1] = rm->color[2] = rm->color[3] = 1;
+        if (def[g] < 0)
             continue;
-        st = mr_image_read(ml.m[i].texture, &look->images[i], err);
+        const obj_mat *d = &ml.m[def[g]];
+        memcpy(rm->color, d->color, sizeof rm->color);
+        rm->wrap_s = rm->wrap_t = d->wrap;
+        if (!d->texture[0] || !look->mesh.texcoords)
+            continue;
+        st = mr_image_read(d->texture, &look->images[g], err);
         if (st == MR_ERR_UNSUPPORTED) {
             st = MR_OK; /* another image format, or one not built: the colour */
             mr_error_clear(err);
@@ -312,12 +272,15 @@ static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
         }
         if (st != MR_OK) {
             char prefix[NAME_MAX_LEN + 40];
-            snprintf(prefix, sizeof prefix, "material '%s': its texture", ml.m[i].name);
+            snprintf(prefix, sizeof prefix, "material '%s': its texture", d->name);
             st = rewrap(err, st, path, prefix);
-        } else
-            rm->texture = &look->images[i];
+        } else {
+            rm->texture = &look->images[g];
+        }
     }
+    free(def);
     free(ml.m);
+    mr_obj_materials_free(&om);
     return st;
 }
 
