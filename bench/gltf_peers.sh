@@ -8,7 +8,11 @@
 #
 #   bench/gltf_peers.sh NODE_MODULES [RATIO] [RUNS] [FILE...]
 #
-# NODE_MODULES: where `npm install gltfpack@1.3` put it. gltfpack runs with
+# NODE_MODULES: where `npm install gltfpack@1.3` put it (and, for a third
+# row, `npm install meshoptimizer@1.3`: its simplifyWithAttributes through
+# bench/meshopt_attributes.mjs on the model as OBJ, normals 0.5 and UVs 1,
+# at the same count; its time includes reading the OBJ text in JavaScript
+# and is not comparable). gltfpack runs with
 # -noq (no quantisation), -kn -km -ke (nodes, materials and extras kept),
 # -si RATIO and -se 1 (no error limit: the ratio is the target, as for
 # meshreduce). FILE...: default, the .glb sample models of
@@ -16,7 +20,8 @@
 # (MR_CLI to change it), at its default threads. With MR_SHEETS=DIR, each
 # model's render sheet (input, gltfpack's, meshreduce's; textured, from one
 # camera, each captioned with its distance to the input) goes to
-# DIR/MODEL.png.
+# DIR/MODEL.png. MR_ARGS adds options to meshreduce's runs (e.g.
+# MR_ARGS=--free-seams).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 modules=${1:?usage: gltf_peers.sh NODE_MODULES [RATIO] [RUNS] [FILE...]}
@@ -58,7 +63,7 @@ for f in "${files[@]}"; do
                 node "$gp" -i "$f" -o "$work/gp.glb" -noq -kn -km -ke -si "$ratio" -se 1 >/dev/null 2>&1
                 tg+=("$(echo "$(now) - $t0" | bc)")
             else
-                "$mr" simplify "$f" -o "$work/mr.glb" --triangles "$tris" -q 2>/dev/null
+                "$mr" simplify "$f" -o "$work/mr.glb" --triangles "$tris" ${MR_ARGS:-} -q 2>/dev/null
                 tm+=("$(echo "$(now) - $t0" | bc)")
             fi
         done
@@ -73,6 +78,21 @@ for f in "${files[@]}"; do
             "$(field "$work/$tool.json" normal_rms_degrees)" \
             "$(pct "$(field "$work/$tool.json" texture_rms_rel)")"
     done
+    if [ -f "$modules/meshoptimizer/index.js" ] && "$mr" convert "$f" "$work/in.obj" -q 2>/dev/null &&
+        grep -q '^vn ' "$work/in.obj" && grep -q '^vt ' "$work/in.obj"; then
+        t0=$(now)
+        if node "$here/bench/meshopt_attributes.mjs" "$modules" "$work/in.obj" "$tris" \
+            "$work/mo.obj" >/dev/null 2>&1; then
+            t=$(echo "$(now) - $t0" | bc)
+            "$mr" compare "$f" "$work/mo.obj" --json > "$work/mo.json"
+            mine=$("$mr" info "$work/mo.obj" --json | $py -c "import json,sys; print(json.load(sys.stdin)['triangles'])")
+            printf '%-22s %-10s %9s %8.3f %9.4f %9.4f %9.3f %10.4f\n' "$name" meshopt "$mine" "$t" \
+                "$(pct "$(field "$work/mo.json" rms_rel)")" \
+                "$(pct "$(field "$work/mo.json" hausdorff_rel)")" \
+                "$(field "$work/mo.json" normal_rms_degrees)" \
+                "$(pct "$(field "$work/mo.json" texture_rms_rel)")"
+        fi
+    fi
     if [ -n "${MR_SHEETS:-}" ]; then
         mkdir -p "$MR_SHEETS"
         cp "$work/gp.glb" "$work/gltfpack.glb"

@@ -94,11 +94,14 @@ static const char usage[] =
     "                        4 threads, 2 up to 8, 3 up to 16, 4 up to 32)\n"
     "  --multiqueue-factor C multiqueue: C heaps per thread (default 2)\n"
     "  --lock-border         never move boundary vertices\n"
-    "  --free-seams          let seam vertices leave their seams from the start,\n"
-    "                        priced by the attribute cost (meshoptimizer's\n"
-    "                        permissive mode; by default seams hold until the\n"
-    "                        target cannot be reached with them): better on\n"
-    "                        atlas-heavy assets\n"
+    "  --seams auto|free|keep\n"
+    "                        attribute seams: keep holds them (a seam vertex\n"
+    "                        slides along its seam; where islands meet it stays);\n"
+    "                        free lets them go from the start, priced by the\n"
+    "                        attribute cost (meshoptimizer's permissive mode);\n"
+    "                        auto (default) holds them, frees them in a last\n"
+    "                        stage when the target needs it, and from the start\n"
+    "                        where they lock a tenth of the surface or more\n"
     "  --prune               drop the disconnected pieces no larger than the error\n"
     "                        bound (--max-error, or the largest collapse error made;\n"
     "                        their bounding-box diagonal), never the largest piece\n"
@@ -432,8 +435,15 @@ static int option(int argc, char **argv, int *i, void *user)
         o->lock_border = 1;
     } else if (cli_flag(argc, argv, i, "--prune")) {
         o->prune = 1;
-    } else if (cli_flag(argc, argv, i, "--free-seams")) {
-        o->free_seams = 1;
+    } else if (cli_value(argc, argv, i, "--seams", &v)) {
+        if (v && !strcmp(v, "auto"))
+            o->seams = MR_SEAMS_AUTO;
+        else if (v && !strcmp(v, "free"))
+            o->seams = MR_SEAMS_FREE;
+        else if (v && !strcmp(v, "keep"))
+            o->seams = MR_SEAMS_KEEP;
+        else
+            return cli_usage_error("simplify", "--seams is auto, free or keep");
     } else if (cli_value(argc, argv, i, "--lock", &v)) {
         if (!v || !*v)
             return cli_usage_error("simplify", "--lock needs a file of vertex indices");

@@ -481,6 +481,27 @@ typedef enum mr_simplify_quality {
                                error. */
 } mr_simplify_quality;
 
+/*
+ * What the seams of an attribute mesh (mr_mesh_simplify) may do. Held, a
+ * seam vertex slides only along its seam, and where islands meet or a seam
+ * meets an open boundary it stays. Freed, a seam vertex off the open
+ * boundaries may leave its seam wherever the attribute quadrics price it
+ * lowest (meshoptimizer's permissive mode); it needs weighted attributes,
+ * which price it (without them the seams hold).
+ *   MR_SEAMS_AUTO (default): held, and freed in a last stage when the run
+ *     ends short of its target with them; freed from the start where the
+ *     vertices they lock are a tenth of the surface points or more (an
+ *     atlas of many small islands: the Khronos DamagedHelmet, 13 %), where
+ *     holding them would crowd the collapses into the few free regions.
+ *   MR_SEAMS_FREE: freed from the start.
+ *   MR_SEAMS_KEEP: held, even when the target is missed for them.
+ */
+typedef enum mr_seam_mode {
+    MR_SEAMS_AUTO = 0,
+    MR_SEAMS_FREE,
+    MR_SEAMS_KEEP
+} mr_seam_mode;
+
 typedef struct mr_simplify_options {
     /* Targets: simplification stops at the first one reached. 0 = unused.
      * At least one target (or max_error) must be set. Vertex counts and
@@ -547,18 +568,8 @@ typedef struct mr_simplify_options {
      * bounds (max_error) include them. Defaults: MR_NORMAL_WEIGHT,
      * MR_UV_WEIGHT, MR_COLOR_WEIGHT. */
     double normal_weight, uv_weight, color_weight;
-    /* Attribute seams (mr_mesh_simplify). 0 (default): a seam vertex
-     * slides only along its seam, and where islands meet or a seam meets
-     * an open boundary it stays, until the run ends short of its target:
-     * then those off the open boundaries are freed for a last stage. 1:
-     * free from the start (meshoptimizer's permissive mode): a seam
-     * vertex off the open boundaries may leave its seam wherever the
-     * attribute quadrics price it lowest -- better for atlas-heavy assets
-     * (the Khronos DamagedHelmet at 25 %: RMS 0.14 % against 0.34 %, and
-     * lower normal and texture deviation), worse where the seams trace
-     * the shape (the Fox: Hausdorff +24-43 %). Needs weighted attributes
-     * (without them the seams hold). */
-    int free_seams;
+    /* Attribute seams (mr_mesh_simplify): MR_SEAMS_AUTO by default. */
+    mr_seam_mode seams;
 } mr_simplify_options;
 
 #define MR_NORMAL_WEIGHT 0.5

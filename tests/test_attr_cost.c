@@ -336,10 +336,10 @@ static void test_atlas_release(void **state)
         tu_assert_mesh_equal(&out, &again);
         mr_mesh_free(&again);
     }
-    /* free from the start (free_seams): the target too, the same bytes
+    /* free from the start (MR_SEAMS_FREE): the target too, the same bytes
      * at any thread count, and another path than the stages' */
     mr_simplify_options of = o;
-    of.free_seams = 1;
+    of.seams = MR_SEAMS_FREE;
     mr_mesh freed;
     assert_int_equal(mr_mesh_simplify(&m, &of, &freed, NULL, &st, NULL), MR_OK);
     assert_true(st.target_reached);
@@ -352,6 +352,14 @@ static void test_atlas_release(void **state)
     tu_assert_mesh_equal(&freed, &again);
     mr_mesh_free(&again);
     mr_mesh_free(&freed);
+    /* kept (MR_SEAMS_KEEP): as without weighted attributes, short of it */
+    mr_simplify_options ok = o;
+    ok.seams = MR_SEAMS_KEEP;
+    mr_mesh kept;
+    assert_int_equal(mr_mesh_simplify(&m, &ok, &kept, NULL, &st, NULL), MR_OK);
+    assert_false(st.target_reached);
+    assert_true(kept.triangle_count > 250);
+    mr_mesh_free(&kept);
     mr_mesh_free(&strict);
     mr_mesh_free(&out);
     mr_mesh_free(&m);
@@ -437,7 +445,7 @@ static void test_closed_atlas(void **state)
             mr_simplify_options o;
             mr_simplify_options_default(&o);
             o.target_triangles = targets[i];
-            o.free_seams = free_seams;
+            o.seams = free_seams ? MR_SEAMS_FREE : MR_SEAMS_AUTO;
             mr_mesh out;
             mr_simplify_stats st;
             assert_int_equal(mr_mesh_simplify(&m, &o, &out, NULL, &st, NULL), MR_OK);

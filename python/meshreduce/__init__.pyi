@@ -105,7 +105,7 @@ def simplify(
     quality: Literal["default", "best"] = ...,
     partitions: int = ...,
     attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
-    free_seams: bool = ...,
+    seams: Literal["auto", "free", "keep"] = ...,
 ) -> Result: ...
 def simplify_lods(
     vertices: _Floats,
@@ -153,7 +153,7 @@ def simplify_file(
     temp_dir: Optional[_Path] = ...,
     temp_budget: Optional[int] = ...,
     attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
-    free_seams: bool = ...,
+    seams: Literal["auto", "free", "keep"] = ...,
 ) -> dict[str, Any]: ...
 def read(path: _Path, *, format: Optional[str] = ..., threads: int = ...) -> Mesh: ...
 def write(

@@ -656,6 +656,21 @@ fail:
 /* PyErr_Format for a function that returns -1. */
 #define format_error(...) (PyErr_Format(__VA_ARGS__), -1)
 
+/* options.seams from its name; -1 with the exception set. */
+static int seam_mode_from(mr_simplify_options *o, const char *seams)
+{
+    if (!strcmp(seams, "auto"))
+        o->seams = MR_SEAMS_AUTO;
+    else if (!strcmp(seams, "free"))
+        o->seams = MR_SEAMS_FREE;
+    else if (!strcmp(seams, "keep"))
+        o->seams = MR_SEAMS_KEEP;
+    else
+        return format_error(PyExc_ValueError, "seams must be 'auto', 'free' or 'keep', got '%.40s'",
+                            seams);
+    return 0;
+}
+
 /* The options of simplify() and simplify_file() from their arguments;
  * -1 with the exception set. */
 static int simplify_options_from(mr_simplify_options *o, PyObject *ratio, PyObject *vcount,
@@ -775,7 +790,7 @@ PyDoc_STRVAR(simplify_doc,
 "         lock_border=False, boundary_weight=1.0, max_normal_turn=60.0, locked=None,\n"
 "         prune=False, normals=None, texcoords=None, colors=None, threads=0,\n"
 "         progress=None, filter_levels=0, multiqueue_factor=0, quality='default',\n"
-"         partitions=0, attribute_weights=None, free_seams=False)\n"
+"         partitions=0, attribute_weights=None, seams='auto')\n"
 "--\n"
 "\n"
 "Reduce a triangle mesh by quadric-error edge collapse, as `meshreduce simplify`\n"
@@ -790,10 +805,10 @@ PyDoc_STRVAR(simplify_doc,
 "attribute_weights: their part in the collapse cost, a dict such as\n"
 "{'normal': 0.5, 'uv': 0.25, 'color': 1.0} (those are the defaults; a name not\n"
 "given keeps its default, 0 leaves an attribute out: it is interpolated), as\n"
-"`meshreduce simplify --attribute-weights`. free_seams: seam vertices may leave\n"
-"their seams from the start, priced by that cost (meshoptimizer's permissive\n"
-"mode; by default seams hold until the target cannot be reached with them), as\n"
-"`--free-seams`.\n"
+"`meshreduce simplify --attribute-weights`. seams: 'auto', 'free' or 'keep', as\n"
+"`--seams` (keep: seam vertices slide only along their seams; free: they may\n"
+"leave them from the start, priced by that cost; auto: held, freed when the\n"
+"target needs it, and from the start where they lock a tenth of the surface).\n"
 "\n"
 "Targets (the first reached stops; at least one is needed): ratio, the fraction\n"
 "of vertices to keep in (0, 1]; vertex_count; triangle_count (0: as far as\n"
@@ -838,31 +853,31 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                              "locked",    "prune",         "normals",         "texcoords",
                              "colors",    "threads",       "progress",        "filter_levels",
                              "multiqueue_factor", "quality", "partitions", "attribute_weights",
-                             "free_seams", NULL};
+                             "seams", NULL};
     PyObject *vertices, *triangles, *ratio = Py_None, *vcount = Py_None, *tcount = Py_None,
                                     *max_error = Py_None, *locked = Py_None, *normals = Py_None,
                                     *texcoords = Py_None, *colors = Py_None, *progress = Py_None,
                                     *weights = Py_None;
-    int absolute = 0, lock_border = 0, prune = 0, threads = 0, free_seams = 0;
-    const char *collapse = "full", *strategy = NULL, *quality = "default";
+    int absolute = 0, lock_border = 0, prune = 0, threads = 0;
+    const char *collapse = "full", *strategy = NULL, *quality = "default", *seams = "auto";
     double boundary_weight = 1.0, max_normal_turn = 60.0;
     unsigned int filter_levels = 0, multiqueue_factor = 0, partitions = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsIOp", kwlist, &vertices,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsIOs", kwlist, &vertices,
                                      &triangles, &ratio, &vcount, &tcount, &max_error, &absolute,
                                      &collapse, &strategy, &lock_border, &boundary_weight,
                                      &max_normal_turn, &locked, &prune, &normals, &texcoords,
                                      &colors, &threads, &progress, &filter_levels,
                                      &multiqueue_factor, &quality, &partitions, &weights,
-                                     &free_seams))
+                                     &seams))
         return NULL;
 
     mr_simplify_options o;
     if (simplify_options_from(&o, ratio, vcount, tcount, max_error, absolute, collapse, strategy,
                               lock_border, boundary_weight, max_normal_turn, prune, threads,
                               filter_levels, multiqueue_factor, quality, partitions, progress,
-                              weights) < 0)
+                              weights) < 0 ||
+        seam_mode_from(&o, seams) < 0)
         return NULL;
-    o.free_seams = free_seams;
 
     py_mesh in;
     if (py_mesh_from(&in, vertices, triangles, normals, texcoords, colors, 1, "vertices",
@@ -995,7 +1010,7 @@ PyDoc_STRVAR(simplify_file_doc,
 "              max_normal_turn=60.0, locked=None, prune=False, threads=0,\n"
 "              progress=None, quality='default', partitions=0, memory=None,\n"
 "              temp_dir=None, temp_budget=None, attribute_weights=None,\n"
-"              free_seams=False)\n"
+"              seams='auto')\n"
 "--\n"
 "\n"
 "Simplify a mesh file into a file, as `meshreduce simplify IN -o OUT --memory M`\n"
@@ -1018,20 +1033,20 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
                              "strategy",  "lock_border",   "boundary_weight", "max_normal_turn",
                              "locked",    "prune",         "threads",         "progress",
                              "quality",   "partitions",    "memory",          "temp_dir",
-                             "temp_budget", "attribute_weights", "free_seams", NULL};
+                             "temp_budget", "attribute_weights", "seams", NULL};
     PyObject *input = NULL, *output = NULL, *ratio = Py_None, *vcount = Py_None,
              *tcount = Py_None, *max_error = Py_None, *locked = Py_None, *progress = Py_None,
              *memory = Py_None, *temp_dir = Py_None, *temp_budget = Py_None, *weights = Py_None;
-    int absolute = 0, lock_border = 0, prune = 0, threads = 0, free_seams = 0;
-    const char *collapse = "full", *strategy = NULL, *quality = "default";
+    int absolute = 0, lock_border = 0, prune = 0, threads = 0;
+    const char *collapse = "full", *strategy = NULL, *quality = "default", *seams = "auto";
     double boundary_weight = 1.0, max_normal_turn = 60.0;
     unsigned int partitions = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOOpszpddOpiOsIOOOOp", kwlist, path_arg,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O&|$OOOOpszpddOpiOsIOOOOs", kwlist, path_arg,
                                      &input, path_arg, &output, &ratio, &vcount, &tcount,
                                      &max_error, &absolute, &collapse, &strategy, &lock_border,
                                      &boundary_weight, &max_normal_turn, &locked, &prune,
                                      &threads, &progress, &quality, &partitions, &memory,
-                                     &temp_dir, &temp_budget, &weights, &free_seams))
+                                     &temp_dir, &temp_budget, &weights, &seams))
         return NULL;
     PyObject *result = NULL, *dir = NULL;
     uint8_t *lock = NULL;
@@ -1040,9 +1055,9 @@ static PyObject *py_simplify_file(PyObject *self, PyObject *args, PyObject *kw)
     mr_out_of_core_options_default(&c);
     if (simplify_options_from(&o, ratio, vcount, tcount, max_error, absolute, collapse, strategy,
                               lock_border, boundary_weight, max_normal_turn, prune, threads, 0,
-                              0, quality, partitions, progress, weights) < 0)
+                              0, quality, partitions, progress, weights) < 0 ||
+        seam_mode_from(&o, seams) < 0)
         goto done;
-    o.free_seams = free_seams;
     if (ooc_options_from(&c, memory, temp_dir, temp_budget, &dir) < 0)
         goto done;
     const char *in_path = PyBytes_AS_STRING(input), *out_path = PyBytes_AS_STRING(output);

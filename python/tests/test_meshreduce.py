@@ -443,16 +443,18 @@ def test_attribute_weights_match_cli(tmp_path):
 
 @needs_cli
 @pytest.mark.skipif(not os.path.exists(SPOT), reason=SPOT + " absent")
-def test_free_seams_match_cli(tmp_path):
-    # free_seams=True is --free-seams: the same bytes, and other bytes than
-    # the seams held (spot's seams give way at 2 %)
-    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.02", "--free-seams"],
-                           ratio=0.02, free_seams=True)
+def test_seams_match_cli(tmp_path):
+    # seams='free' is --seams free: the same bytes, and other bytes than
+    # the default's (spot's seams give way at 2 %)
+    out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.02", "--seams", "free"],
+                           ratio=0.02, seams="free")
     assert_same(tmp_path, out, r)
     free = r.vertices.copy()
     out, r = simplify_both(tmp_path, SPOT, ["--ratio", "0.02"], ratio=0.02)
     assert_same(tmp_path, out, r)
     assert free.shape != r.vertices.shape or not np.array_equal(free, r.vertices)
+    with pytest.raises(ValueError, match="seams must be"):
+        meshreduce.simplify(r.vertices, r.triangles, ratio=0.5, seams="loose")
 
 
 @needs_cli

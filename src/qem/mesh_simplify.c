@@ -19,15 +19,14 @@
  *     or on an open boundary (seams meeting, corners) are locked;
  *   - where a seam turns sharply between straight runs, its vertex is a
  *     corner (MR_VF_CORNER), kept in place as a boundary's corners are;
- *   - a collapse at a seam vertex may turn a triangle by up to 90 degrees
- *     (seam_limits), where the others keep the options' limit;
  *   - when the run ends short of its targets with all this (and the
  *     corners released), the seam vertices off the open boundaries that
  *     no caller locked are freed for a last stage (attr_release): they
  *     may leave their seams onto other seam vertices, any vertex may go
  *     onto them, and the wedges that lose their place are priced by the
  *     attribute quadrics (meshoptimizer's permissive mode; only with
- *     weighted attributes, which price it).
+ *     weighted attributes, which price it); options.seams frees them from
+ *     the start instead, or never (mr_seam_mode).
  * On a full collapse the survivor's wedges take the attributes
  * interpolated along the edge at the target's projection parameter
  * (normals renormalised). The output keeps the split: one output vertex
@@ -355,6 +354,26 @@ static bool attr_release(mr_simplifier *s)
     return a->permissive;
 }
 
+/* Whether the seams go free from the start (mr_seam_mode): asked, or
+ * (auto) where the seam vertices they lock that the last stage would free
+ * are a tenth of the surface points or more. */
+static bool free_from_start(const mr_simplifier *s, mr_seam_mode mode)
+{
+    if (mode == MR_SEAMS_FREE)
+        return true;
+    if (mode != MR_SEAMS_AUTO)
+        return false;
+    const attr_ctx *a = s->attr;
+    const mr_collapse_mesh *m = &s->m;
+    size_t live = 0, held = 0;
+    for (size_t v = 0; v < m->vertex_count; v++)
+        if (!(m->flags[v] & MR_VF_REMOVED)) {
+            live++;
+            held += a->loose[v] && (m->flags[v] & MR_VF_LOCKED);
+        }
+    return 10 * held >= live && held > 0;
+}
+
 /* A seam's edge (mr_simplifier_mark_corners' polyline). */
 static bool seam_line_edge(const mr_simplifier *s, uint32_t v, uint32_t x)
 {
@@ -624,17 +643,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         mr_simplifier_mark_corners(&s, MR_VF_SEAM, seam_line_edge);
     s.attr_valid = has_seams ? attr_valid : NULL;
     s.attr_apply = has_seams || has_attributes ? attr_apply : NULL;
-    s.attr_release = has_seams ? attr_release : NULL;
-    /* A collapse at a seam may turn a triangle by up to 90 degrees (or
-     * the options' limit where it is larger): a seam vertex slides only
-     * along its seam and a vertex that goes onto one takes its place, so
-     * such collapses turn their triangles more than free ones do, and at
-     * 60 degrees an atlas-heavy asset (the Khronos DamagedHelmet at 25 %)
-     * had its free regions collapsed instead, at four times the RMS. */
-    mr_collapse_limits seam_limits = s.limits;
-    if (seam_limits.min_cos_turn > 0)
-        seam_limits.min_cos_turn = 0;
-    s.seam_limits = has_seams ? &seam_limits : NULL;
+    s.attr_release = has_seams && o.seams != MR_SEAMS_KEEP ? attr_release : NULL;
     /* The weighted attributes in the cost (their quadrics from the
      * triangles as set up: before any collapse). */
     st = attr_cost_setup(&s, &a, in, &o, nth, err);
@@ -651,7 +660,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
                 geo[v] = w;
         }
     }
-    if (st == MR_OK && o.free_seams && s.attr_release)
+    if (st == MR_OK && s.attr_release && free_from_start(&s, o.seams))
         s.attr_release(&s); /* the seams free from the start */
     if (st == MR_OK)
         st = mr_simplifier_fill_queue(&s, err);
@@ -672,7 +681,6 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     s.attr_cost = NULL;
     s.attr_prefetch = NULL;
     s.attr_release = NULL;
-    s.seam_limits = NULL; /* on this frame */
     float *before = NULL; /* a chunk's: where the collapses left the vertices */
     if (o.quality == MR_QUALITY_BEST && !s.cancelled) {
         if (cm) {

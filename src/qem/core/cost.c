@@ -706,8 +706,7 @@ bool mr_simplifier_allowed(const mr_simplifier *s, uint32_t r, uint32_t k, const
 {
     if (!(cost <= limit && cost < INFINITY))
         return false;
-    const bool at_seam = s->seam_limits && ((s->m.flags[r] | s->m.flags[k]) & MR_VF_SEAM);
-    if (!mr_collapse_valid(&s->m, r, k, target, at_seam ? s->seam_limits : &s->limits))
+    if (!mr_collapse_valid(&s->m, r, k, target, &s->limits))
         return false;
     if (s->cut && s->cut[k] && !cut_collapse_ok(s, r, k))
         return false;

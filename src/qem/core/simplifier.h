@@ -129,9 +129,6 @@ struct mr_simplifier {
     void (*attr_cost)(const mr_simplifier *s, uint32_t u, uint32_t w, mr_quadric *q);
     /* A hint that attr_cost of edge (u, w) comes soon (or NULL). */
     void (*attr_prefetch)(const mr_simplifier *s, uint32_t u, uint32_t w);
-    /* The limits of a collapse at a seam vertex (r or k flagged
-     * MR_VF_SEAM), or NULL: s->limits for every collapse. */
-    const mr_collapse_limits *seam_limits;
     /* When the run ends short of its targets: loosen the attribute rules
      * for one more stage (mr_simplify_run); whether anything changed. */
     bool (*attr_release)(mr_simplifier *s);
