@@ -61,6 +61,21 @@ void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_c
 /* Monotonic wall clock in seconds (phase timings). */
 double mr_now_seconds(void);
 
+/* sRGB display values (0..1, clamped; NaN stays NaN) to linear light and
+ * back (IEC 61966-2-1): glTF's colour factors and COLOR_0 are linear, the
+ * renderer's textures and output display values. */
+static inline float mr_srgb_to_linear(float v)
+{
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    return v <= 0.04045f ? v / 12.92f : powf((v + 0.055f) / 1.055f, 2.4f);
+}
+
+static inline float mr_linear_to_srgb(float v)
+{
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
+}
+
 /* Byte order helpers for binary formats (the host may be of either order). */
 static inline bool mr_host_is_little_endian(void)
 {

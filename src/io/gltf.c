@@ -1387,8 +1387,7 @@ static mr_status scene_join(const mr_gltf *g, mr_mesh *out, uint32_t **face_mate
             for (int k = 0; k < 4; k++) {
                 float c = m->colors ? m->colors[4 * v + (size_t)k] : 1.0f;
                 if (face_material && k < 3) /* linear light to display values */
-                    c = c <= 0 ? 0 : c >= 1 ? 1 : c <= 0.0031308f
-                        ? 12.92f * c : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+                    c = mr_linear_to_srgb(c);
                 out->colors[4 * (v0 + v) + (size_t)k] = c;
             }
         for (size_t c = 0; c < 3 * m->triangle_count; c++)
@@ -1487,12 +1486,9 @@ mr_status mr_gltf_scene_look(const mr_gltf *g, mr_mesh *mesh, uint32_t **face_ma
         const cJSON *pbr = member(mat, "pbrMetallicRoughness");
         double f[4] = {1, 1, 1, 1};
         numbers(member(pbr, "baseColorFactor"), 4, f);
-        for (int k = 0; k < 4; k++) {
-            double c = f[k] <= 0 ? 0 : f[k] >= 1 ? 1 : f[k];
-            if (k < 3) /* linear light to display values */
-                c = c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1 / 2.4) - 0.055;
-            gm->color[k] = (float)c;
-        }
+        for (int k = 0; k < 4; k++) /* linear light to display values */
+            gm->color[k] = k < 3 ? mr_linear_to_srgb((float)f[k])
+                                 : (float)(f[k] <= 0 ? 0 : f[k] >= 1 ? 1 : f[k]);
         gm->image = -1;
         const cJSON *info = member(pbr, "baseColorTexture");
         long long ti, set, src, smp;

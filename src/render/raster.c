@@ -330,19 +330,6 @@ typedef struct ctx {
 
 /* ---- the surface's look: textures, materials, vertex colours ---------------- */
 
-/* sRGB display value (0..1) to linear light and back (IEC 61966-2-1). */
-static float srgb_to_linear(float v)
-{
-    v = v < 0 ? 0 : v > 1 ? 1 : v;
-    return v <= 0.04045f ? v / 12.92f : powf((v + 0.055f) / 1.055f, 2.4f);
-}
-
-static float linear_to_srgb(float v)
-{
-    v = v < 0 ? 0 : v > 1 ? 1 : v;
-    return v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
-}
-
 /* Texel index i of a side of n texels under a wrap mode. */
 static int wrap_index(int i, int n, mr_wrap mode)
 {
@@ -416,7 +403,7 @@ static void surface_albedo(const ctx *c, uint32_t id, const uint32_t cv[3], cons
     const mr_render_material *m = c->nt ? face_material(c, id) : NULL;
     if (m) {
         for (int k = 0; k < 3; k++)
-            out[k] = srgb_to_linear(m->color[k]);
+            out[k] = mr_srgb_to_linear(m->color[k]);
         if (m->texture && m->texture->rgba && o->texcoords) {
             double u = 0, v = 0;
             for (int i = 0; i < 3; i++) {
@@ -440,7 +427,7 @@ static void surface_albedo(const ctx *c, uint32_t id, const uint32_t cv[3], cons
             double s = 0;
             for (int i = 0; i < 3; i++)
                 s += w[i] * (double)o->vertex_colors[4 * (size_t)cv[i] + (size_t)k];
-            out[k] *= srgb_to_linear((float)(s / area));
+            out[k] *= mr_srgb_to_linear((float)(s / area));
         }
     }
 }
@@ -890,7 +877,7 @@ static void shade_sample(const ctx *c, uint32_t id, int x, int y, int acc[3])
             value = s[id];
         } else if (o->vertex_colors) {
             for (int k = 0; k < 3; k++)
-                albedo[k] = srgb_to_linear(o->vertex_colors[4 * (size_t)id + (size_t)k]);
+                albedo[k] = mr_srgb_to_linear(o->vertex_colors[4 * (size_t)id + (size_t)k]);
             lit = 1;
         }
     }
@@ -903,7 +890,7 @@ static void shade_sample(const ctx *c, uint32_t id, int x, int y, int acc[3])
         /* in linear light, then back to display values */
         const float f = (float)(0.15 + 0.85 * light);
         for (int i = 0; i < 3; i++)
-            acc[i] += (int)lrintf(linear_to_srgb(albedo[i] * f) * 255.0f);
+            acc[i] += (int)lrintf(mr_linear_to_srgb(albedo[i] * f) * 255.0f);
         return;
     }
     float f;
@@ -1035,9 +1022,9 @@ mr_status mr_render_framed(const float *positions, size_t vertex_count, const ui
     rgb_of(options->wire_color, c.wire);
     c.look = options->texcoords || options->vertex_colors || options->materials;
     for (int i = 0; i < 3; i++)
-        c.base_lin[i] = srgb_to_linear(c.base[i]);
+        c.base_lin[i] = mr_srgb_to_linear(c.base[i]);
     for (int i = 0; c.look && i < 256; i++)
-        c.texel_lin[i] = srgb_to_linear((float)i / 255.0f);
+        c.texel_lin[i] = mr_srgb_to_linear((float)i / 255.0f);
     const int nthreads = mr_thread_count(options->threads);
 
     double lo[3], hi[3];
