@@ -1,12 +1,12 @@
 /* A mesh with its look (mr_look_read): glTF's materials through the glTF
- * reader, an OBJ's usemtl groups and its mtllib files here, vertex
- * colours of every format. */
+ * reader, an OBJ's usemtl groups and mtllib files through the OBJ's
+ * (io/obj_materials.c), their textures decoded here; vertex colours of
+ * every format. */
 #include "../core/internal.h"
 
 #include "../io/gltf.h"
-#include "../io/mapped.h"
+#include "../io/obj_materials.h"
 
-#include <ctype.h>
 #include <stdio.h>
 
 void mr_look_free(mr_look *look)
@@ -24,8 +24,6 @@ void mr_look_free(mr_look *look)
 
 /* ---- OBJ: mtllib, usemtl, and the .mtl files ------------------------------- */
 
-#define NAME_MAX_LEN 512
-
 /* err's message taken into a new one: "path: <prefix>: <old message>
  * (<hint>)" (the old text copied first: the two share the buffer). */
 static mr_status rewrap(mr_error *err, mr_status st, const char *path, const char *prefix)
@@ -38,201 +36,17 @@ static mr_status rewrap(mr_error *err, mr_status st, const char *path, const cha
                          old);
 }
 
-typedef struct obj_mat {
-    char name[NAME_MAX_LEN];
-    float color[4];
-    char texture[NAME_MAX_LEN * 2]; /* path, or "" */
-    mr_wrap wrap;
-} obj_mat;
-
-typedef struct mat_list {
-    obj_mat *m;
-    size_t n, cap;
-} mat_list;
-
-/* The line [s, e) trimmed of blanks at both ends (and a '\r'). */
-static void trim(const char **s, const char **e)
-{
-    while (*s < *e && isspace((unsigned char)**s))
-        (*s)++;
-    while (*e > *s && isspace((unsigned char)(*e)[-1]))
-        (*e)--;
-}
-
-/* Whether the line [s, e) starts with keyword kw followed by a blank;
- * *rest is the text after it, trimmed. */
-static bool keyword(const char *s, const char *e, const char *kw, const char **rest)
-{
-    const size_t n = strlen(kw);
-    if ((size_t)(e - s) < n || memcmp(s, kw, n) != 0 ||
-        (s + n < e && !isspace((unsigned char)s[n])))
-        return false;
-    const char *r = s + n, *re = e;
-    trim(&r, &re);
-    *rest = r;
-    return true;
-}
-
-/* dir + '/' + the name [s, e) (backslashes as slashes), or the name
- * alone where it is absolute. */
-static bool join_path(const char *dir, const char *s, const char *e, char *out, size_t cap)
-{
-    size_t n = 0;
-    if (*s != '/' && dir[0]) {
-        int w = snprintf(out, cap, "%s/", dir);
-        if (w < 0 || (size_t)w >= cap)
-            return false;
-        n = (size_t)w;
-    }
-    for (; s < e; s++) {
-        if (n + 1 >= cap)
-            return false;
-        out[n++] = *s == '\\' ? '/' : *s;
-    }
-    out[n] = '\0';
-    return true;
-}
-
-static void dir_of(const char *path, char *dir, size_t cap)
-{
-    const char *slash = strrchr(path, '/');
-    size_t n = slash ? (size_t)(slash - path) : 0;
-    if (n >= cap)
-        n = cap - 1;
-    memcpy(dir, path, n);
-    dir[n] = '\0';
-    if (slash && n == 0 && cap > 1) { /* the root */
-        dir[0] = '/';
-        dir[1] = '\0';
-    }
-}
-
-/* The last blank-separated token of [s, e) and whether "-clamp on" came
- * before it (map_Kd's options precede the file name). */
-static void map_file(const char *s, const char *e, const char **fs, bool *clamp)
-{
-    *clamp = false;
-    const char *p = s;
-    while (p < e) {
-        while (p < e && isspace((unsigned char)*p))
-            p++;
-        const char *t = p;
-        while (p < e && !isspace((unsigned char)*p))
-            p++;
-        if ((size_t)(p - t) == 6 && !memcmp(t, "-clamp", 6)) {
-            while (p < e && isspace((unsigned char)*p))
-                p++;
-            *clamp = e - p >= 2 && !memcmp(p, "on", 2);
-        }
-    }
-    /* the name: after the last option's arguments is not knowable in
-     * general; take the last token (names with blanks are rare) */
-    const char *t = e;
-    while (t > s && !isspace((unsigned char)t[-1]))
-        t--;
-    *fs = t;
-}
-
-static mr_status read_mtl(const char *path, mat_list *ml, mr_error *err)
-{
-    mr_mapped_file f;
-    mr_status st = mr_map_file(path, &f, err);
-    if (st == MR_ERR_EMPTY) {
-        mr_error_clear(err);
-        return MR_OK; /* an empty library: no materials */
-    }
-    if (st != MR_OK)
-        return st;
-    char dir[NAME_MAX_LEN];
-    dir_of(path, dir, sizeof dir);
-    obj_mat *cur = NULL;
-    size_t line = 0;
-    for (const char *p = f.data, *end = f.data + f.size; p < end && st == MR_OK;) {
-        const char *e = memchr(p, '\n', (size_t)(end - p));
-        e = e ? e : end;
-        const char *s = p, *le = e;
-        p = e + 1;
-        line++;
-        trim(&s, &le);
-        const char *rest;
-        if (keyword(s, le, "newmtl", &rest)) {
-            if (ml->n == ml->cap) {
-                size_t nc = ml->cap ? 2 * ml->cap : 8;
-                obj_mat *nm = realloc(ml->m, nc * sizeof *nm);
-                if (!nm) {
-                    st = mr_fail_nomem(err, path, nc * sizeof *nm);
-                    break;
-                }
-                ml->m = nm;
-                ml->cap = nc;
-            }
-            cur = &ml->m[ml->n++];
-            memset(cur, 0, sizeof *cur);
-            snprintf(cur->name, sizeof cur->name, "%.*s", (int)(le - rest), rest);
-            cur->color[0] = cur->color[1] = cur->color[2] = cur->color[3] = 1;
-        } else if (!cur) {
-            continue; /* before the first material: nothing to set */
-        } else if (keyword(s, le, "Kd", &rest)) {
-            float c[3];
-            char *q = (char *)rest;
-            for (int k = 0; k < 3; k++) {
-                char *next;
-                c[k] = strtof(q, &next);
-                if (next == q || !isfinite(c[k]))
-                    c[k] = k ? c[k - 1] : 1; /* "Kd r" is grey r */
-                q = next;
-            }
-            for (int k = 0; k < 3; k++)
-                cur->color[k] = c[k] < 0 ? 0 : c[k] > 1 ? 1 : c[k];
-        } else if (keyword(s, le, "map_Kd", &rest)) {
-            const char *fs;
-            bool clamp;
-            map_file(rest, le, &fs, &clamp);
-            if (fs == le || !join_path(dir, fs, le, cur->texture, sizeof cur->texture))
-                st = mr_fail_plain(err, MR_ERR_PARSE, path,
-                                   "line %zu: map_Kd of material '%s' names no usable file",
-                                   line, cur->name);
-            cur->wrap = clamp ? MR_WRAP_CLAMP : MR_WRAP_REPEAT;
-        }
-    }
-    mr_unmap_file(&f);
-    return st;
-}
-
-static long find_mat(const mat_list *ml, const char *name)
-{
-    /* the last definition of a name wins, as later libraries override */
-    for (size_t i = ml->n; i-- > 0;)
-        if (!strcmp(ml->m[i].name, name))
-            return (long)i;
-    return -1;
-}
-
 static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
 {
     mr_obj_materials om;
     mr_status st = mr_obj_materials_read(path, &om, err);
     if (st != MR_OK)
         return st;
-    char dir[NAME_MAX_LEN];
-    dir_of(path, dir, sizeof dir);
-    mat_list ml = {NULL, 0, 0};
-    /* the libraries, blank-separated */
-    for (const char *t = om.mtllib; t && *t && st == MR_OK;) {
-        const char *te = t;
-        while (*te && !isspace((unsigned char)*te))
-            te++;
-        char lib[NAME_MAX_LEN * 2];
-        if (!join_path(dir, t, te, lib, sizeof lib))
-            st = mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path, "mtllib path too long");
-        else
-            st = read_mtl(lib, &ml, err);
-        if (st != MR_OK)
-            st = rewrap(err, st, path, "its material library");
-        t = te;
-        while (*t && isspace((unsigned char)*t))
-            t++;
-    }
+    mr_mtl_material *defs = NULL;
+    size_t ndefs = 0;
+    st = mr_mtl_read_all(path, om.mtllib, &defs, &ndefs, err);
+    if (st != MR_OK)
+        st = rewrap(err, st, path, "its material library");
     const size_t nt = look->mesh.triangle_count;
     /* each usemtl name's definition; faces of a name no library defines
      * are plain (and faces that do not line up with the reader's: all) */
@@ -248,7 +62,7 @@ static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
             look->material_count = look->image_count = om.count;
     }
     for (size_t g = 0; st == MR_OK && g < look->material_count; g++)
-        def[g] = find_mat(&ml, om.names[g]);
+        def[g] = mr_mtl_find(defs, ndefs, om.names[g]);
     for (size_t t = 0; st == MR_OK && look->face_material && t < nt; t++) {
         const uint32_t g = om.face_material[t];
         look->face_material[t] = g != UINT32_MAX && def[g] >= 0 ? g : UINT32_MAX;
@@ -259,7 +73,7 @@ static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
         rm->color[0] = rm->color[1] = rm->color[2] = rm->color[3] = 1;
         if (def[g] < 0)
             continue;
-        const obj_mat *d = &ml.m[def[g]];
+        const mr_mtl_material *d = &defs[def[g]];
         memcpy(rm->color, d->color, sizeof rm->color);
         rm->wrap_s = rm->wrap_t = d->wrap;
         if (!d->texture[0] || !look->mesh.texcoords)
@@ -271,7 +85,7 @@ static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
             continue;
         }
         if (st != MR_OK) {
-            char prefix[NAME_MAX_LEN + 40];
+            char prefix[MR_MTL_NAME_MAX + 40];
             snprintf(prefix, sizeof prefix, "material '%s': its texture", d->name);
             st = rewrap(err, st, path, prefix);
         } else {
@@ -279,7 +93,7 @@ static mr_status obj_look(const char *path, mr_look *look, mr_error *err)
         }
     }
     free(def);
-    free(ml.m);
+    free(defs);
     mr_obj_materials_free(&om);
     return st;
 }
