@@ -880,7 +880,8 @@ static mr_status read_attrs(const mr_gltf *g, const cJSON *obj, const char *wher
     {
         gl_attr *a = &out[*n];
         a->name = x->string;
-        if (!cJSON_IsNumber(x) || x->valuedouble < 0 || x->valuedouble != floor(x->valuedouble))
+        if (!cJSON_IsNumber(x) || x->valuedouble < 0 || x->valuedouble > 2147483647.0 ||
+            x->valuedouble != floor(x->valuedouble))
             return mr_fail_plain(err, MR_ERR_PARSE, g->name, "%s: attribute %s is not an index",
                                  where, x->string);
         a->accessor = (long long)x->valuedouble;
