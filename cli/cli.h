@@ -183,10 +183,9 @@ int cli_run_job(const cli_io *io, const cli_job *job, void *user);
  * usemtl names (mr_obj_materials_read; m->count 0: none, or not OBJ into
  * OBJ). CLI_OK, or the failure's status (message printed). */
 int cli_obj_materials(const cli_io *io, mr_obj_materials *m);
-/* Point the write options at m's library and names and at face_material
- * (one per output triangle), or at none when face_material is NULL. */
-void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m,
-                           const uint32_t *face_material);
+/* Point the write options at m's library and names where the output
+ * mesh has materials (each face's is the mesh's), or at none. */
+void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const mr_mesh *out);
 
 /* Print "OUT: V vertices, T triangles (DETAIL)" on stderr: the line that
  * tells what a command wrote; DETAIL is formatted from fmt. */

@@ -413,14 +413,14 @@ int cli_obj_materials(const cli_io *io, mr_obj_materials *m)
     return CLI_OK;
 }
 
-void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m,
-                           const uint32_t *face_material)
+void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const mr_mesh *out)
 {
-    const bool on = face_material && m->count;
+    /* each face's material is the mesh's (read, and kept by simplify) */
+    const bool on = out->materials && m->count;
     w->mtllib = on ? m->mtllib : NULL;
     w->material_names = on ? (const char *const *)m->names : NULL;
     w->material_count = on ? m->count : 0;
-    w->face_material = on ? face_material : NULL;
+    w->face_material = NULL;
 }
 
 void cli_summary(const char *out, size_t vertices, size_t triangles, const char *fmt, ...)

@@ -229,7 +229,7 @@ static int run(int argc, char **argv)
     /* the attributes both have, at the same points */
     mr_attribute_error e;
     memset(&e, 0, sizeof e);
-    if (st == MR_OK && (mr_mesh_attributes(&ref) & mr_mesh_attributes(&test)))
+    if (st == MR_OK && (mr_mesh_attributes(&ref) & mr_mesh_attributes(&test) & MR_ATTR_BASIC))
         st = mr_compare_attributes(&ref, &test, &opt, &e, &err);
     double t2 = cli_now();
     if (st == MR_OK) {

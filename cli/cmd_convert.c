@@ -95,8 +95,8 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         *result = *mesh;
         mr_mesh_init(mesh);
         /* the usemtl groups, face for face as read */
-        if (job->write && job->mats.count && job->mats.triangle_count == result->triangle_count)
-            cli_obj_materials_use(job->write, &job->mats, job->mats.face_material);
+        if (job->write)
+            cli_obj_materials_use(job->write, &job->mats, result);
     }
     return rc;
 }

@@ -233,7 +233,6 @@ typedef struct simplify_job {
     size_t nlods;
     mr_obj_materials mats;    /* an OBJ into an OBJ: its usemtl groups */
     mr_write_options *write;  /* where the output's go: the io's options */
-    uint32_t *out_material;   /* the output's, one per triangle */
 } simplify_job;
 
 /*
@@ -515,109 +514,6 @@ static void warn_after(const cli_io *io, const simplify_job *job)
     }
 }
 
-/*
- * An OBJ's usemtl groups through the simplifier: a vertex that faces of
- * two materials share is split into one vertex per material (the same
- * values), so the border between materials is a seam that the seam rules
- * keep in place, and each output triangle takes its first corner's
- * material. *src (one per split vertex) is its input vertex, *mat its
- * material (count for none).
- */
-static int split_by_material(const char *path, const mr_mesh *in, const uint32_t *fm,
-                             size_t count, mr_mesh *out, uint32_t **src, uint32_t **mat)
-{
-    const size_t nv = in->vertex_count, nc = 3 * in->triangle_count;
-    uint32_t *head = malloc((nv ? nv : 1) * sizeof *head);
-    uint32_t *next = malloc((nc ? nc : 1) * sizeof *next);
-    uint32_t *vs = malloc((nc ? nc : 1) * sizeof *vs), *vm = malloc((nc ? nc : 1) * sizeof *vm);
-    uint32_t *idx = malloc((nc ? nc : 1) * sizeof *idx);
-    int rc = CLI_OK;
-    if (!head || !next || !vs || !vm || !idx)
-        rc = cli_fail("%s: out of memory splitting its vertices by material", path);
-    size_t made = 0;
-    for (size_t v = 0; rc == CLI_OK && v < nv; v++)
-        head[v] = UINT32_MAX;
-    for (size_t c = 0; rc == CLI_OK && c < nc; c++) {
-        const uint32_t v = in->indices[c];
-        const uint32_t g = fm[c / 3] < count ? fm[c / 3] : (uint32_t)count;
-        uint32_t x = head[v];
-        while (x != UINT32_MAX && vm[x] != g)
-            x = next[x];
-        if (x == UINT32_MAX) {
-            x = (uint32_t)made++;
-            vs[x] = v;
-            vm[x] = g;
-            next[x] = head[v];
-            head[v] = x;
-        }
-        idx[c] = x;
-    }
-    mr_error err;
-    mr_mesh_init(out);
-    if (rc == CLI_OK && mr_mesh_alloc(out, made, in->triangle_count, mr_mesh_attributes(in),
-                                      &err) != MR_OK)
-        rc = cli_fail_in(path, NULL, &err);
-    for (size_t x = 0; rc == CLI_OK && x < made; x++) {
-        const size_t v = vs[x];
-        memcpy(out->positions + 3 * x, in->positions + 3 * v, 12);
-        if (out->normals)
-            memcpy(out->normals + 3 * x, in->normals + 3 * v, 12);
-        if (out->texcoords)
-            memcpy(out->texcoords + 2 * x, in->texcoords + 2 * v, 8);
-        if (out->colors)
-            memcpy(out->colors + 4 * x, in->colors + 4 * v, 16);
-    }
-    if (rc == CLI_OK)
-        memcpy(out->indices, idx, nc * sizeof *idx);
-    free(head);
-    free(next);
-    free(idx);
-    if (rc != CLI_OK) {
-        free(vs);
-        free(vm);
-        return rc;
-    }
-    *src = vs;
-    *mat = vm;
-    return CLI_OK;
-}
-
-/* The output's triangles in the order of their materials (none first: an
- * OBJ cannot go back to no material), each run in its order; their
- * materials into *out. */
-static int group_by_material(const char *path, mr_mesh *m, const uint32_t *origin,
-                             const uint32_t *vmat, size_t count, uint32_t **out)
-{
-    const size_t nt = m->triangle_count;
-    size_t *start = calloc(count + 2, sizeof *start);
-    uint32_t *idx = malloc((nt ? 3 * nt : 1) * sizeof *idx);
-    uint32_t *fm = malloc((nt ? nt : 1) * sizeof *fm);
-    if (!start || !idx || !fm) {
-        free(start);
-        free(idx);
-        free(fm);
-        return cli_fail("%s: out of memory grouping its triangles by material", path);
-    }
-    /* key: 0 for none, g + 1 for material g */
-    for (size_t t = 0; t < nt; t++) {
-        const uint32_t g = vmat[origin[m->indices[3 * t]]];
-        start[(g < count ? g + 1 : 0) + 1]++;
-    }
-    for (size_t k = 1; k <= count + 1; k++)
-        start[k] += start[k - 1];
-    for (size_t t = 0; t < nt; t++) {
-        const uint32_t g = vmat[origin[m->indices[3 * t]]];
-        const size_t at = start[g < count ? g + 1 : 0]++;
-        memcpy(idx + 3 * at, m->indices + 3 * t, 3 * sizeof *idx);
-        fm[at] = g < count ? g : UINT32_MAX;
-    }
-    memcpy(m->indices, idx, 3 * nt * sizeof *idx);
-    free(idx);
-    free(start);
-    *out = fm;
-    return CLI_OK;
-}
-
 static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
 {
     simplify_job *job = user;
@@ -639,47 +535,10 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         job->o.progress = show_progress;
         job->o.progress_user = &prog;
     }
-    /* an OBJ into an OBJ: its usemtl groups kept */
-    const bool groups = job->write && job->mats.count &&
-                        job->mats.triangle_count == mesh->triangle_count;
-    mr_mesh split;
-    uint32_t *src = NULL, *vmat = NULL, *origin = NULL;
-    mr_mesh_init(&split);
-    if (groups) {
-        int rc = split_by_material(io->in, mesh, job->mats.face_material, job->mats.count,
-                                   &split, &src, &vmat);
-        if (rc != CLI_OK)
-            return rc;
-        if (job->lock) { /* the locks by input vertex: each split one's */
-            uint8_t *lock = calloc(split.vertex_count ? split.vertex_count : 1, 1);
-            if (!lock) {
-                free(src);
-                free(vmat);
-                mr_mesh_free(&split);
-                return cli_fail("%s: out of memory", io->in);
-            }
-            for (size_t x = 0; x < split.vertex_count; x++)
-                lock[x] = job->lock[src[x]];
-            free(job->lock);
-            job->lock = lock;
-            job->o.vertex_lock = lock;
-        }
-    }
-    mr_status st = mr_mesh_simplify(groups ? &split : mesh, &job->o, result,
-                                    groups ? &origin : NULL, &job->s, &err);
-    mr_mesh_free(&split);
-    free(src);
-    int grouped = CLI_OK;
-    if (st == MR_OK && groups) {
-        grouped = group_by_material(io->in, result, origin, vmat, job->mats.count,
-                                    &job->out_material);
-        if (grouped == CLI_OK)
-            cli_obj_materials_use(job->write, &job->mats, job->out_material);
-    }
-    free(origin);
-    free(vmat);
-    if (grouped != CLI_OK)
-        return grouped;
+    /* an OBJ's usemtl groups are the mesh's materials: simplify keeps them */
+    mr_status st = mr_mesh_simplify(mesh, &job->o, result, NULL, &job->s, &err);
+    if (st == MR_OK && job->write)
+        cli_obj_materials_use(job->write, &job->mats, result);
     free(job->lock);
     job->lock = NULL;
     job->o.vertex_lock = NULL;
@@ -1044,7 +903,11 @@ static int run_lods(const cli_io *io, simplify_job *job, bool gltf)
             lod_path(io->out, k, path[k], sizeof path[k]);
         else
             snprintf(path[0], sizeof path[0], "%s", io->out);
-        st = mr_mesh_write(path[k], k ? &lv[k - 1].mesh : &mesh, &io->write, &err);
+        /* an OBJ into OBJs: each level keeps its usemtl groups */
+        const mr_mesh *level = k ? &lv[k - 1].mesh : &mesh;
+        mr_write_options w = io->write;
+        cli_obj_materials_use(&w, &job->mats, level);
+        st = mr_mesh_write(path[k], level, &w, &err);
         written += st == MR_OK;
     }
     if (st != MR_OK) {
@@ -1085,8 +948,14 @@ static int run(int argc, char **argv)
     const mr_format in_format = mr_format_from_path(io.in);
     const mr_format out_format =
         io.write.format != MR_FORMAT_AUTO ? io.write.format : mr_format_from_path(io.out);
-    if (job.nlods)
-        return run_lods(&io, &job, in_format == MR_FORMAT_GLTF && out_format == MR_FORMAT_GLTF);
+    if (job.nlods) {
+        /* an OBJ into OBJs keeps its mtllib and usemtl groups */
+        if ((rc = cli_obj_materials(&io, &job.mats)) != CLI_OK)
+            return rc;
+        rc = run_lods(&io, &job, in_format == MR_FORMAT_GLTF && out_format == MR_FORMAT_GLTF);
+        mr_obj_materials_free(&job.mats);
+        return rc;
+    }
     if (in_format == MR_FORMAT_GLTF && out_format == MR_FORMAT_GLTF && !cli_comm)
         return run_gltf(&io, &job);
     const bool streamed = in_format == MR_FORMAT_PLY || in_format == MR_FORMAT_STL ||
@@ -1099,7 +968,6 @@ static int run(int argc, char **argv)
     job.write = &io.write;
     rc = cli_run_job(&io, &steps, &job);
     mr_obj_materials_free(&job.mats);
-    free(job.out_material);
     return rc;
 }
 

@@ -30,9 +30,9 @@ extern "C" {
 #endif
 
 #define MR_VERSION_MAJOR 0
-#define MR_VERSION_MINOR 2
+#define MR_VERSION_MINOR 3
 #define MR_VERSION_PATCH 0
-#define MR_VERSION_STRING "0.2.0"
+#define MR_VERSION_STRING "0.3.0"
 
 /* ------------------------------------------------------------------------ */
 /* Status and errors                                                        */
@@ -77,6 +77,9 @@ const char *mr_version(void);
  * coordinates or normals for one position (UV seams, hard edges) is read as
  * several vertices at the same position.
  */
+/* Texture coordinate sets besides the first (mr_mesh.more_texcoords). */
+#define MR_MORE_TEXCOORDS 3
+
 typedef struct mr_mesh {
     size_t vertex_count;
     size_t triangle_count;
@@ -88,13 +91,42 @@ typedef struct mr_mesh {
                            writing) */
     float *colors;      /* 4 * vertex_count: r g b a in [0, 1], or NULL */
     uint32_t *indices;  /* 3 * triangle_count, counter-clockwise */
+    /* Since 0.3.0: what game and web assets carry besides (glTF's other
+     * attributes, an OBJ's usemtl groups). Simplification carries them as
+     * its surviving vertices had them (texture sets 1-3, joints and
+     * weights: no blend is made), keeps each triangle's material (a
+     * vertex two materials share is a seam), and leaves tangents out:
+     * they follow the normals and texture coordinates it moves
+     * (MikkTSpace tangents are the client's to make). */
+    float *more_texcoords[MR_MORE_TEXCOORDS]; /* sets 1, 2, 3 (glTF
+                           TEXCOORD_1..3): 2 * vertex_count each, v up as
+                           texcoords', or NULL */
+    float *tangents;    /* 4 * vertex_count: x y z, and w = +-1 the
+                           bitangent's sign (bitangent = w * normal x
+                           tangent), or NULL */
+    uint16_t *joints;   /* 4 * vertex_count: skin joints (glTF JOINTS_0:
+                           indices into the skin's joints), or NULL */
+    float *weights;     /* 4 * vertex_count: their weights (WEIGHTS_0);
+                           joints and weights are both set or both NULL */
+    uint32_t *materials; /* triangle_count: each triangle's material, an
+                           index into the file's (glTF's materials[], an
+                           OBJ's usemtl names in order of first use), or
+                           UINT32_MAX for none; or NULL */
 } mr_mesh;
 
 /* Flags for mr_mesh_alloc: which attribute arrays to allocate. */
 enum {
     MR_ATTR_NORMALS = 1u << 0,
     MR_ATTR_TEXCOORDS = 1u << 1,
-    MR_ATTR_COLORS = 1u << 2
+    MR_ATTR_COLORS = 1u << 2,
+    MR_ATTR_TEXCOORDS1 = 1u << 3, /* more_texcoords[0]; [1] and [2] are */
+    MR_ATTR_TEXCOORDS2 = 1u << 4, /* the next two flags */
+    MR_ATTR_TEXCOORDS3 = 1u << 5,
+    MR_ATTR_TANGENTS = 1u << 6,
+    MR_ATTR_SKIN = 1u << 7,       /* joints and weights */
+    MR_ATTR_MATERIALS = 1u << 8,  /* per triangle */
+    /* the attributes simplification interpolates and weighs */
+    MR_ATTR_BASIC = MR_ATTR_NORMALS | MR_ATTR_TEXCOORDS | MR_ATTR_COLORS
 };
 
 /* An empty mesh (all counts zero, all pointers NULL). */

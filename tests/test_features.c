@@ -231,8 +231,8 @@ static void test_open_grid_keeps_corners(void **state)
                                      m.triangle_count, &o, &r, &err),
                          MR_OK);
         assert_int_equal(r.triangle_count, 2);
-        mr_mesh out = {r.vertex_count, r.triangle_count, r.positions, NULL, NULL, NULL,
-                       r.indices};
+        mr_mesh out = {.vertex_count = r.vertex_count, .triangle_count = r.triangle_count,
+                       .positions = r.positions, .indices = r.indices};
         assert_points_kept(&out, pts, 4, half ? "open grid, half" : "open grid, full");
         mr_simplified_free(&r);
     }
@@ -445,8 +445,8 @@ static void test_prune_keeps_largest_in_any_order(void **state)
             assert_int_equal(r.stats.pruned_parts, 2);
             assert_true(r.stats.target_reached);
             assert_int_equal(r.stats.stop, MR_STOP_TARGET);
-            mr_mesh out = {r.vertex_count, r.triangle_count, r.positions, NULL, NULL, NULL,
-                           r.indices};
+            mr_mesh out = {.vertex_count = r.vertex_count, .triangle_count = r.triangle_count,
+                           .positions = r.positions, .indices = r.indices};
             const float (*big)[3] = (const float (*)[3])piece[2];
             assert_points_kept(&out, big, 3, "pruned pieces");
             mr_simplified_free(&r);

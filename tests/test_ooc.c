@@ -200,8 +200,8 @@ static void check_quality(const char *in, const mr_mesh *m, uint64_t kib, size_t
         assert_int_equal(mr_simplify(m->positions, 0, m->vertex_count, m->indices,
                                      m->triangle_count, &o, &ref, &err),
                          MR_OK);
-        mr_mesh rm = {ref.vertex_count, ref.triangle_count, ref.positions, NULL, NULL, NULL,
-                      ref.indices};
+        mr_mesh rm = {.vertex_count = ref.vertex_count, .triangle_count = ref.triangle_count,
+                      .positions = ref.positions, .indices = ref.indices};
         mr_simplify_file_stats st;
         run_ok(in, out, &o, kib, tmp, &st);
         assert_int_equal(st.out_of_core, 1);
@@ -998,8 +998,8 @@ static void test_forest(void **state)
         assert_int_equal(mr_simplify(m.positions, 0, m.vertex_count, m.indices, m.triangle_count,
                                      &o, &ref, &err),
                          MR_OK);
-        mr_mesh rm = {ref.vertex_count, ref.triangle_count, ref.positions, NULL, NULL, NULL,
-                      ref.indices};
+        mr_mesh rm = {.vertex_count = ref.vertex_count, .triangle_count = ref.triangle_count,
+                      .positions = ref.positions, .indices = ref.indices};
         mr_simplify_file_stats st;
         run_ok(in, out, &o, 4096, tmp, &st);
         assert_true(st.out_of_core);

@@ -427,7 +427,7 @@ mr_status mr_mesh_cluster(const mr_mesh *in, const mr_cluster_options *options, 
     uint32_t *ptri = NULL, *tri_out = NULL;
     double *quad = NULL;
     size_t np = 0;
-    unsigned attrs = mr_mesh_attributes(in);
+    unsigned attrs = mr_mesh_attributes(in) & MR_ATTR_BASIC;
     if (!label || (s = mr_mesh_alloc(out, k, 0, attrs, err)) != MR_OK) {
         if (!label)
             s = mr_fail_nomem(err, NULL, n * 4);

@@ -57,6 +57,10 @@ void *mr_realloc_array(void *p, size_t count, size_t size);
  * Attribute arrays move with the positions. Triangle indices are not
  * touched. */
 void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_count);
+/* n vertices' texture sets 1-3, tangents, joints and weights from src's
+ * vertex `from` on to dst's vertex `at` on (each array both have; may
+ * overlap). */
+void mr_mesh_copy_more(mr_mesh *dst, size_t at, const mr_mesh *src, size_t from, size_t n);
 
 /* Monotonic wall clock in seconds (phase timings). */
 double mr_now_seconds(void);

@@ -37,7 +37,7 @@ static mr_status stream_ply(mr_gen_stream *gs, const char *path,
     for (size_t v0 = 0; v0 < vc && st == MR_OK; v0 += GEN_BLOCK) {
         const size_t n = vc - v0 < GEN_BLOCK ? vc - v0 : GEN_BLOCK;
         mr_gen_stream_positions(gs, v0, n, pos);
-        const mr_mesh block = {n, 0, pos, NULL, NULL, NULL, NULL};
+        const mr_mesh block = {.vertex_count = n, .positions = pos};
         st = mr_ply_stream_vertices(&ps, &block, err);
     }
     for (size_t t0 = 0; t0 < tc && st == MR_OK; t0 += GEN_BLOCK) {

@@ -19,6 +19,7 @@
  */
 #include "io_internal.h"
 #include "mapped.h"
+#include "obj_materials.h"
 #include "text.h"
 
 #include <errno.h>
@@ -866,12 +867,37 @@ static mr_status read_obj(const char *data, size_t size, const char *name, int t
     return MR_OK;
 }
 
+/* Whether "usemtl" starts a line of the data. */
+static bool any_usemtl(const char *data, size_t size)
+{
+    for (const char *p = data, *end = data + size;
+         (p = memchr(p, 'u', (size_t)(end - p))) != NULL; p++)
+        if ((size_t)(end - p) >= 6 && !memcmp(p, "usemtl", 6) &&
+            (p == data || p[-1] == '\n' || p[-1] == ' ' || p[-1] == '\t'))
+            return true;
+    return false;
+}
+
 mr_status mr_read_obj(const char *data, size_t size, const char *name, int threads,
                       mr_mesh *mesh, mr_error *err)
 {
     obj_temp t = {0};
     mr_status st = read_obj(data, size, name, threads, mesh, &t, err);
     temp_free(&t);
+    /* usemtl groups: each triangle's material (names by
+     * mr_obj_materials_read) */
+    if (st == MR_OK && mesh->triangle_count && any_usemtl(data, size)) {
+        mr_obj_materials m;
+        st = mr_obj_materials_parse(data, size, name, &m, err);
+        if (st == MR_OK && m.face_material && m.triangle_count == mesh->triangle_count) {
+            mesh->materials = m.face_material;
+            m.face_material = NULL;
+        }
+        if (st == MR_OK)
+            mr_obj_materials_free(&m);
+        else
+            mr_mesh_free(mesh);
+    }
     return st;
 }
 
@@ -889,7 +915,8 @@ mr_status mr_read_obj(const char *data, size_t size, const char *name, int threa
 typedef struct obj_writer {
     const mr_mesh *m;
     bool normals, texcoords, colors;
-    const mr_write_options *o; /* its materials */
+    const mr_write_options *o; /* its materials' names */
+    const uint32_t *fm;        /* each face's: the options', else the mesh's */
 } obj_writer;
 
 typedef size_t (*format_fn)(const obj_writer *w, size_t first, size_t count, char *out);
@@ -950,9 +977,9 @@ static size_t format_vn(const obj_writer *w, size_t first, size_t count, char *o
 static uint32_t face_group(const obj_writer *w, size_t i)
 {
     const mr_write_options *o = w->o;
-    if (!o->face_material || !o->material_names)
+    if (!w->fm || !o->material_names)
         return UINT32_MAX;
-    const uint32_t g = o->face_material[i];
+    const uint32_t g = w->fm[i];
     return g < o->material_count ? g : UINT32_MAX;
 }
 
@@ -1046,10 +1073,11 @@ mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
     }
     obj_writer w = {mesh, options->write_normals && mesh->normals,
                     options->write_texcoords && mesh->texcoords,
-                    options->write_colors && mesh->colors, options};
+                    options->write_colors && mesh->colors, options,
+                    options->face_material ? options->face_material : mesh->materials};
     /* a face line may follow a usemtl line: room for the longest name */
     size_t longest = 0;
-    for (size_t i = 0; options->face_material && options->material_names &&
+    for (size_t i = 0; w.fm && options->material_names &&
                        i < options->material_count; i++) {
         const size_t n = options->material_names[i] ? strlen(options->material_names[i]) : 0;
         if (!options->material_names[i] || memchr(options->material_names[i], '\n', n))

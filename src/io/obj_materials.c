@@ -66,20 +66,15 @@ static char *dup_range(const char *s, const char *e)
     return d;
 }
 
-mr_status mr_obj_materials_read(const char *path, mr_obj_materials *out, mr_error *err)
+mr_status mr_obj_materials_parse(const char *data, size_t size, const char *path,
+                                 mr_obj_materials *out, mr_error *err)
 {
-    mr_error_clear(err);
-    if (!out)
-        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path, "no materials given");
     memset(out, 0, sizeof *out);
-    mr_mapped_file f;
-    mr_status st = mr_map_file(path, &f, err);
-    if (st != MR_OK)
-        return st;
+    mr_status st = MR_OK;
     size_t cap_names = 0, cap_faces = 0, lib_len = 0;
     uint32_t cur = UINT32_MAX;
     bool any_usemtl = false;
-    for (const char *p = f.data, *end = f.data + f.size; p < end && st == MR_OK;) {
+    for (const char *p = data, *end = data + size; p < end && st == MR_OK;) {
         const char *e = memchr(p, '\n', (size_t)(end - p));
         e = e ? e : end;
         const char *s = p, *le = e, *rest;
@@ -144,13 +139,27 @@ mr_status mr_obj_materials_read(const char *path, mr_obj_materials *out, mr_erro
             nl[lib_len] = '\0';
         }
     }
-    mr_unmap_file(&f);
     if (st == MR_OK && !any_usemtl) {
         free(out->face_material); /* no usemtl: no materials */
         out->face_material = NULL;
     }
     if (st != MR_OK)
         mr_obj_materials_free(out);
+    return st;
+}
+
+mr_status mr_obj_materials_read(const char *path, mr_obj_materials *out, mr_error *err)
+{
+    mr_error_clear(err);
+    if (!out)
+        return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, path, "no materials given");
+    memset(out, 0, sizeof *out);
+    mr_mapped_file f;
+    mr_status st = mr_map_file(path, &f, err);
+    if (st != MR_OK)
+        return st;
+    st = mr_obj_materials_parse(f.data, f.size, path, out, err);
+    mr_unmap_file(&f);
     return st;
 }
 

@@ -8,6 +8,10 @@
 
 #define MR_MTL_NAME_MAX 512
 
+/* mr_obj_materials_read of an OBJ's bytes (path names it in messages). */
+mr_status mr_obj_materials_parse(const char *data, size_t size, const char *path,
+                                 mr_obj_materials *out, mr_error *err);
+
 /* One newmtl: its Kd (clamped to [0, 1]; white where not given) and its
  * map_Kd file (a path from the library's folder, or ""), whose `-clamp
  * on` makes its wrap MR_WRAP_CLAMP. */

@@ -2138,7 +2138,7 @@ mr_status mr_ply_stream_faces(mr_ply_stream *s, const uint32_t *indices, size_t 
         return mr_fail_plain(err, MR_ERR_INVALID_ARGUMENT, s->name,
                              "streamed faces before every vertex or past the header's %zu",
                              s->triangle_count);
-    const mr_mesh view = {0, count, NULL, NULL, NULL, NULL, (uint32_t *)indices};
+    const mr_mesh view = {.triangle_count = count, .indices = (uint32_t *)indices};
     s->w.mesh = &view;
     s->triangles_written += count;
     mr_status st = write_rows(s->f, &s->w, count, face_row_bytes(&s->w), encode_faces,

@@ -310,8 +310,11 @@ mr_status mr_mesh_remove_degenerate(mr_mesh *mesh, int remove_duplicates, size_t
     for (size_t t = 0; t < tc; t++) {
         if (drop[t])
             continue;
-        if (kept != t)
+        if (kept != t) {
             memcpy(idx + 3 * kept, idx + 3 * t, 3 * sizeof *idx);
+            if (mesh->materials)
+                mesh->materials[kept] = mesh->materials[t];
+        }
         kept++;
     }
     free(drop);

@@ -15,6 +15,12 @@ void mr_mesh_free(mr_mesh *mesh)
     free(mesh->texcoords);
     free(mesh->colors);
     free(mesh->indices);
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        free(mesh->more_texcoords[k]);
+    free(mesh->tangents);
+    free(mesh->joints);
+    free(mesh->weights);
+    free(mesh->materials);
     mr_mesh_init(mesh);
 }
 
@@ -27,6 +33,15 @@ unsigned mr_mesh_attributes(const mr_mesh *mesh)
         f |= MR_ATTR_TEXCOORDS;
     if (mesh->colors)
         f |= MR_ATTR_COLORS;
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        if (mesh->more_texcoords[k])
+            f |= MR_ATTR_TEXCOORDS1 << k;
+    if (mesh->tangents)
+        f |= MR_ATTR_TANGENTS;
+    if (mesh->joints && mesh->weights)
+        f |= MR_ATTR_SKIN;
+    if (mesh->materials)
+        f |= MR_ATTR_MATERIALS;
     return f;
 }
 
@@ -55,6 +70,17 @@ mr_status mr_mesh_alloc(mr_mesh *mesh, size_t vertex_count, size_t triangle_coun
         ok = ok && (m.texcoords = mr_alloc_array(vertex_count * 2, sizeof(float)));
     if (attr_flags & MR_ATTR_COLORS)
         ok = ok && (m.colors = mr_alloc_array(vertex_count * 4, sizeof(float)));
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        if (attr_flags & (MR_ATTR_TEXCOORDS1 << k))
+            ok = ok && (m.more_texcoords[k] = mr_alloc_array(vertex_count * 2, sizeof(float)));
+    if (attr_flags & MR_ATTR_TANGENTS)
+        ok = ok && (m.tangents = mr_alloc_array(vertex_count * 4, sizeof(float)));
+    if (attr_flags & MR_ATTR_SKIN) {
+        ok = ok && (m.joints = mr_alloc_array(vertex_count * 4, sizeof(uint16_t)));
+        ok = ok && (m.weights = mr_alloc_array(vertex_count * 4, sizeof(float)));
+    }
+    if (attr_flags & MR_ATTR_MATERIALS)
+        ok = ok && (m.materials = mr_alloc_array(triangle_count, sizeof(uint32_t)));
     if (!ok) {
         mr_mesh_free(&m);
         return mr_fail_nomem(err, NULL, vertex_count * 48 + triangle_count * 12);
@@ -77,8 +103,25 @@ mr_status mr_mesh_copy(mr_mesh *dst, const mr_mesh *src, mr_error *err)
         memcpy(dst->texcoords, src->texcoords, n * 2 * sizeof(float));
     if (src->colors)
         memcpy(dst->colors, src->colors, n * 4 * sizeof(float));
+    mr_mesh_copy_more(dst, 0, src, 0, n);
     memcpy(dst->indices, src->indices, src->triangle_count * 3 * sizeof(uint32_t));
+    if (src->materials)
+        memcpy(dst->materials, src->materials, src->triangle_count * sizeof(uint32_t));
     return MR_OK;
+}
+
+void mr_mesh_copy_more(mr_mesh *dst, size_t at, const mr_mesh *src, size_t from, size_t n)
+{
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        if (dst->more_texcoords[k] && src->more_texcoords[k])
+            memmove(dst->more_texcoords[k] + 2 * at, src->more_texcoords[k] + 2 * from,
+                    n * 2 * sizeof(float));
+    if (dst->tangents && src->tangents)
+        memmove(dst->tangents + 4 * at, src->tangents + 4 * from, n * 4 * sizeof(float));
+    if (dst->joints && src->joints)
+        memmove(dst->joints + 4 * at, src->joints + 4 * from, n * 4 * sizeof(uint16_t));
+    if (dst->weights && src->weights)
+        memmove(dst->weights + 4 * at, src->weights + 4 * from, n * 4 * sizeof(float));
 }
 
 void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_count)
@@ -97,6 +140,7 @@ void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_c
                    2 * sizeof(float));
         if (mesh->colors)
             memcpy(mesh->colors + 4 * (size_t)j, mesh->colors + 4 * i, 4 * sizeof(float));
+        mr_mesh_copy_more(mesh, j, mesh, i, 1);
     }
     mesh->vertex_count = new_count;
 }

@@ -859,7 +859,7 @@ mr_status mr_compare_attributes(const mr_mesh *ref, const mr_mesh *test,
     if (options)
         opt = *options;
     const int nt = mr_thread_count(opt.threads);
-    out->attributes = mr_mesh_attributes(ref) & mr_mesh_attributes(test);
+    out->attributes = mr_mesh_attributes(ref) & mr_mesh_attributes(test) & MR_ATTR_BASIC;
     /* the same points as mr_compare's */
     surface s0, s1 = {.name = "test mesh", .pos = test->positions,
                       .vertex_count = test->vertex_count, .idx = test->indices,

@@ -33,6 +33,7 @@
  * per surviving wedge.
  */
 #include "attr_quadric.h"
+#include "carried.h"
 #include "entry.h"
 
 #include "../core/omp_compat.h"
@@ -742,7 +743,7 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
         if (remap[v] != NONE)
             remap[v] = (uint32_t)nv++;
     mr_mesh_init(out);
-    st = mr_mesh_alloc(out, nv, nt, mr_mesh_attributes(in), err);
+    st = mr_mesh_alloc(out, nv, nt, mr_mesh_attributes(in) & MR_ATTR_BASIC, err);
     uint32_t *org = NULL;
     if (st == MR_OK && origin) {
         org = mr_alloc_array(nv, sizeof *org);
@@ -833,11 +834,54 @@ static mr_status mesh_simplify(const mr_mesh *in, const mr_simplify_options *opt
     return MR_OK;
 }
 
+/* A mesh with materials, texture sets 1-3 or a skin: the run on its
+ * weighed attributes (split by material), what it carries put back
+ * (carried.c). Tangents are left out. */
+static mr_status simplify_carried(const mr_mesh *in, const mr_simplify_options *options,
+                                  mr_mesh *out, uint32_t **origin, mr_simplify_stats *stats,
+                                  mr_error *err)
+{
+    mr_carried c;
+    memset(&c, 0, sizeof c);
+    mr_mesh run = *in; /* its weighed attributes only */
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        run.more_texcoords[k] = NULL;
+    run.tangents = NULL;
+    run.joints = NULL;
+    run.weights = NULL;
+    run.materials = NULL;
+    mr_simplify_options o;
+    mr_simplify_options_default(&o);
+    if (options)
+        o = *options;
+    mr_status st = MR_OK;
+    if (in->materials) {
+        if ((st = mr_check_indices(in->indices, in->triangle_count, in->vertex_count, err)) !=
+                MR_OK ||
+            (st = mr_carried_split(in, o.vertex_lock, &c, err)) != MR_OK)
+            return st;
+        run = c.split;
+        o.vertex_lock = c.lock;
+    }
+    uint32_t *org = NULL;
+    st = mesh_simplify(&run, &o, NULL, out, &org, stats, err);
+    if (st == MR_OK && (st = mr_carried_finish(in, &c, out, org, err)) != MR_OK)
+        mr_mesh_free(out);
+    if (st == MR_OK && origin)
+        *origin = org;
+    else
+        free(org);
+    mr_carried_free(&c);
+    return st;
+}
+
 mr_status mr_mesh_simplify(const mr_mesh *in, const mr_simplify_options *options, mr_mesh *out,
                            uint32_t **origin, mr_simplify_stats *stats, mr_error *err)
 {
     const int dynamic = mr_omp_fixed_teams(); /* teams as asked for */
-    const mr_status st = mesh_simplify(in, options, NULL, out, origin, stats, err);
+    const bool carried = in && out && (mr_mesh_attributes(in) & ~MR_ATTR_BASIC);
+    const mr_status st = carried ? simplify_carried(in, options, out, origin, stats, err)
+                                 : mesh_simplify(in, options, NULL, out, origin, stats, err);
     mr_omp_restore_teams(dynamic);
     return st;
 }
