@@ -178,14 +178,18 @@ typedef struct cli_job {
  */
 int cli_run_job(const cli_io *io, const cli_job *job, void *user);
 
-/* An OBJ input's materials kept in an OBJ output (simplify, convert):
- * when io's input and output are both OBJ, m gets the input's mtllib and
- * usemtl names (mr_obj_materials_read; m->count 0: none, or not OBJ into
- * OBJ). CLI_OK, or the failure's status (message printed). */
+/* An OBJ input's materials kept in an OBJ or glTF output (simplify,
+ * convert): when io's input is OBJ and its output OBJ or glTF, m gets the
+ * input's mtllib and usemtl names (mr_obj_materials_read; m->count 0:
+ * none, or another pair of formats). CLI_OK, or the failure's status
+ * (message printed). */
 int cli_obj_materials(const cli_io *io, mr_obj_materials *m);
 /* Point the write options at m's library and names where the output
- * mesh has materials (each face's is the mesh's), or at none. */
-void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const mr_mesh *out);
+ * mesh has materials (each face's is the mesh's), or at none; in_path is
+ * the OBJ the libraries are beside (a glTF output takes their colours and
+ * textures). */
+void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const mr_mesh *out,
+                           const char *in_path);
 
 /* Print "OUT: V vertices, T triangles (DETAIL)" on stderr: the line that
  * tells what a command wrote; DETAIL is formatted from fmt. */

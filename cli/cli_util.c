@@ -403,7 +403,8 @@ int cli_obj_materials(const cli_io *io, mr_obj_materials *m)
     memset(m, 0, sizeof *m);
     const mr_format out = io->write.format != MR_FORMAT_AUTO ? io->write.format
                                                               : mr_format_from_path(io->out);
-    if (!io->in || mr_format_from_path(io->in) != MR_FORMAT_OBJ || out != MR_FORMAT_OBJ)
+    if (!io->in || mr_format_from_path(io->in) != MR_FORMAT_OBJ ||
+        (out != MR_FORMAT_OBJ && out != MR_FORMAT_GLTF))
         return CLI_OK;
     mr_error err;
     if (mr_obj_materials_read(io->in, m, &err) != MR_OK)
@@ -413,7 +414,8 @@ int cli_obj_materials(const cli_io *io, mr_obj_materials *m)
     return CLI_OK;
 }
 
-void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const mr_mesh *out)
+void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const mr_mesh *out,
+                           const char *in_path)
 {
     /* each face's material is the mesh's (read, and kept by simplify) */
     const bool on = out->materials && m->count;
@@ -421,6 +423,7 @@ void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const
     w->material_names = on ? (const char *const *)m->names : NULL;
     w->material_count = on ? m->count : 0;
     w->face_material = NULL;
+    w->mtllib_from = on ? in_path : NULL;
 }
 
 void cli_summary(const char *out, size_t vertices, size_t triangles, const char *fmt, ...)

@@ -96,7 +96,7 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         mr_mesh_init(mesh);
         /* the usemtl groups, face for face as read */
         if (job->write)
-            cli_obj_materials_use(job->write, &job->mats, result);
+            cli_obj_materials_use(job->write, &job->mats, result, io->in);
     }
     return rc;
 }

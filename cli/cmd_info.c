@@ -1,4 +1,5 @@
 /* meshreduce info FILE: counts, bounds and topology of a mesh. */
+#include <stdlib.h>
 #include "cli.h"
 
 #include <string.h>
@@ -27,6 +28,30 @@ static long long genus_of(const mr_stats *s)
     return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
 }
 
+/* The distinct materials of the triangles (none counts as none). */
+static size_t material_count(const mr_mesh *m)
+{
+    size_t n = 0, cap = 0;
+    uint32_t *seen = NULL;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t g = m->materials[t];
+        size_t i = 0;
+        while (g != UINT32_MAX && i < n && seen[i] != g)
+            i++;
+        if (g == UINT32_MAX || i < n || (t && m->materials[t - 1] == g))
+            continue;
+        if (n == cap) {
+            uint32_t *ns = realloc(seen, (cap = cap ? 2 * cap : 16) * sizeof *ns);
+            if (!ns)
+                break;
+            seen = ns;
+        }
+        seen[n++] = g;
+    }
+    free(seen);
+    return n;
+}
+
 static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
                         double seconds)
 {
@@ -49,9 +74,21 @@ static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
     if (s->triangle_count == 0)
         printf(" (point cloud)");
     printf("\n");
-    printf("%-22s %s%s%s\n", "attributes", m->normals ? "normals " : "",
-           m->texcoords ? "texcoords " : "",
-           m->colors ? "colors" : (m->normals || m->texcoords ? "" : "none"));
+    const unsigned at = mr_mesh_attributes(m);
+    printf("%-22s", "attributes");
+    static const struct {
+        unsigned flag;
+        const char *name;
+    } names[] = {{MR_ATTR_NORMALS, "normals"},       {MR_ATTR_TEXCOORDS, "texcoords"},
+                 {MR_ATTR_TEXCOORDS1, "texcoords1"}, {MR_ATTR_TEXCOORDS2, "texcoords2"},
+                 {MR_ATTR_TEXCOORDS3, "texcoords3"}, {MR_ATTR_TANGENTS, "tangents"},
+                 {MR_ATTR_COLORS, "colors"},         {MR_ATTR_SKIN, "joints+weights"}};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (at & names[i].flag)
+            printf(" %s", names[i].name);
+    printf("%s\n", at & ~MR_ATTR_MATERIALS ? "" : " none");
+    if (m->materials)
+        printf("%-22s %zu\n", "materials", material_count(m));
     printf("%-22s %s\n", "edges", cli_count(a, sizeof a, s->edge_count));
     printf("%-22s %s in %s loop%s\n", "boundary edges",
            cli_count(a, sizeof a, s->boundary_edges),
@@ -93,6 +130,12 @@ static void print_json(const char *path, const mr_mesh *m, const mr_stats *s, do
     printf(", \"normals\": %s, \"texcoords\": %s, \"colors\": %s",
            m->normals ? "true" : "false", m->texcoords ? "true" : "false",
            m->colors ? "true" : "false");
+    int sets = m->texcoords ? 1 : 0;
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        sets += m->more_texcoords[k] != NULL;
+    printf(", \"texcoord_sets\": %d, \"tangents\": %s, \"skin\": %s, \"materials\": %zu", sets,
+           m->tangents ? "true" : "false", m->joints ? "true" : "false",
+           m->materials ? material_count(m) : 0);
     printf(", \"edges\": %zu, \"boundary_edges\": %zu, \"boundary_loops\": %zu", s->edge_count,
            s->boundary_edges, s->boundary_loops);
     printf(", \"nonmanifold_edges\": %zu, \"nonmanifold_vertices\": %zu",

@@ -538,7 +538,7 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
     /* an OBJ's usemtl groups are the mesh's materials: simplify keeps them */
     mr_status st = mr_mesh_simplify(mesh, &job->o, result, NULL, &job->s, &err);
     if (st == MR_OK && job->write)
-        cli_obj_materials_use(job->write, &job->mats, result);
+        cli_obj_materials_use(job->write, &job->mats, result, io->in);
     free(job->lock);
     job->lock = NULL;
     job->o.vertex_lock = NULL;
@@ -548,6 +548,10 @@ static int work(const cli_io *io, mr_mesh *mesh, mr_mesh *result, void *user)
         fprintf(stderr, "\r%60s\r", "");
     if (st != MR_OK) /* e.g. a --vertices target above the input's */
         return cli_fail_in(io->in, "simplify", &err);
+    if (mesh->tangents && !io->quiet)
+        fprintf(stderr, "meshreduce: note: %s: tangents dropped (clients compute MikkTSpace "
+                        "tangents where a material needs them)\n",
+                io->in);
     warn_after(io, job);
     return CLI_OK;
 }
@@ -906,7 +910,7 @@ static int run_lods(const cli_io *io, simplify_job *job, bool gltf)
         /* an OBJ into OBJs: each level keeps its usemtl groups */
         const mr_mesh *level = k ? &lv[k - 1].mesh : &mesh;
         mr_write_options w = io->write;
-        cli_obj_materials_use(&w, &job->mats, level);
+        cli_obj_materials_use(&w, &job->mats, level, io->in);
         st = mr_mesh_write(path[k], level, &w, &err);
         written += st == MR_OK;
     }

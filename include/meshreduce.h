@@ -190,7 +190,14 @@ typedef struct mr_write_options {
     const char *mtllib;
     const char *const *material_names;
     size_t material_count;
-    const uint32_t *face_material;
+    const uint32_t *face_material;  /* NULL: the mesh's own materials */
+    /* glTF (since 0.3.0): one primitive per material, each a glTF material
+     * named by material_names; where mtllib_from is the path of the OBJ
+     * whose mtllib files (`mtllib`) define them, its Kd becomes the base
+     * colour and its map_Kd (PNG or JPEG) the base colour texture, held
+     * in the file's buffer. Joints and weights are not written into a
+     * plain mesh's glTF (they need its skin: a glTF document keeps it). */
+    const char *mtllib_from;
 } mr_write_options;
 
 /* An OBJ file's materials: its mtllib lines' file names and each

@@ -1074,6 +1074,226 @@ static void test_texcoords_and_look(void **state)
     assert_true(tu_file_exists(out));
 }
 
+/* ---- the data model (mr_mesh's texture sets, tangents, skin, materials) ------ */
+
+/* A grid in two primitives (materials 0 and 1, the halves of its
+ * triangles) with NORMAL, TANGENT, TEXCOORD_0, TEXCOORD_1, JOINTS_0 (joint
+ * 1 where x > 0.5) and WEIGHTS_0: read into mr_mesh with all of them;
+ * simplified, each triangle keeps its material (grouped, none lost), each
+ * vertex its origin's second texture set, joints and weights, and the
+ * tangents are left out; written as a plain mesh's glTF, one primitive per
+ * material, read back bit for bit. */
+static void test_data_model(void **state)
+{
+    (void)state;
+    grid g;
+    make_grid(&g, 24);
+    const size_t nv = g.nv, nt = g.nt;
+    uint8_t *joints = malloc(4 * nv);
+    float *weights = malloc(16 * nv), *tan = malloc(16 * nv), *uv1 = malloc(8 * nv);
+    for (size_t v = 0; v < nv; v++) {
+        joints[4 * v] = g.pos[3 * v] > 0.5f ? 1 : 0;
+        joints[4 * v + 1] = joints[4 * v + 2] = joints[4 * v + 3] = 0;
+        weights[4 * v] = 1, weights[4 * v + 1] = weights[4 * v + 2] = weights[4 * v + 3] = 0;
+        tan[4 * v] = 1, tan[4 * v + 1] = tan[4 * v + 2] = 0, tan[4 * v + 3] = v % 2 ? 1 : -1;
+        uv1[2 * v] = 0.5f * g.pos[3 * v] + 0.25f, uv1[2 * v + 1] = 0.5f * g.pos[3 * v + 1];
+    }
+    const float ibm[32] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1,
+                           1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    blob b = {0};
+    const size_t p = put(&b, g.pos, 12 * nv), n = put(&b, g.nrm, 12 * nv),
+                 ta = put(&b, tan, 16 * nv), u0 = put(&b, g.uv, 8 * nv),
+                 u1 = put(&b, uv1, 8 * nv), j = put(&b, joints, 4 * nv),
+                 w = put(&b, weights, 16 * nv), i1 = put(&b, g.idx, 6 * nt),
+                 i2 = put(&b, g.idx + 3 * (nt / 2), 6 * nt), m = put(&b, ibm, sizeof ibm);
+    char body[8192];
+    snprintf(body, sizeof body,
+             "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],"
+             "\"nodes\":[{\"mesh\":0,\"skin\":0},{\"name\":\"root\",\"children\":[2]},"
+             "{\"name\":\"bone\"}],"
+             "\"skins\":[{\"joints\":[1,2],\"inverseBindMatrices\":9}],"
+             "\"materials\":[{\"name\":\"left\"},{\"name\":\"right\"}],"
+             "\"meshes\":[{\"primitives\":["
+             "{\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"TANGENT\":2,\"TEXCOORD_0\":3,"
+             "\"TEXCOORD_1\":4,\"JOINTS_0\":5,\"WEIGHTS_0\":6},\"indices\":7,\"material\":0},"
+             "{\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"TANGENT\":2,\"TEXCOORD_0\":3,"
+             "\"TEXCOORD_1\":4,\"JOINTS_0\":5,\"WEIGHTS_0\":6},\"indices\":8,\"material\":1}]}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":%zu,"
+             "\"type\":\"VEC3\",%s},"
+             "{\"bufferView\":1,\"componentType\":5126,\"count\":%zu,\"type\":\"VEC3\"},"
+             "{\"bufferView\":2,\"componentType\":5126,\"count\":%zu,\"type\":\"VEC4\"},"
+             "{\"bufferView\":3,\"componentType\":5126,\"count\":%zu,\"type\":\"VEC2\"},"
+             "{\"bufferView\":4,\"componentType\":5126,\"count\":%zu,\"type\":\"VEC2\"},"
+             "{\"bufferView\":5,\"componentType\":5121,\"count\":%zu,\"type\":\"VEC4\"},"
+             "{\"bufferView\":6,\"componentType\":5126,\"count\":%zu,\"type\":\"VEC4\"},"
+             "{\"bufferView\":7,\"componentType\":5125,\"count\":%zu,\"type\":\"SCALAR\"},"
+             "{\"bufferView\":8,\"componentType\":5125,\"count\":%zu,\"type\":\"SCALAR\"},"
+             "{\"bufferView\":9,\"componentType\":5126,\"count\":2,\"type\":\"MAT4\"}]}",
+             p, 12 * nv, n, 12 * nv, ta, 16 * nv, u0, 8 * nv, u1, 8 * nv, j, 4 * nv, w, 16 * nv,
+             i1, 6 * nt, i2, 6 * nt, m, sizeof ibm, nv, bounds(g.pos, nv), nv, nv, nv, nv, nv,
+             nv, nt * 3 / 2, nt * 3 / 2);
+    const char *in = tu_tmp_path("gltf-model.glb"), *out = tu_tmp_path("gltf-model-out.glb"),
+               *back = tu_tmp_path("gltf-model-simplified.gltf");
+    write_doc(in, body, &b);
+    validate(in);
+    mr_mesh s;
+    mr_error err;
+    assert_int_equal(mr_mesh_read(in, NULL, &s, &err), MR_OK);
+    assert_int_equal(mr_mesh_attributes(&s),
+                     MR_ATTR_NORMALS | MR_ATTR_TEXCOORDS | MR_ATTR_TEXCOORDS1 | MR_ATTR_TANGENTS |
+                         MR_ATTR_SKIN | MR_ATTR_MATERIALS);
+    assert_int_equal(s.triangle_count, nt);
+    for (size_t t = 0; t < nt; t++)
+        assert_int_equal(s.materials[t], t < nt / 2 ? 0 : 1);
+    for (size_t v = 0; v < s.vertex_count; v++) {
+        /* the scene's vertices are the primitives' (each welded on its
+         * own): find this one's input by position */
+        const float *q = s.positions + 3 * v;
+        size_t i = 0;
+        while (i < nv && memcmp(g.pos + 3 * i, q, 12) != 0)
+            i++;
+        assert_true(i < nv);
+        assert_memory_equal(s.tangents + 4 * v, tan + 4 * i, 16);
+        assert_true(s.more_texcoords[0][2 * v] == uv1[2 * i]);
+        assert_true(s.more_texcoords[0][2 * v + 1] == 1.0f - uv1[2 * i + 1]); /* v up */
+        assert_int_equal(s.joints[4 * v], joints[4 * i]);
+        assert_true(s.weights[4 * v] == 1 && s.weights[4 * v + 1] == 0);
+    }
+    /* simplified: materials grouped and kept, the rest the origin's */
+    mr_simplify_options o = ratio_options(0.15);
+    mr_mesh r;
+    uint32_t *origin = NULL;
+    assert_int_equal(mr_mesh_simplify(&s, &o, &r, &origin, NULL, &err), MR_OK);
+    assert_null(r.tangents);
+    assert_non_null(r.materials);
+    assert_non_null(r.more_texcoords[0]);
+    assert_non_null(r.joints);
+    double area[2] = {0, 0}, area_in[2] = {0, 0};
+    for (size_t t = 0; t < r.triangle_count; t++) {
+        assert_true(r.materials[t] <= 1);
+        if (t)
+            assert_true(r.materials[t] >= r.materials[t - 1]);
+        const float *a = r.positions + 3 * r.indices[3 * t], *bb = r.positions + 3 * r.indices[3 * t + 1],
+                    *c = r.positions + 3 * r.indices[3 * t + 2];
+        area[r.materials[t]] += 0.5 * fabs((double)(bb[0] - a[0]) * (c[1] - a[1]) -
+                                           (double)(c[0] - a[0]) * (bb[1] - a[1]));
+    }
+    for (size_t t = 0; t < nt; t++) {
+        const float *a = s.positions + 3 * s.indices[3 * t], *bb = s.positions + 3 * s.indices[3 * t + 1],
+                    *c = s.positions + 3 * s.indices[3 * t + 2];
+        area_in[s.materials[t]] += 0.5 * fabs((double)(bb[0] - a[0]) * (c[1] - a[1]) -
+                                              (double)(c[0] - a[0]) * (bb[1] - a[1]));
+    }
+    for (int k = 0; k < 2; k++) /* the border between them stays where it was */
+        assert_true(fabs(area[k] - area_in[k]) < 1e-3 * (area_in[0] + area_in[1]));
+    for (size_t v = 0; v < r.vertex_count; v++) {
+        const uint32_t i = origin[v];
+        assert_true(i < s.vertex_count);
+        assert_memory_equal(r.more_texcoords[0] + 2 * v, s.more_texcoords[0] + 2 * i, 8);
+        assert_memory_equal(r.joints + 4 * v, s.joints + 4 * i, 8);
+        assert_memory_equal(r.weights + 4 * v, s.weights + 4 * i, 16);
+    }
+    free(origin);
+    /* a plain mesh's glTF: a primitive per material; read back the same */
+    assert_int_equal(mr_mesh_write(out, &s, NULL, &err), MR_OK);
+    validate(out);
+    assert_int_equal(mr_mesh_write(back, &r, NULL, &err), MR_OK);
+    validate(back);
+    doc d;
+    load_doc(out, &d);
+    const cJSON *prims = cJSON_GetObjectItem(
+        cJSON_GetArrayItem(cJSON_GetObjectItem(d.root, "meshes"), 0), "primitives");
+    assert_int_equal(cJSON_GetArraySize(prims), 2);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(d.root, "materials")), 2);
+    cJSON_Delete(d.root);
+    free(d.bin);
+    mr_mesh x;
+    assert_int_equal(mr_mesh_read(out, NULL, &x, &err), MR_OK);
+    assert_int_equal(x.vertex_count, s.vertex_count);
+    assert_int_equal(x.triangle_count, s.triangle_count);
+    assert_int_equal(mr_mesh_attributes(&x) & ~MR_ATTR_SKIN,
+                     mr_mesh_attributes(&s) & ~MR_ATTR_SKIN); /* no skin: not written */
+    assert_memory_equal(x.tangents, s.tangents, 16 * s.vertex_count);
+    assert_memory_equal(x.more_texcoords[0], s.more_texcoords[0], 8 * s.vertex_count);
+    assert_memory_equal(x.materials, s.materials, 4 * s.triangle_count);
+    assert_memory_equal(x.indices, s.indices, 12 * s.triangle_count);
+    mr_mesh c2;
+    assert_int_equal(mr_mesh_copy(&c2, &x, &err), MR_OK);
+    assert_memory_equal(c2.tangents, x.tangents, 16 * x.vertex_count);
+    assert_memory_equal(c2.materials, x.materials, 4 * x.triangle_count);
+    mr_mesh_free(&c2);
+    mr_mesh_free(&x);
+    mr_mesh_free(&r);
+    mr_mesh_free(&s);
+    free(b.d);
+    free(joints), free(weights), free(tan), free(uv1);
+    free_grid(&g);
+}
+
+/* An OBJ's usemtl groups into glTF: a primitive per material, named, its
+ * Kd the base colour; a map_Kd that is no PNG or JPEG is one error naming
+ * the material, and no file. */
+static void test_obj_materials_to_gltf(void **state)
+{
+    (void)state;
+    const char *obj = tu_tmp_path("mat-quads.obj"), *mtl = tu_tmp_path("mat-quads.mtl"),
+               *out = tu_tmp_path("mat-quads.gltf"), *bad_tex = tu_tmp_path("mat-quads.tga");
+    const char *text = "mtllib mat-quads.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\n"
+                       "v 2 1 0\nusemtl red\nf 1 2 3 4\nusemtl blue\nf 2 5 6 3\n";
+    tu_write_file(obj, text, strlen(text));
+    const char *lib = "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\n";
+    tu_write_file(mtl, lib, strlen(lib));
+    mr_mesh m;
+    mr_error err;
+    assert_int_equal(mr_mesh_read(obj, NULL, &m, &err), MR_OK);
+    assert_non_null(m.materials);
+    const uint32_t want[4] = {0, 0, 1, 1};
+    assert_memory_equal(m.materials, want, sizeof want);
+    mr_obj_materials om;
+    assert_int_equal(mr_obj_materials_read(obj, &om, &err), MR_OK);
+    mr_write_options w;
+    mr_write_options_default(&w);
+    w.mtllib = om.mtllib;
+    w.material_names = (const char *const *)om.names;
+    w.material_count = om.count;
+    w.mtllib_from = obj;
+    assert_int_equal(mr_mesh_write(out, &m, &w, &err), MR_OK);
+    validate(out);
+    doc d;
+    load_doc(out, &d);
+    const cJSON *mats = cJSON_GetObjectItem(d.root, "materials");
+    assert_int_equal(cJSON_GetArraySize(mats), 2);
+    const cJSON *blue = cJSON_GetArrayItem(mats, 1);
+    assert_string_equal(cJSON_GetObjectItem(blue, "name")->valuestring, "blue");
+    const cJSON *f = cJSON_GetObjectItem(cJSON_GetObjectItem(blue, "pbrMetallicRoughness"),
+                                         "baseColorFactor");
+    assert_true(cJSON_GetArrayItem(f, 2)->valuedouble == 1 &&
+                cJSON_GetArrayItem(f, 0)->valuedouble == 0);
+    cJSON_Delete(d.root);
+    free(d.bin);
+    /* a texture glTF cannot hold */
+    const char *lib2 = "newmtl red\nKd 1 0 0\nmap_Kd mat-quads.tga\nnewmtl blue\nKd 0 0 1\n";
+    tu_write_file(mtl, lib2, strlen(lib2));
+    tu_write_file(bad_tex, "TGA?", 4);
+    remove(out);
+    assert_int_equal(mr_mesh_write(out, &m, &w, &err), MR_ERR_UNSUPPORTED);
+    tu_assert_contains(err.message, "material \"red\"");
+    tu_assert_contains(err.message, "neither PNG nor JPEG");
+    assert_int_equal(access(out, F_OK), -1);
+    mr_obj_materials_free(&om);
+    mr_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1082,6 +1302,8 @@ int main(void)
         cmocka_unit_test(test_malformed),
         cmocka_unit_test(test_samples),
         cmocka_unit_test(test_texcoords_and_look),
+        cmocka_unit_test(test_data_model),
+        cmocka_unit_test(test_obj_materials_to_gltf),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

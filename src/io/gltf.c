@@ -1,6 +1,7 @@
 /* glTF 2.0 documents (gltf.h). */
 #include "gltf.h"
 #include "mapped.h"
+#include "obj_materials.h"
 #include "output.h"
 
 #include <errno.h>
@@ -1090,18 +1091,35 @@ void mr_gltf_primitive_at(const mr_gltf *g, size_t i, size_t *mesh, size_t *prim
 /* The mesh of a read primitive, its positions (and normals) under the
  * 4x4 column-major matrix x (NULL: as they are). */
 static mr_status prim_mesh(const mr_gltf *g, const gl_prim_data *p, const double *x,
-                           mr_mesh *out, mr_error *err)
+                           long long material, mr_mesh *out, mr_error *err)
 {
     const gl_attr *N = find_attr(p, "NORMAL"), *T = find_attr(p, "TEXCOORD_0"),
-                  *C = find_attr(p, "COLOR_0"), *P = find_attr(p, "POSITION");
+                  *C = find_attr(p, "COLOR_0"), *P = find_attr(p, "POSITION"),
+                  *TA = find_attr(p, "TANGENT"), *J = find_attr(p, "JOINTS_0"),
+                  *W = find_attr(p, "WEIGHTS_0"), *TM[MR_MORE_TEXCOORDS];
     if (N && N->info.comps != 3)
         N = NULL;
     if (T && T->info.comps != 2)
         T = NULL;
     if (C && C->info.comps != 3 && C->info.comps != 4)
         C = NULL;
-    const unsigned flags = (N ? MR_ATTR_NORMALS : 0) | (T ? MR_ATTR_TEXCOORDS : 0) |
-                           (C ? MR_ATTR_COLORS : 0);
+    if (TA && TA->info.comps != 4)
+        TA = NULL;
+    if (!J || !W || J->info.comps != 4 || W->info.comps != 4)
+        J = W = NULL;
+    if (material >= (long long)UINT32_MAX)
+        material = -1;
+    unsigned flags = (N ? MR_ATTR_NORMALS : 0) | (T ? MR_ATTR_TEXCOORDS : 0) |
+                     (C ? MR_ATTR_COLORS : 0) | (TA ? MR_ATTR_TANGENTS : 0) |
+                     (J ? MR_ATTR_SKIN : 0) | (material >= 0 ? MR_ATTR_MATERIALS : 0);
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++) {
+        char name[16];
+        snprintf(name, sizeof name, "TEXCOORD_%d", k + 1);
+        TM[k] = find_attr(p, name);
+        if (TM[k] && TM[k]->info.comps != 2)
+            TM[k] = NULL;
+        flags |= TM[k] ? MR_ATTR_TEXCOORDS1 << k : 0;
+    }
     mr_status st = mr_mesh_alloc(out, p->nw, p->nt, flags, err);
     if (st != MR_OK)
         return st;
@@ -1139,10 +1157,35 @@ static mr_status prim_mesh(const mr_gltf *g, const gl_prim_data *p, const double
         for (int k = 0; C && k < 4; k++) /* rgb: alpha 1 */
             out->colors[4 * w + (size_t)k] =
                 k < C->info.comps ? (float)C->data[(size_t)C->info.comps * v + (size_t)k] : 1.0f;
+        for (int s = 0; s < MR_MORE_TEXCOORDS; s++)
+            for (int k = 0; TM[s] && k < 2; k++)
+                out->more_texcoords[s][2 * w + (size_t)k] = (float)TM[s]->data[2 * v + (size_t)k];
+        for (int k = 0; J && k < 4; k++) {
+            const double j = J->data[4 * v + (size_t)k];
+            out->joints[4 * w + (size_t)k] = j >= 0 && j <= 65535 ? (uint16_t)j : 0;
+            out->weights[4 * w + (size_t)k] = (float)W->data[4 * v + (size_t)k];
+        }
     }
     const bool flip = x && (x[0] * (x[5] * x[10] - x[9] * x[6]) -
                             x[4] * (x[1] * x[10] - x[9] * x[2]) +
                             x[8] * (x[1] * x[6] - x[5] * x[2])) < 0;
+    /* tangents: directions under x's 3x3 (a mirror turns the bitangent) */
+    for (size_t w = 0; TA && w < p->nw; w++) {
+        const double *q = TA->data + 4 * p->first[w];
+        double t[3] = {q[0], q[1], q[2]};
+        if (x) {
+            for (int k = 0; k < 3; k++)
+                t[k] = x[k] * q[0] + x[4 + k] * q[1] + x[8 + k] * q[2];
+            const double l = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (l > 0)
+                t[0] /= l, t[1] /= l, t[2] /= l;
+        }
+        for (int k = 0; k < 3; k++)
+            out->tangents[4 * w + (size_t)k] = (float)t[k];
+        out->tangents[4 * w + 3] = (float)(flip ? -q[3] : q[3]);
+    }
+    for (size_t t = 0; out->materials && t < p->nt; t++)
+        out->materials[t] = (uint32_t)material;
     for (size_t t = 0; t < p->nt; t++) {
         out->indices[3 * t] = p->tri[3 * t];
         out->indices[3 * t + 1] = p->tri[3 * t + (flip ? 2 : 1)];
@@ -1156,8 +1199,11 @@ mr_status mr_gltf_primitive_mesh(const mr_gltf *g, size_t i, mr_mesh *out, mr_er
     mr_mesh_init(out);
     gl_prim_data p;
     mr_status st = prim_read(g, g->prims[i].mesh, g->prims[i].prim, &p, err);
+    long long material = -1;
+    if (st == MR_OK && get_index(p.json, "material", -1, &material) != 1)
+        material = -1;
     if (st == MR_OK)
-        st = prim_mesh(g, &p, NULL, out, err);
+        st = prim_mesh(g, &p, NULL, material, out, err);
     prim_free(&p);
     if (st != MR_OK)
         mr_mesh_free(out);
@@ -1286,7 +1332,7 @@ static mr_status visit(scene_acc *s, long long n, const double *parent, int dept
             static const double id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
             if (st == MR_OK)
                 st = prim_mesh(g, &pd, memcmp(world, id, sizeof id) ? world : NULL,
-                               &s->parts[s->nparts], err);
+                               s->material[s->nparts], &s->parts[s->nparts], err);
             prim_free(&pd);
             s->nparts++;
         }
@@ -1349,7 +1395,9 @@ static mr_status scene_join(const mr_gltf *g, mr_mesh *out, uint32_t **face_mate
     /* the parts joined: normals and texture coordinates where all have
      * them, colors where one has */
     size_t nv = 0, nt = 0;
-    unsigned all = MR_ATTR_NORMALS | MR_ATTR_TEXCOORDS, any = 0;
+    unsigned all = MR_ATTR_NORMALS | MR_ATTR_TEXCOORDS | MR_ATTR_TEXCOORDS1 | MR_ATTR_TEXCOORDS2 |
+                   MR_ATTR_TEXCOORDS3 | MR_ATTR_TANGENTS | MR_ATTR_SKIN,
+             any = 0;
     for (size_t i = 0; i < s.nparts; i++) {
         nv += s.parts[i].vertex_count;
         nt += s.parts[i].triangle_count;
@@ -1363,7 +1411,7 @@ static mr_status scene_join(const mr_gltf *g, mr_mesh *out, uint32_t **face_mate
         st = mr_fail_plain(err, MR_ERR_EMPTY, g->name, "its scene holds no triangles");
     const unsigned flags = face_material ? (all & MR_ATTR_NORMALS) |
                                                (any & (MR_ATTR_TEXCOORDS | MR_ATTR_COLORS))
-                                         : all | (any & MR_ATTR_COLORS);
+                                         : all | (any & (MR_ATTR_COLORS | MR_ATTR_MATERIALS));
     if (st == MR_OK)
         st = mr_mesh_alloc(out, nv, nt, flags, err);
     if (st == MR_OK && face_material) {
@@ -1384,6 +1432,13 @@ static mr_status scene_join(const mr_gltf *g, mr_mesh *out, uint32_t **face_mate
         }
         if (out->texcoords && !m->texcoords)
             memset(out->texcoords + 2 * v0, 0, 8 * m->vertex_count);
+        mr_mesh_copy_more(out, v0, m, 0, m->vertex_count);
+        for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+            for (size_t v = 0; out->more_texcoords[k] && v < m->vertex_count; v++)
+                out->more_texcoords[k][2 * (v0 + v) + 1] =
+                    1.0f - out->more_texcoords[k][2 * (v0 + v) + 1];
+        for (size_t t = 0; out->materials && t < m->triangle_count; t++)
+            out->materials[t0 + t] = m->materials ? m->materials[t] : UINT32_MAX;
         for (size_t v = 0; out->colors && v < m->vertex_count; v++)
             for (int k = 0; k < 4; k++) {
                 float c = m->colors ? m->colors[4 * v + (size_t)k] : 1.0f;
@@ -2375,6 +2430,202 @@ mr_status mr_convert_gltf(const char *in_path, const char *out_path, size_t *pri
     return st;
 }
 
+/* A buffer view of raw bytes (an image's): its index, or -1. */
+static long long add_view(mr_gltf *g, uint8_t *bytes, size_t nbytes, mr_error *err)
+{
+    /* an accessor's view without the accessor */
+    const long long a = add_accessor(g, bytes, nbytes, 1, GL_UNSIGNED_BYTE, "SCALAR", false, 0,
+                                     NULL, 1, err);
+    if (a < 0)
+        return -1;
+    cJSON *accs = member(g->root, "accessors");
+    const long long view = (long long)cJSON_GetNumberValue(member(cJSON_GetArrayItem(accs, (int)a),
+                                                                  "bufferView"));
+    cJSON_DeleteItemFromArray(accs, (int)a);
+    return view;
+}
+
+/* An OBJ material's texture (map_Kd) as a glTF texture: its image's bytes
+ * in the buffer (PNG or JPEG, which glTF takes), once per file; its index
+ * or -1 (with the error). */
+typedef struct gl_tex {
+    char path[2 * MR_MTL_NAME_MAX];
+    mr_wrap wrap;
+    long long index;
+} gl_tex;
+
+static long long obj_texture(mr_gltf *g, const mr_mtl_material *d, gl_tex **tex, size_t *ntex,
+                             mr_error *err)
+{
+    for (size_t i = 0; i < *ntex; i++)
+        if (strcmp((*tex)[i].path, d->texture) == 0 && (*tex)[i].wrap == d->wrap)
+            return (*tex)[i].index;
+    gl_blob b;
+    mr_status st = read_whole(d->texture, g->name, &b, err);
+    if (st != MR_OK) {
+        char why[sizeof err->message];
+        snprintf(why, sizeof why, "%s", err->message);
+        mr_fail_plain(err, MR_ERR_IO, g->name, "material \"%s\": cannot read its map_Kd (%s)",
+                      d->name, why);
+        return -1;
+    }
+    const bool png = b.size >= 8 && memcmp(b.data, "\x89PNG", 4) == 0;
+    const bool jpeg = b.size >= 3 && b.data[0] == 0xFF && b.data[1] == 0xD8 && b.data[2] == 0xFF;
+    if (!png && !jpeg) {
+        free(b.data);
+        mr_fail_plain(err, MR_ERR_UNSUPPORTED, g->name,
+                      "material \"%s\": map_Kd %s is neither PNG nor JPEG, the images glTF "
+                      "takes (convert it, or write another format)",
+                      d->name, d->texture);
+        return -1;
+    }
+    const long long view = add_view(g, b.data, b.size, err);
+    cJSON *images = member(g->root, "images"), *textures = member(g->root, "textures"),
+          *samplers = member(g->root, "samplers");
+    if (!images)
+        images = cJSON_AddArrayToObject(g->root, "images");
+    if (!textures)
+        textures = cJSON_AddArrayToObject(g->root, "textures");
+    if (!samplers)
+        samplers = cJSON_AddArrayToObject(g->root, "samplers");
+    gl_tex *nt = realloc(*tex, (*ntex + 1) * sizeof *nt);
+    cJSON *img = cJSON_CreateObject(), *t = cJSON_CreateObject(), *sm = cJSON_CreateObject();
+    if (view < 0 || !images || !textures || !samplers || !nt || !img || !t || !sm) {
+        if (nt)
+            *tex = nt;
+        cJSON_Delete(img), cJSON_Delete(t), cJSON_Delete(sm);
+        if (view >= 0)
+            mr_fail_nomem(err, g->name, 4096);
+        return -1;
+    }
+    *tex = nt;
+    cJSON_AddNumberToObject(img, "bufferView", (double)view);
+    cJSON_AddStringToObject(img, "mimeType", png ? "image/png" : "image/jpeg");
+    cJSON_AddItemToArray(images, img);
+    const int wrap = d->wrap == MR_WRAP_CLAMP ? 33071 : 10497;
+    cJSON_AddNumberToObject(sm, "wrapS", wrap);
+    cJSON_AddNumberToObject(sm, "wrapT", wrap);
+    cJSON_AddItemToArray(samplers, sm);
+    cJSON_AddNumberToObject(t, "source", cJSON_GetArraySize(images) - 1);
+    cJSON_AddNumberToObject(t, "sampler", cJSON_GetArraySize(samplers) - 1);
+    cJSON_AddItemToArray(textures, t);
+    gl_tex *e = &nt[(*ntex)++];
+    snprintf(e->path, sizeof e->path, "%s", d->texture);
+    e->wrap = d->wrap;
+    e->index = cJSON_GetArraySize(textures) - 1;
+    return e->index;
+}
+
+/* glTF material for the mesh's material id: its name (the options'), and
+ * where the options name an OBJ's libraries, its Kd as the base colour
+ * (in linear light) and its map_Kd as the base colour texture; not
+ * metallic. */
+static mr_status add_material(mr_gltf *g, uint32_t id, const mr_write_options *o,
+                              const mr_mtl_material *defs, size_t ndefs, gl_tex **tex,
+                              size_t *ntex, mr_error *err)
+{
+    cJSON *mats = member(g->root, "materials");
+    if (!mats)
+        mats = cJSON_AddArrayToObject(g->root, "materials");
+    cJSON *mat = cJSON_CreateObject(), *pbr = cJSON_CreateObject();
+    if (!mats || !mat || !pbr) {
+        cJSON_Delete(mat), cJSON_Delete(pbr);
+        return mr_fail_nomem(err, g->name, 256);
+    }
+    char name[64];
+    snprintf(name, sizeof name, "material_%u", id);
+    const char *nm = o->material_names && id < o->material_count && o->material_names[id]
+                         ? o->material_names[id]
+                         : name;
+    cJSON_AddStringToObject(mat, "name", nm);
+    cJSON_AddItemToObject(mat, "pbrMetallicRoughness", pbr);
+    cJSON_AddItemToArray(mats, mat);
+    const long d = defs ? mr_mtl_find(defs, ndefs, nm) : -1;
+    if (d >= 0) {
+        cJSON *f = cJSON_AddArrayToObject(pbr, "baseColorFactor");
+        for (int k = 0; k < 4; k++)
+            cJSON_AddItemToArray(f, cJSON_CreateNumber(k < 3 ? mr_srgb_to_linear(defs[d].color[k])
+                                                             : defs[d].color[3]));
+        if (defs[d].texture[0]) {
+            const long long t = obj_texture(g, &defs[d], tex, ntex, err);
+            if (t < 0)
+                return err ? err->status : MR_ERR_IO;
+            cJSON *bt = cJSON_CreateObject();
+            if (!bt)
+                return mr_fail_nomem(err, g->name, 64);
+            cJSON_AddNumberToObject(bt, "index", (double)t);
+            cJSON_AddItemToObject(pbr, "baseColorTexture", bt);
+        }
+    }
+    cJSON_AddNumberToObject(pbr, "metallicFactor", 0);
+    return MR_OK;
+}
+
+static int by_key64(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The triangles as one primitive per material (none first, then by id),
+ * each with the attributes of `prim` (which becomes the first). */
+static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_t *fm,
+                                     const mr_write_options *o, cJSON *prim, mr_error *err)
+{
+    const size_t nt = m->triangle_count;
+    mr_mtl_material *defs = NULL;
+    size_t ndefs = 0;
+    mr_status st = MR_OK;
+    if (o->mtllib && o->mtllib_from)
+        st = mr_mtl_read_all(o->mtllib_from, o->mtllib, &defs, &ndefs, err);
+    uint64_t *key = st == MR_OK ? mr_alloc_array(nt + 1, sizeof *key) : NULL;
+    uint32_t *idx = key ? mr_alloc_array(3 * nt + 1, sizeof *idx) : NULL;
+    if (st == MR_OK && (!key || !idx || nt > UINT32_MAX))
+        st = mr_fail_nomem(err, g->name, nt * 20);
+    for (size_t t = 0; st == MR_OK && t < nt; t++)
+        key[t] = (uint64_t)(uint32_t)(fm[t] + 1u) << 32 | t;
+    if (st == MR_OK)
+        qsort(key, nt, sizeof *key, by_key64);
+    cJSON *prims = member(cJSON_GetArrayItem(member(g->root, "meshes"), 0), "primitives");
+    cJSON *templ = st == MR_OK ? cJSON_Duplicate(prim, true) : NULL;
+    if (st == MR_OK && !templ)
+        st = mr_fail_nomem(err, g->name, 256);
+    gl_tex *tex = NULL;
+    size_t ntex = 0, nmat = 0;
+    for (size_t i = 0, first = 1; st == MR_OK && i < nt; first = 0) {
+        const uint32_t g1 = (uint32_t)(key[i] >> 32);
+        size_t j = i;
+        for (; j < nt && (uint32_t)(key[j] >> 32) == g1; j++)
+            memcpy(idx + 3 * (j - i), m->indices + 3 * (key[j] & 0xFFFFFFFFu), 12);
+        cJSON *p = first ? prim : cJSON_Duplicate(templ, true);
+        if (!p) {
+            st = mr_fail_nomem(err, g->name, 256);
+            break;
+        }
+        if (!first)
+            cJSON_AddItemToArray(prims, p);
+        const long long acc = index_accessor(g, idx, 3 * (j - i), m->vertex_count, err);
+        if (acc < 0 || !set_index(p, "indices", acc)) {
+            st = MR_ERR_NO_MEMORY;
+            break;
+        }
+        if (g1 != 0) { /* a material (0: none) */
+            if (!set_index(p, "material", (long long)nmat++)) {
+                st = mr_fail_nomem(err, g->name, 64);
+                break;
+            }
+            st = add_material(g, g1 - 1, o, defs, ndefs, &tex, &ntex, err);
+        }
+        i = j;
+    }
+    cJSON_Delete(templ);
+    free(tex);
+    free(defs);
+    free(key);
+    free(idx);
+    return st;
+}
+
 mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
                              const mr_write_options *options, mr_error *err)
 {
@@ -2407,23 +2658,36 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
         acc = float_accessor(g, m->normals, n, 3, false, GL_ARRAY_BUFFER, err);
         st = acc < 0 || !set_index(attrs, "NORMAL", acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
-    if (st == MR_OK && m->texcoords && options->write_texcoords) {
+    /* tangents go with the normals (glTF asks for both) */
+    if (st == MR_OK && m->tangents && m->normals && options->write_normals) {
+        acc = float_accessor(g, m->tangents, n, 4, false, GL_ARRAY_BUFFER, err);
+        st = acc < 0 || !set_index(attrs, "TANGENT", acc) ? MR_ERR_NO_MEMORY : MR_OK;
+    }
+    for (int set = 0; set <= MR_MORE_TEXCOORDS && st == MR_OK && options->write_texcoords; set++) {
+        const float *tc = set ? m->more_texcoords[set - 1] : m->texcoords;
+        if (!tc)
+            continue;
         /* the mesh's v points up (OBJ's way); glTF's points down */
         float *uv = mr_alloc_array(2 * n, sizeof *uv);
         for (size_t i = 0; uv && i < n; i++) {
-            uv[2 * i] = m->texcoords[2 * i];
-            uv[2 * i + 1] = 1.0f - m->texcoords[2 * i + 1];
+            uv[2 * i] = tc[2 * i];
+            uv[2 * i + 1] = 1.0f - tc[2 * i + 1];
         }
         acc = uv ? float_accessor(g, uv, n, 2, false, GL_ARRAY_BUFFER, err)
                  : (mr_fail_nomem(err, path, 8 * n), -1);
         free(uv);
-        st = acc < 0 || !set_index(attrs, "TEXCOORD_0", acc) ? MR_ERR_NO_MEMORY : MR_OK;
+        char name[16];
+        snprintf(name, sizeof name, "TEXCOORD_%d", set);
+        st = acc < 0 || !set_index(attrs, name, acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
     if (st == MR_OK && m->colors && options->write_colors) {
         acc = float_accessor(g, m->colors, n, 4, false, GL_ARRAY_BUFFER, err);
         st = acc < 0 || !set_index(attrs, "COLOR_0", acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
-    if (st == MR_OK && m->triangle_count) {
+    const uint32_t *fm = options->face_material ? options->face_material : m->materials;
+    if (st == MR_OK && m->triangle_count && fm) {
+        st = material_primitives(g, m, fm, options, prim, err);
+    } else if (st == MR_OK && m->triangle_count) {
         acc = index_accessor(g, m->indices, 3 * m->triangle_count, n, err);
         st = acc < 0 || !set_index(prim, "indices", acc) ? MR_ERR_NO_MEMORY : MR_OK;
     } else if (st == MR_OK) {
