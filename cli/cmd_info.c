@@ -1,5 +1,4 @@
 /* meshreduce info FILE: counts, bounds and topology of a mesh. */
-#include <stdlib.h>
 #include "cli.h"
 
 #include <string.h>
@@ -26,30 +25,6 @@ static long long genus_of(const mr_stats *s)
     long long twice = 2 * (long long)s->components - s->euler_characteristic -
                       (long long)s->boundary_loops;
     return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
-}
-
-/* The distinct materials of the triangles (none counts as none). */
-static size_t material_count(const mr_mesh *m)
-{
-    size_t n = 0, cap = 0;
-    uint32_t *seen = NULL;
-    for (size_t t = 0; t < m->triangle_count; t++) {
-        const uint32_t g = m->materials[t];
-        size_t i = 0;
-        while (g != UINT32_MAX && i < n && seen[i] != g)
-            i++;
-        if (g == UINT32_MAX || i < n || (t && m->materials[t - 1] == g))
-            continue;
-        if (n == cap) {
-            uint32_t *ns = realloc(seen, (cap = cap ? 2 * cap : 16) * sizeof *ns);
-            if (!ns)
-                break;
-            seen = ns;
-        }
-        seen[n++] = g;
-    }
-    free(seen);
-    return n;
 }
 
 static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
@@ -88,7 +63,7 @@ static void print_table(const char *path, const mr_mesh *m, const mr_stats *s,
             printf(" %s", names[i].name);
     printf("%s\n", at & ~MR_ATTR_MATERIALS ? "" : " none");
     if (m->materials)
-        printf("%-22s %zu\n", "materials", material_count(m));
+        printf("%-22s %zu\n", "materials", mr_mesh_material_count(m));
     printf("%-22s %s\n", "edges", cli_count(a, sizeof a, s->edge_count));
     printf("%-22s %s in %s loop%s\n", "boundary edges",
            cli_count(a, sizeof a, s->boundary_edges),
@@ -135,7 +110,7 @@ static void print_json(const char *path, const mr_mesh *m, const mr_stats *s, do
         sets += m->more_texcoords[k] != NULL;
     printf(", \"texcoord_sets\": %d, \"tangents\": %s, \"skin\": %s, \"materials\": %zu", sets,
            m->tangents ? "true" : "false", m->joints ? "true" : "false",
-           m->materials ? material_count(m) : 0);
+           m->materials ? mr_mesh_material_count(m) : 0);
     printf(", \"edges\": %zu, \"boundary_edges\": %zu, \"boundary_loops\": %zu", s->edge_count,
            s->boundary_edges, s->boundary_loops);
     printf(", \"nonmanifold_edges\": %zu, \"nonmanifold_vertices\": %zu",

@@ -147,6 +147,10 @@ mr_status mr_mesh_copy(mr_mesh *dst, const mr_mesh *src, mr_error *err);
 /* The MR_ATTR_* flags of the attribute arrays present in the mesh. */
 unsigned mr_mesh_attributes(const mr_mesh *mesh);
 
+/* How many distinct materials the triangles have (none not counted; 0
+ * without materials, or where the count's memory is not there). */
+size_t mr_mesh_material_count(const mr_mesh *mesh);
+
 /* ------------------------------------------------------------------------ */
 /* File input and output                                                    */
 /* ------------------------------------------------------------------------ */

@@ -91,24 +91,40 @@ def _shape(a):
 class Mesh:
     """A mesh or point cloud as arrays: vertices (N, 3), triangles (M, 3)
     ((0, 3) or None for a point cloud), and optional per-vertex normals
-    (N, 3), texcoords (N, 2) and colors (N, 4, RGBA in [0, 1]).
+    (N, 3), texcoords (N, 2) and colors (N, 4, RGBA in [0, 1]); and, as
+    glTF files carry them, texcoords1 to texcoords3 (N, 2: texture sets 1 to
+    3), tangents (N, 4: xyz and the bitangent's sign), joints (N, 4 uint16)
+    with weights (N, 4), and materials (M,: each triangle's material id,
+    -1 for none; an OBJ's usemtl names in order of first use).
 
     read() and generate() return one (float32 and uint32 arrays); write()
     accepts one, or any object with the same attributes."""
 
-    __slots__ = ("vertices", "triangles", "normals", "texcoords", "colors")
+    _arrays = ("vertices", "triangles", "normals", "texcoords", "colors", "texcoords1",
+               "texcoords2", "texcoords3", "tangents", "joints", "weights", "materials")
+    __slots__ = _arrays
 
-    def __init__(self, vertices, triangles=None, normals=None, texcoords=None, colors=None):
+    def __init__(self, vertices, triangles=None, normals=None, texcoords=None, colors=None,
+                 texcoords1=None, texcoords2=None, texcoords3=None, tangents=None, joints=None,
+                 weights=None, materials=None):
         self.vertices = vertices
         self.triangles = triangles
         self.normals = normals
         self.texcoords = texcoords
         self.colors = colors
+        self.texcoords1 = texcoords1
+        self.texcoords2 = texcoords2
+        self.texcoords3 = texcoords3
+        self.tangents = tangents
+        self.joints = joints
+        self.weights = weights
+        self.materials = materials
 
     def __repr__(self):
-        return "Mesh(vertices=%s, triangles=%s, normals=%s, texcoords=%s, colors=%s)" % (
-            _shape(self.vertices), _shape(self.triangles), _shape(self.normals),
-            _shape(self.texcoords), _shape(self.colors))
+        # the first five always; the others where present
+        shown = [k for k in self._arrays[:5]] + [
+            k for k in self._arrays[5:] if getattr(self, k) is not None]
+        return "Mesh(%s)" % ", ".join("%s=%s" % (k, _shape(getattr(self, k))) for k in shown)
 
 
 class Result:
@@ -130,6 +146,10 @@ class Result:
 
 
 _core._register(Mesh, Result)
+
+
+_CARRIED = ("texcoords1", "texcoords2", "texcoords3", "tangents", "joints", "weights",
+            "materials")
 
 
 def simplify_lods(vertices, triangles, levels, *, normals=None, texcoords=None, colors=None,
@@ -166,12 +186,15 @@ def simplify_lods(vertices, triangles, levels, *, normals=None, texcoords=None, 
         cmp["samples"] = samples
     out, worst = [], 0.0
     cur = (vertices, triangles, normals, texcoords, colors)
+    # texture sets 1-3, skin and materials go from level to level
+    carried = {k: options.pop(k) for k in _CARRIED if k in options}
     origin = None
     for f in levels:
         target = max(1, int(np.floor(f * total + 0.5)))  # llround
         target = min(target, len(cur[1]))
         r = simplify(cur[0], cur[1], normals=cur[2], texcoords=cur[3], colors=cur[4],
-                     triangle_count=target, **options)
+                     triangle_count=target, **carried, **options)
+        carried = {k: getattr(r, k) for k in _CARRIED if getattr(r, k) is not None}
         if origin is not None:
             r.origin = origin[r.origin]
         origin = r.origin

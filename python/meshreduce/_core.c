@@ -263,6 +263,7 @@ static PyArrayObject *index_rows(PyObject *obj, size_t vertex_count, const char 
 /* The arrays of one input mesh, held while the library reads them. */
 typedef struct py_mesh {
     PyArrayObject *v, *t, *n, *uv, *c;
+    PyArrayObject *more[MR_MORE_TEXCOORDS], *tan, *jo, *we, *mat; /* py_mesh_more's */
     mr_mesh m; /* points into the arrays: never freed by mr_mesh_free */
 } py_mesh;
 
@@ -273,7 +274,117 @@ static void py_mesh_release(py_mesh *p)
     Py_XDECREF(p->n);
     Py_XDECREF(p->uv);
     Py_XDECREF(p->c);
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        Py_XDECREF(p->more[k]);
+    Py_XDECREF(p->tan);
+    Py_XDECREF(p->jo);
+    Py_XDECREF(p->we);
+    Py_XDECREF(p->mat);
     memset(p, 0, sizeof *p);
+}
+
+/* The names of the arrays besides the weighed attributes, in the order
+ * py_mesh_more takes them: texcoords1-3, tangents, joints, weights,
+ * materials. */
+#define PY_MORE 7
+static const char *const more_names[PY_MORE] = {"texcoords1", "texcoords2", "texcoords3",
+                                                "tangents",   "joints",     "weights",
+                                                "materials"};
+
+/* An array of integers of `rows` x cols (cols 0: 1-D, `rows` long) with
+ * every value in [lo, hi], copied into a new array of `type` (uint16 or
+ * uint32); -1 becomes UINT32_MAX for uint32 (a material's "none"). */
+static PyArrayObject *int_rows(PyObject *obj, int cols, npy_intp rows, long long lo,
+                               long long hi, int type, const char *name)
+{
+    PyArrayObject *a0 = (PyArrayObject *)PyArray_FROMANY(obj, NPY_NOTYPE, 0, 0, 0);
+    if (!a0) {
+        if (PyErr_ExceptionMatches(PyExc_ValueError) || PyErr_ExceptionMatches(PyExc_TypeError)) {
+            PyErr_Clear();
+            PyErr_Format(PyExc_TypeError, "%s: not an array of integers (%.80s)", name,
+                         Py_TYPE(obj)->tp_name);
+        }
+        return NULL;
+    }
+    const char kind = PyArray_DESCR(a0)->kind;
+    const int nd = cols ? 2 : 1;
+    if (PyArray_NDIM(a0) != nd || PyArray_DIM(a0, 0) != rows ||
+        (cols && PyArray_DIM(a0, 1) != cols) ||
+        (kind != 'i' && kind != 'u' && PyArray_SIZE(a0) > 0)) {
+        char shape[96];
+        shape_string(a0, shape, sizeof shape);
+        if (cols)
+            PyErr_Format(PyExc_ValueError, "%s must be integers of shape (%lld, %d), got %s %c%d",
+                         name, (long long)rows, cols, shape, kind, (int)PyArray_ITEMSIZE(a0));
+        else
+            PyErr_Format(PyExc_ValueError, "%s must be integers of shape (%lld,), got %s %c%d",
+                         name, (long long)rows, shape, kind, (int)PyArray_ITEMSIZE(a0));
+        Py_DECREF(a0);
+        return NULL;
+    }
+    PyArrayObject *w = (PyArrayObject *)PyArray_FromArray(
+        a0, PyArray_DescrFromType(NPY_INT64), NPY_ARRAY_IN_ARRAY | NPY_ARRAY_FORCECAST);
+    Py_DECREF(a0);
+    if (!w)
+        return NULL;
+    npy_intp dims[2] = {rows, cols};
+    PyArrayObject *out = (PyArrayObject *)PyArray_SimpleNew(nd, dims, type);
+    if (!out) {
+        Py_DECREF(w);
+        return NULL;
+    }
+    const int64_t *x = PyArray_DATA(w);
+    const npy_intp n = PyArray_SIZE(w);
+    for (npy_intp i = 0; i < n; i++) {
+        if (x[i] < lo || x[i] > hi) {
+            PyErr_Format(PyExc_ValueError, "%s: value %lld at %lld is not in [%lld, %lld]", name,
+                         (long long)x[i], (long long)i, lo, hi);
+            Py_DECREF(w);
+            Py_DECREF(out);
+            return NULL;
+        }
+        if (type == NPY_UINT16)
+            ((uint16_t *)PyArray_DATA(out))[i] = (uint16_t)x[i];
+        else
+            ((uint32_t *)PyArray_DATA(out))[i] = x[i] < 0 ? UINT32_MAX : (uint32_t)x[i];
+    }
+    Py_DECREF(w);
+    return out;
+}
+
+/* The arrays besides the weighed attributes (more_names' order; each may
+ * be NULL or None) into p, which py_mesh_from filled. Returns 0, or -1
+ * with the exception set (p released). */
+static int py_mesh_more(py_mesh *p, PyObject *const *x)
+{
+    const npy_intp nv = (npy_intp)p->m.vertex_count, nt = (npy_intp)p->m.triangle_count;
+#define GIVEN(i) (x[i] && x[i] != Py_None)
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        if (GIVEN(k) && !(p->more[k] = float_rows(x[k], 2, nv, more_names[k], 1)))
+            goto fail;
+    if (GIVEN(3) && !(p->tan = float_rows(x[3], 4, nv, "tangents", 1)))
+        goto fail;
+    if (GIVEN(4) != GIVEN(5)) {
+        PyErr_SetString(PyExc_ValueError, "joints and weights go together: give both or neither");
+        goto fail;
+    }
+    if (GIVEN(4) && (!(p->jo = int_rows(x[4], 4, nv, 0, 65535, NPY_UINT16, "joints")) ||
+                     !(p->we = float_rows(x[5], 4, nv, "weights", 1))))
+        goto fail;
+    if (GIVEN(6) && !(p->mat = int_rows(x[6], 0, nt, -1, (long long)UINT32_MAX - 1, NPY_UINT32,
+                                        "materials")))
+        goto fail;
+#undef GIVEN
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        p->m.more_texcoords[k] = p->more[k] ? PyArray_DATA(p->more[k]) : NULL;
+    p->m.tangents = p->tan ? PyArray_DATA(p->tan) : NULL;
+    p->m.joints = p->jo ? PyArray_DATA(p->jo) : NULL;
+    p->m.weights = p->we ? PyArray_DATA(p->we) : NULL;
+    p->m.materials = p->mat ? PyArray_DATA(p->mat) : NULL;
+    return 0;
+fail:
+    py_mesh_release(p);
+    return -1;
 }
 
 /* Fill p from Python objects (triangles, normals, texcoords, colors may be
@@ -345,6 +456,25 @@ static int py_mesh_from_object(py_mesh *p, PyObject *mesh, int need_triangles)
                           "mesh.triangles");
     for (int i = 0; i < 5; i++)
         Py_XDECREF(f[i]);
+    if (rc < 0)
+        return rc;
+    /* the arrays besides, where the object has them */
+    PyObject *x[PY_MORE] = {NULL};
+    for (int i = 0; i < PY_MORE && rc == 0; i++) {
+        x[i] = PyObject_GetAttrString(mesh, more_names[i]);
+        if (!x[i]) {
+            if (PyErr_ExceptionMatches(PyExc_AttributeError))
+                PyErr_Clear();
+            else
+                rc = -1;
+        }
+    }
+    if (rc < 0)
+        py_mesh_release(p);
+    else
+        rc = py_mesh_more(p, x);
+    for (int i = 0; i < PY_MORE; i++)
+        Py_XDECREF(x[i]);
     return rc;
 fail:
     for (int i = 0; i < 5; i++)
@@ -417,6 +547,32 @@ static int move_mesh_arrays(PyObject *d, mr_mesh *m)
     rc |= set_item(d, "colors",
                    x.colors ? take_array(x.colors, x.vertex_count, 4, NPY_FLOAT32)
                             : Py_NewRef(Py_None));
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        rc |= set_item(d, more_names[k],
+                       x.more_texcoords[k]
+                           ? take_array(x.more_texcoords[k], x.vertex_count, 2, NPY_FLOAT32)
+                           : Py_NewRef(Py_None));
+    rc |= set_item(d, "tangents",
+                   x.tangents ? take_array(x.tangents, x.vertex_count, 4, NPY_FLOAT32)
+                              : Py_NewRef(Py_None));
+    rc |= set_item(d, "joints",
+                   x.joints ? take_array(x.joints, x.vertex_count, 4, NPY_UINT16)
+                            : Py_NewRef(Py_None));
+    rc |= set_item(d, "weights",
+                   x.weights ? take_array(x.weights, x.vertex_count, 4, NPY_FLOAT32)
+                             : Py_NewRef(Py_None));
+    /* materials as int64, -1 for none */
+    PyObject *mat = Py_NewRef(Py_None);
+    if (x.materials) {
+        npy_intp dims[1] = {(npy_intp)x.triangle_count};
+        Py_DECREF(mat);
+        mat = PyArray_SimpleNew(1, dims, NPY_INT64);
+        for (size_t t = 0; mat && t < x.triangle_count; t++)
+            ((int64_t *)PyArray_DATA((PyArrayObject *)mat))[t] =
+                x.materials[t] == UINT32_MAX ? -1 : (int64_t)x.materials[t];
+        free(x.materials);
+    }
+    rc |= set_item(d, "materials", mat);
     return rc ? -1 : 0;
 }
 
@@ -790,7 +946,9 @@ PyDoc_STRVAR(simplify_doc,
 "         lock_border=False, boundary_weight=1.0, max_normal_turn=60.0, locked=None,\n"
 "         prune=False, normals=None, texcoords=None, colors=None, threads=0,\n"
 "         progress=None, filter_levels=0, multiqueue_factor=0, quality='default',\n"
-"         partitions=0, attribute_weights=None, seams='auto')\n"
+"         partitions=0, attribute_weights=None, seams='auto', texcoords1=None,\n"
+"         texcoords2=None, texcoords3=None, tangents=None, joints=None, weights=None,\n"
+"         materials=None)\n"
 "--\n"
 "\n"
 "Reduce a triangle mesh by quadric-error edge collapse, as `meshreduce simplify`\n"
@@ -802,6 +960,10 @@ PyDoc_STRVAR(simplify_doc,
 "(uint32 and non-negative int32 C-contiguous arrays without a copy).\n"
 "normals (N, 3), texcoords (N, 2), colors (N, 4): per-vertex attributes carried\n"
 "through; attribute seams (vertices split at one position) are kept.\n"
+"texcoords1-3 (N, 2), joints (N, 4) with weights (N, 4): carried as the\n"
+"surviving vertex had them (no blend); materials (M,): each triangle's material\n"
+"id (-1: none), kept (a vertex two materials share is a seam; the output's\n"
+"triangles are grouped by material); tangents (N, 4) are left out (None).\n"
 "attribute_weights: their part in the collapse cost, a dict such as\n"
 "{'normal': 0.5, 'uv': 0.25, 'color': 1.0} (those are the defaults; a name not\n"
 "given keeps its default, 0 leaves an attribute out: it is interpolated), as\n"
@@ -837,7 +999,7 @@ PyDoc_STRVAR(simplify_doc,
 "raised.\n"
 "\n"
 "Returns a Result with vertices (float32), triangles (uint32), normals,\n"
-"texcoords, colors (or None), origin (uint32: for each output vertex, the input\n"
+"texcoords, colors, texcoords1-3, tangents, joints, weights, materials (or None), origin (uint32: for each output vertex, the input\n"
 "vertex it descends from), error (the largest collapse error, as a distance),\n"
 "target_reached, stop_reason ('target', 'max_error', 'locked', 'refused'), stop\n"
 "(a sentence), and the figures of `meshreduce simplify --json` as attributes and\n"
@@ -853,22 +1015,25 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
                              "locked",    "prune",         "normals",         "texcoords",
                              "colors",    "threads",       "progress",        "filter_levels",
                              "multiqueue_factor", "quality", "partitions", "attribute_weights",
-                             "seams", NULL};
+                             "seams", "texcoords1", "texcoords2", "texcoords3", "tangents",
+                             "joints", "weights", "materials", NULL};
     PyObject *vertices, *triangles, *ratio = Py_None, *vcount = Py_None, *tcount = Py_None,
                                     *max_error = Py_None, *locked = Py_None, *normals = Py_None,
                                     *texcoords = Py_None, *colors = Py_None, *progress = Py_None,
                                     *weights = Py_None;
+    PyObject *more[PY_MORE] = {Py_None, Py_None, Py_None, Py_None, Py_None, Py_None, Py_None};
     int absolute = 0, lock_border = 0, prune = 0, threads = 0;
     const char *collapse = "full", *strategy = NULL, *quality = "default", *seams = "auto";
     double boundary_weight = 1.0, max_normal_turn = 60.0;
     unsigned int filter_levels = 0, multiqueue_factor = 0, partitions = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsIOs", kwlist, &vertices,
-                                     &triangles, &ratio, &vcount, &tcount, &max_error, &absolute,
-                                     &collapse, &strategy, &lock_border, &boundary_weight,
-                                     &max_normal_turn, &locked, &prune, &normals, &texcoords,
-                                     &colors, &threads, &progress, &filter_levels,
-                                     &multiqueue_factor, &quality, &partitions, &weights,
-                                     &seams))
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|$OOOOpszpddOpOOOiOIIsIOsOOOOOOO", kwlist,
+                                     &vertices, &triangles, &ratio, &vcount, &tcount, &max_error,
+                                     &absolute, &collapse, &strategy, &lock_border,
+                                     &boundary_weight, &max_normal_turn, &locked, &prune,
+                                     &normals, &texcoords, &colors, &threads, &progress,
+                                     &filter_levels, &multiqueue_factor, &quality, &partitions,
+                                     &weights, &seams, &more[0], &more[1], &more[2], &more[3],
+                                     &more[4], &more[5], &more[6]))
         return NULL;
 
     mr_simplify_options o;
@@ -881,7 +1046,8 @@ static PyObject *py_simplify(PyObject *self, PyObject *args, PyObject *kw)
 
     py_mesh in;
     if (py_mesh_from(&in, vertices, triangles, normals, texcoords, colors, 1, "vertices",
-                     "triangles") < 0)
+                     "triangles") < 0 ||
+        py_mesh_more(&in, more) < 0)
         return NULL;
     uint8_t *lock = NULL;
     if (locked != Py_None) {
@@ -1194,29 +1360,55 @@ static PyObject *py_read(PyObject *self, PyObject *args, PyObject *kw)
 
 PyDoc_STRVAR(write_doc,
 "write($module, /, path, mesh, *, format=None, encoding=None, normals=True, texcoords=True,\n"
-"      colors=True)\n"
+"      colors=True, material_names=None)\n"
 "--\n"
 "\n"
 "Write a mesh: any object with .vertices and .triangles (and optionally\n"
 ".normals, .texcoords, .colors), such as Mesh or Result. The format comes from\n"
 "the extension unless format='obj'|'ply'|'stl'|'xyz' is given; encoding is\n"
 "'binary' (default for PLY/STL), 'ascii' or 'big-endian' (PLY). normals,\n"
-"texcoords, colors=False drop those arrays. The file appears complete or not at\n"
-"all (temporary file, then rename), as with the CLI.");
+"texcoords, colors=False drop those arrays. The mesh's other arrays\n"
+"(texcoords1-3, tangents, materials) go where the format holds them: glTF\n"
+"writes every one (a primitive per material; joints and weights need a skin\n"
+"and are left out), OBJ its materials as usemtl groups. material_names: the\n"
+"materials' names, by id (OBJ usemtl lines; glTF materials' names). The file\n"
+"appears complete or not at all (temporary file, then rename), as with the CLI.");
 
 static PyObject *py_write(PyObject *self, PyObject *args, PyObject *kw)
 {
     static char *kwlist[] = {"path", "mesh", "format", "encoding", "normals", "texcoords",
-                             "colors", NULL};
+                             "colors", "material_names", NULL};
     static const char *const encodings[] = {"default", "ascii", "binary", "big-endian", NULL};
-    PyObject *path = NULL, *mesh;
+    PyObject *path = NULL, *mesh, *names = Py_None, *seq = NULL;
     const char *format = NULL, *encoding = NULL;
+    const char **name_list = NULL;
     mr_write_options wo;
     mr_write_options_default(&wo);
     int normals = 1, texcoords = 1, colors = 1;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O|$zzppp", kwlist, path_arg, &path, &mesh,
-                                     &format, &encoding, &normals, &texcoords, &colors))
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O|$zzpppO", kwlist, path_arg, &path, &mesh,
+                                     &format, &encoding, &normals, &texcoords, &colors, &names))
         return NULL;
+    if (names != Py_None) {
+        /* the materials' names: usemtl lines (OBJ), glTF materials' names */
+        if (!(seq = PySequence_Fast(names, "material_names must be a sequence of str")))
+            goto fail;
+        const Py_ssize_t nn = PySequence_Fast_GET_SIZE(seq);
+        name_list = calloc((size_t)nn + 1, sizeof *name_list);
+        if (!name_list) {
+            PyErr_NoMemory();
+            goto fail;
+        }
+        for (Py_ssize_t i = 0; i < nn; i++) {
+            PyObject *x = PySequence_Fast_GET_ITEM(seq, i);
+            if (!PyUnicode_Check(x) || !(name_list[i] = PyUnicode_AsUTF8(x))) {
+                if (!PyErr_Occurred())
+                    PyErr_Format(PyExc_TypeError, "material_names[%zd] is not a str", i);
+                goto fail;
+            }
+        }
+        wo.material_names = name_list;
+        wo.material_count = (size_t)nn;
+    }
     int k;
     if (format) {
         if ((k = choose("format", format, format_names)) < 0)
@@ -1242,11 +1434,15 @@ static PyObject *py_write(PyObject *self, PyObject *args, PyObject *kw)
     Py_END_ALLOW_THREADS
     py_mesh_release(&in);
     Py_DECREF(path);
+    Py_XDECREF(seq);
+    free(name_list);
     if (st != MR_OK)
         return raise_mr_error(&err);
     Py_RETURN_NONE;
 fail:
     Py_DECREF(path);
+    Py_XDECREF(seq);
+    free(name_list);
     return NULL;
 }
 
@@ -1356,6 +1552,11 @@ static PyObject *py_info(PyObject *self, PyObject *args, PyObject *kw)
                           in.m.triangle_count, &s, &err);
     Py_END_ALLOW_THREADS
     const int has_n = in.n != NULL, has_uv = in.uv != NULL, has_c = in.c != NULL;
+    int sets = has_uv;
+    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
+        sets += in.more[k] != NULL;
+    const int has_t = in.tan != NULL, has_s = in.jo != NULL;
+    const size_t materials = mr_mesh_material_count(&in.m);
     py_mesh_release(&in);
     if (st != MR_OK)
         return raise_mr_error(&err);
@@ -1370,7 +1571,7 @@ static PyObject *py_info(PyObject *self, PyObject *args, PyObject *kw)
         return NULL;
     return Py_BuildValue(
         "{s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:O,s:O,s:O,s:n,s:n,s:n,s:n,s:n,s:n,s:n,s:L,s:N,"
-        "s:O,s:O,s:O,s:(ddd),s:(ddd),s:d,s:d}",
+        "s:O,s:O,s:O,s:(ddd),s:(ddd),s:d,s:d,s:i,s:O,s:O,s:n}",
         "vertices", (Py_ssize_t)s.vertex_count, "referenced_vertices",
         (Py_ssize_t)s.referenced_vertices, "unreferenced_vertices",
         (Py_ssize_t)s.unreferenced_vertices, "surface_vertices", (Py_ssize_t)s.surface_vertices,
@@ -1387,7 +1588,9 @@ static PyObject *py_info(PyObject *self, PyObject *args, PyObject *kw)
         s.closed ? Py_True : Py_False, "manifold", s.manifold ? Py_True : Py_False, "oriented",
         s.oriented ? Py_True : Py_False, "bbox_min", s.bbox_min[0], s.bbox_min[1],
         s.bbox_min[2], "bbox_max", s.bbox_max[0], s.bbox_max[1], s.bbox_max[2],
-        "bbox_diagonal", s.bbox_diagonal, "surface_area", s.surface_area);
+        "bbox_diagonal", s.bbox_diagonal, "surface_area", s.surface_area, "texcoord_sets", sets,
+        "tangents", has_t ? Py_True : Py_False, "skin", has_s ? Py_True : Py_False, "materials",
+        (Py_ssize_t)materials);
 }
 
 /* ------------------------------------------------------------------------ */

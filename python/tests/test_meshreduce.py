@@ -121,6 +121,68 @@ def test_attributes_carried(sphere):
         meshreduce.simplify(v, t, ratio=0.3, normals=n[:-1])
 
 
+def test_data_model_carried(sphere):
+    # texture set 1, joints and weights are the surviving vertex's; each
+    # triangle keeps its material (grouped, -1 = none first); tangents go
+    v, t = sphere.vertices, sphere.triangles
+    uv1 = (v[:, :2] * 0.5 + 0.5).astype(np.float32)
+    joints = np.zeros((len(v), 4), np.uint16)
+    joints[:, 0] = v[:, 0] > 0
+    weights = np.zeros((len(v), 4), np.float32)
+    weights[:, 0] = 1
+    centre = v[t].mean(axis=1)
+    mats = np.where(centre[:, 2] > 0.3, 1, np.where(centre[:, 2] < -0.3, -1, 0))
+    tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (len(v), 1))
+    r = meshreduce.simplify(v, t, ratio=0.3, texcoords1=uv1, joints=joints, weights=weights,
+                            materials=mats, tangents=tangents)
+    assert r.tangents is None
+    assert r.materials.dtype == np.int64 and len(r.materials) == len(r.triangles)
+    assert set(np.unique(r.materials)) == {-1, 0, 1}
+    assert np.all(np.diff(r.materials) >= 0)  # grouped
+    np.testing.assert_array_equal(r.texcoords1, uv1[r.origin])
+    np.testing.assert_array_equal(r.joints, joints[r.origin])
+    np.testing.assert_array_equal(r.weights, weights[r.origin])
+    # a Result is a mesh: info sees its arrays
+    info = meshreduce.info(r)
+    assert info["materials"] == 2 and info["skin"] and info["texcoord_sets"] == 1
+    with pytest.raises(ValueError, match="joints and weights go together"):
+        meshreduce.simplify(v, t, ratio=0.3, joints=joints)
+    with pytest.raises(ValueError, match=r"materials: value -2"):
+        meshreduce.simplify(v, t, ratio=0.3, materials=mats - 1)
+    with pytest.raises(ValueError, match=r"joints: value 70000"):
+        meshreduce.simplify(v, t, ratio=0.3, joints=joints.astype(np.int64) + 70000,
+                            weights=weights)
+    # levels of detail carry them level to level
+    levels = meshreduce.simplify_lods(v, t, [0.5, 0.2], materials=mats, texcoords1=uv1)
+    for lv in levels:
+        assert len(lv.materials) == len(lv.triangles) and set(lv.materials) == {-1, 0, 1}
+        np.testing.assert_array_equal(lv.texcoords1, uv1[lv.origin])
+
+
+def test_materials_through_files(tmp_path):
+    # an OBJ's usemtl groups read as materials, written back as usemtl
+    # groups and as a glTF's primitives with the names given
+    (tmp_path / "q.obj").write_text(
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+        "f 1 2 3\nusemtl red\nf 1 3 4\nusemtl blue\nf 2 5 6 3\n")
+    m = meshreduce.read(tmp_path / "q.obj")
+    np.testing.assert_array_equal(m.materials, [-1, 0, 1, 1])
+    assert "materials=(4,)" in repr(m)
+    meshreduce.write(tmp_path / "o.obj", m, material_names=["red", "blue"])
+    text = (tmp_path / "o.obj").read_text()
+    assert text.count("usemtl red") == 1 and text.count("usemtl blue") == 1
+    np.testing.assert_array_equal(meshreduce.read(tmp_path / "o.obj").materials, [-1, 0, 1, 1])
+    try:
+        meshreduce.write(tmp_path / "o.glb", m, material_names=["red", "blue"])
+    except meshreduce.Error as e:  # glTF support not built
+        assert "not built" in str(e)
+    else:
+        g = meshreduce.read(tmp_path / "o.glb")
+        np.testing.assert_array_equal(np.sort(g.materials), [-1, 0, 1, 1])
+    with pytest.raises(TypeError, match=r"material_names\[1\] is not a str"):
+        meshreduce.write(tmp_path / "o.obj", m, material_names=["red", 2])
+
+
 # ---- input types and zero copy --------------------------------------------
 
 

@@ -144,3 +144,25 @@ void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_c
     }
     mesh->vertex_count = new_count;
 }
+
+static int by_u32(const void *a, const void *b)
+{
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+size_t mr_mesh_material_count(const mr_mesh *mesh)
+{
+    if (!mesh || !mesh->materials || !mesh->triangle_count)
+        return 0;
+    uint32_t *ids = mr_alloc_array(mesh->triangle_count, sizeof *ids);
+    if (!ids)
+        return 0;
+    memcpy(ids, mesh->materials, mesh->triangle_count * sizeof *ids);
+    qsort(ids, mesh->triangle_count, sizeof *ids, by_u32);
+    size_t n = 0;
+    for (size_t t = 0; t < mesh->triangle_count; t++)
+        n += ids[t] != UINT32_MAX && (t == 0 || ids[t] != ids[t - 1]);
+    free(ids);
+    return n;
+}
