@@ -34,6 +34,13 @@ class Mesh:
     normals: Any
     texcoords: Any
     colors: Any
+    texcoords1: Any
+    texcoords2: Any
+    texcoords3: Any
+    tangents: Any
+    joints: Any
+    weights: Any
+    materials: Any
     def __init__(
         self,
         vertices: _Floats,
@@ -41,6 +48,13 @@ class Mesh:
         normals: Optional[_Floats] = ...,
         texcoords: Optional[_Floats] = ...,
         colors: Optional[_Floats] = ...,
+        texcoords1: Optional[_Floats] = ...,
+        texcoords2: Optional[_Floats] = ...,
+        texcoords3: Optional[_Floats] = ...,
+        tangents: Optional[_Floats] = ...,
+        joints: Optional[npt.ArrayLike] = ...,
+        weights: Optional[_Floats] = ...,
+        materials: Optional[npt.ArrayLike] = ...,
     ) -> None: ...
 
 class Result:
@@ -49,6 +63,13 @@ class Result:
     normals: Optional[npt.NDArray[np.float32]]
     texcoords: Optional[npt.NDArray[np.float32]]
     colors: Optional[npt.NDArray[np.float32]]
+    texcoords1: Optional[npt.NDArray[np.float32]]
+    texcoords2: Optional[npt.NDArray[np.float32]]
+    texcoords3: Optional[npt.NDArray[np.float32]]
+    tangents: Optional[npt.NDArray[np.float32]]
+    joints: Optional[npt.NDArray[np.uint16]]
+    weights: Optional[npt.NDArray[np.float32]]
+    materials: Optional[npt.NDArray[np.int64]]
     origin: npt.NDArray[np.uint32]
     error: float
     target_reached: bool
@@ -106,6 +127,13 @@ def simplify(
     partitions: int = ...,
     attribute_weights: Optional[Dict[Literal["normal", "uv", "color"], float]] = ...,
     seams: Literal["auto", "free", "keep"] = ...,
+    texcoords1: Optional[_Floats] = ...,
+    texcoords2: Optional[_Floats] = ...,
+    texcoords3: Optional[_Floats] = ...,
+    tangents: Optional[_Floats] = ...,
+    joints: Optional[npt.ArrayLike] = ...,
+    weights: Optional[_Floats] = ...,
+    materials: Optional[npt.ArrayLike] = ...,
 ) -> Result: ...
 def simplify_lods(
     vertices: _Floats,
@@ -165,6 +193,7 @@ def write(
     normals: bool = ...,
     texcoords: bool = ...,
     colors: bool = ...,
+    material_names: Optional[Sequence[str]] = ...,
 ) -> None: ...
 def generate(
     kind: Literal["sphere", "torus", "scan"] = ..., triangles: int = ..., *, seed: int = ...
