@@ -249,7 +249,7 @@ def cluster_file(
 ) -> dict[str, Any]: ...
 _Color = Union[int, tuple[int, int, int]]
 def render(
-    vertices: _Floats,
+    vertices: Union[_Floats, _Path],
     triangles: Optional[_Indices] = ...,
     *,
     width: int = ...,
@@ -269,5 +269,10 @@ def render(
     scalar_min: Optional[float] = ...,
     scalar_max: Optional[float] = ...,
     threads: int = ...,
+    texcoords: Optional[_Floats] = ...,
+    colors: Optional[_Floats] = ...,
+    face_materials: Optional[npt.ArrayLike] = ...,
+    looks: Optional[Sequence[Dict[str, Any]]] = ...,
+    plain: bool = ...,
 ) -> npt.NDArray[np.uint8]: ...
 def write_png(path: _Path, image: npt.ArrayLike) -> None: ...

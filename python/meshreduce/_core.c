@@ -2066,11 +2066,170 @@ static PyArrayObject *scalar_array(PyObject *o, npy_intp n, const char *name, co
     return a;
 }
 
+/* A surface's look for render(): a file's (mr_look_read), or arrays'
+ * (texcoords, colors, face_materials and looks); held while the library
+ * draws. */
+typedef struct py_look {
+    mr_look file;
+    int from_file;
+    PyArrayObject *uv, *col, *fm;
+    mr_render_material *mats;
+    mr_image *imgs;
+    PyArrayObject **pix; /* each material's texture pixels, or NULL */
+    size_t nmat;
+} py_look;
+
+static void py_look_release(py_look *l)
+{
+    if (l->from_file)
+        mr_look_free(&l->file);
+    Py_XDECREF(l->uv);
+    Py_XDECREF(l->col);
+    Py_XDECREF(l->fm);
+    for (size_t i = 0; l->pix && i < l->nmat; i++)
+        Py_XDECREF(l->pix[i]);
+    free(l->pix);
+    free(l->mats);
+    free(l->imgs);
+    memset(l, 0, sizeof *l);
+}
+
+/* looks[i] (a dict: "color" (r, g, b[, a]) in 0..1 or 0xRRGGBB, "texture"
+ * an (H, W, 3 or 4) uint8 image, "wrap" 'repeat', 'clamp' or 'mirror',
+ * "v_up" True by default) into l->mats[i]. */
+static int look_from(py_look *l, size_t i, PyObject *d)
+{
+    mr_render_material *m = &l->mats[i];
+    m->color[0] = m->color[1] = m->color[2] = m->color[3] = 1;
+    m->wrap_s = m->wrap_t = MR_WRAP_REPEAT;
+    m->v_up = 1;
+    if (!PyDict_Check(d)) {
+        PyErr_Format(PyExc_TypeError, "looks[%zu] must be a dict (color, texture, wrap, v_up)", i);
+        return -1;
+    }
+    PyObject *c = PyDict_GetItemString(d, "color"), *t = PyDict_GetItemString(d, "texture"),
+             *w = PyDict_GetItemString(d, "wrap"), *v = PyDict_GetItemString(d, "v_up");
+    if (c && PyLong_Check(c)) {
+        uint32_t rgb;
+        if (to_rgb(c, "looks[].color", &rgb) < 0)
+            return -1;
+        for (int k = 0; k < 3; k++)
+            m->color[k] = (float)((rgb >> (16 - 8 * k)) & 0xFF) / 255.0f;
+    } else if (c && c != Py_None) {
+        PyObject *seq = PySequence_Fast(c, "looks[].color must be 0xRRGGBB or (r, g, b[, a])");
+        if (!seq)
+            return -1;
+        const Py_ssize_t n = PySequence_Fast_GET_SIZE(seq);
+        for (Py_ssize_t k = 0; k < n && k < 4; k++)
+            m->color[k] = (float)PyFloat_AsDouble(PySequence_Fast_GET_ITEM(seq, k));
+        Py_DECREF(seq);
+        if (PyErr_Occurred())
+            return -1;
+        if (n < 3 || n > 4) {
+            PyErr_Format(PyExc_ValueError, "looks[%zu].color needs 3 or 4 values in 0..1", i);
+            return -1;
+        }
+    }
+    if (w && w != Py_None) {
+        static const char *const wraps[] = {"repeat", "clamp", "mirror", NULL};
+        const char *ws = PyUnicode_Check(w) ? PyUnicode_AsUTF8(w) : NULL;
+        const int k = ws ? choose("wrap", ws, wraps) : -1;
+        if (k < 0) {
+            if (!PyErr_Occurred())
+                PyErr_SetString(PyExc_ValueError, "wrap must be 'repeat', 'clamp' or 'mirror'");
+            return -1;
+        }
+        m->wrap_s = m->wrap_t = (mr_wrap)k;
+    }
+    if (v && v != Py_None && (m->v_up = PyObject_IsTrue(v)) < 0)
+        return -1;
+    if (t && t != Py_None) {
+        PyArrayObject *a = (PyArrayObject *)PyArray_FROMANY(t, NPY_UINT8, 3, 3,
+                                                            NPY_ARRAY_IN_ARRAY);
+        if (!a)
+            return -1;
+        const npy_intp h = PyArray_DIM(a, 0), wd = PyArray_DIM(a, 1), ch = PyArray_DIM(a, 2);
+        if ((ch != 3 && ch != 4) || h < 1 || wd < 1 || h > 32768 || wd > 32768) {
+            Py_DECREF(a);
+            PyErr_Format(PyExc_ValueError, "looks[%zu].texture must be (H, W, 3 or 4) uint8", i);
+            return -1;
+        }
+        if (ch == 3) { /* to RGBA */
+            npy_intp dims[3] = {h, wd, 4};
+            PyArrayObject *r = (PyArrayObject *)PyArray_SimpleNew(3, dims, NPY_UINT8);
+            if (!r) {
+                Py_DECREF(a);
+                return -1;
+            }
+            const uint8_t *src = PyArray_DATA(a);
+            uint8_t *dst = PyArray_DATA(r);
+            for (npy_intp px = 0; px < h * wd; px++) {
+                dst[4 * px] = src[3 * px];
+                dst[4 * px + 1] = src[3 * px + 1];
+                dst[4 * px + 2] = src[3 * px + 2];
+                dst[4 * px + 3] = 255;
+            }
+            Py_DECREF(a);
+            a = r;
+        }
+        l->pix[i] = a;
+        l->imgs[i] = (mr_image){(int)wd, (int)h, PyArray_DATA(a)};
+        m->texture = &l->imgs[i];
+    }
+    return 0;
+}
+
+/* The arrays' look into l and o (nv vertices, nt triangles). */
+static int look_from_arrays(py_look *l, mr_render_options *o, size_t nv, size_t nt,
+                            PyObject *texcoords, PyObject *colors, PyObject *face_materials,
+                            PyObject *looks)
+{
+    if (looks != Py_None) {
+        PyObject *seq = PySequence_Fast(looks, "looks must be a sequence of dicts");
+        if (!seq)
+            return -1;
+        l->nmat = (size_t)PySequence_Fast_GET_SIZE(seq);
+        l->mats = calloc(l->nmat + 1, sizeof *l->mats);
+        l->imgs = calloc(l->nmat + 1, sizeof *l->imgs);
+        l->pix = calloc(l->nmat + 1, sizeof *l->pix);
+        int rc = l->mats && l->imgs && l->pix ? 0 : (PyErr_NoMemory(), -1);
+        for (size_t i = 0; rc == 0 && i < l->nmat; i++)
+            rc = look_from(l, i, PySequence_Fast_GET_ITEM(seq, (Py_ssize_t)i));
+        Py_DECREF(seq);
+        if (rc < 0)
+            return -1;
+        o->materials = l->mats;
+        o->material_count = l->nmat;
+    }
+    if (texcoords != Py_None) {
+        if (!(l->uv = float_rows(texcoords, 2, (npy_intp)nv, "texcoords", 1)))
+            return -1;
+        o->texcoords = PyArray_DATA(l->uv);
+    }
+    if (colors != Py_None) {
+        if (!(l->col = float_rows(colors, 4, (npy_intp)nv, "colors", 1)))
+            return -1;
+        o->vertex_colors = PyArray_DATA(l->col);
+    }
+    if (face_materials != Py_None) {
+        if (!l->nmat) {
+            PyErr_SetString(PyExc_ValueError, "face_materials index looks: give looks too");
+            return -1;
+        }
+        if (!(l->fm = int_rows(face_materials, 0, (npy_intp)nt, -1, (long long)l->nmat - 1,
+                               NPY_UINT32, "face_materials")))
+            return -1;
+        o->face_material = PyArray_DATA(l->fm);
+    }
+    return 0;
+}
+
 PyDoc_STRVAR(render_doc,
 "render($module, /, vertices, triangles=None, *, width=1024, height=768, view='iso', yaw=None,\n"
 "       pitch=None, supersample=3, wire=False, background=0xFFFFFF, color=None,\n"
 "       wire_color=None, point_radius=0.0, margin=0.04, face_scalar=None,\n"
-"       vertex_scalar=None, scalar_min=None, scalar_max=None, threads=0)\n"
+"       vertex_scalar=None, scalar_min=None, scalar_max=None, threads=0,\n"
+"       texcoords=None, colors=None, face_materials=None, looks=None, plain=False)\n"
 "--\n"
 "\n"
 "Render a mesh (flat-shaded, z-buffered, headlight) or a point cloud\n"
@@ -2080,7 +2239,17 @@ PyDoc_STRVAR(render_doc,
 "degrees. Colours: 0xRRGGBB or (r, g, b). face_scalar (one value per triangle)\n"
 "or vertex_scalar (per vertex) colour the surface by a heat map over\n"
 "[scalar_min, scalar_max] (default: the values' range). The same image at any\n"
-"thread count. write_png(path, image) saves it.");
+"thread count. write_png(path, image) saves it.\n"
+"\n"
+"vertices may be a file path: the file is drawn as `meshreduce render` draws\n"
+"it -- its glTF materials or OBJ mtllib/usemtl materials with their base-colour\n"
+"textures (PNG, JPEG), and vertex colours -- unless plain=True. For arrays, the\n"
+"look is given: texcoords (N, 2; v up), colors (N, 4: display values 0..1,\n"
+"multiplying), looks (a list of dicts, one per material: 'color' (r, g, b[, a])\n"
+"in 0..1 or 0xRRGGBB, 'texture' an (H, W, 3 or 4) uint8 image, 'wrap' 'repeat',\n"
+"'clamp' or 'mirror', 'v_up' False for glTF's v) and face_materials (M,: an\n"
+"index into looks per triangle, -1 for the plain color; without it every\n"
+"triangle takes looks[0]).");
 
 static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
 {
@@ -2088,20 +2257,24 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
                              "view",       "yaw",          "pitch",         "supersample",
                              "wire",       "background",   "color",         "wire_color",
                              "point_radius", "margin",     "face_scalar",   "vertex_scalar",
-                             "scalar_min", "scalar_max",   "threads",       NULL};
+                             "scalar_min", "scalar_max",   "threads",       "texcoords",
+                             "colors",     "face_materials", "looks",       "plain",
+                             NULL};
     PyObject *vertices, *triangles = Py_None, *yaw = Py_None, *pitch = Py_None,
                         *background = Py_None, *color = Py_None, *wire_color = Py_None,
                         *face_scalar = Py_None, *vertex_scalar = Py_None, *smin = Py_None,
-                        *smax = Py_None;
+                        *smax = Py_None, *texcoords = Py_None, *colors = Py_None,
+                        *face_materials = Py_None, *looks = Py_None;
     mr_render_options o;
     mr_render_options_default(&o);
     const char *view = "iso";
-    int wire = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|O$iisOOipOOOddOOOOi", kwlist, &vertices,
+    int wire = 0, plain = 0;
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|O$iisOOipOOOddOOOOiOOOOp", kwlist, &vertices,
                                      &triangles, &o.width, &o.height, &view, &yaw, &pitch,
                                      &o.supersample, &wire, &background, &color, &wire_color,
                                      &o.point_radius, &o.margin, &face_scalar, &vertex_scalar,
-                                     &smin, &smax, &o.threads))
+                                     &smin, &smax, &o.threads, &texcoords, &colors,
+                                     &face_materials, &looks, &plain))
         return NULL;
     o.wire = wire;
     if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
@@ -2133,13 +2306,55 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
     if (face_scalar != Py_None && vertex_scalar != Py_None)
         return PyErr_Format(PyExc_ValueError, "give face_scalar or vertex_scalar, not both");
     py_mesh in;
-    if (py_mesh_from(&in, vertices, triangles, NULL, NULL, NULL, 0, "vertices", "triangles") < 0)
-        return NULL;
+    py_look look;
+    memset(&look, 0, sizeof look);
+    memset(&in, 0, sizeof in);
+    if (PyUnicode_Check(vertices) || PyBytes_Check(vertices) ||
+        PyObject_HasAttrString(vertices, "__fspath__")) {
+        /* a file, drawn as its file shows it */
+        PyObject *path = NULL;
+        if (triangles != Py_None || texcoords != Py_None || colors != Py_None ||
+            face_materials != Py_None || looks != Py_None)
+            return PyErr_Format(PyExc_TypeError, "a file path brings its own triangles and "
+                                                 "look (no triangles, texcoords, colors, "
+                                                 "face_materials or looks)");
+        if (!path_arg(vertices, &path))
+            return NULL;
+        mr_error err;
+        mr_status st;
+        const char *p = PyBytes_AS_STRING(path);
+        Py_BEGIN_ALLOW_THREADS
+        st = mr_look_read(p, &look.file, &err);
+        Py_END_ALLOW_THREADS
+        Py_DECREF(path);
+        if (st != MR_OK)
+            return raise_mr_error(&err);
+        look.from_file = 1;
+        in.m = look.file.mesh;
+        if (!plain) {
+            o.texcoords = look.file.mesh.texcoords;
+            o.vertex_colors = look.file.mesh.colors;
+            o.face_material = look.file.face_material;
+            o.materials = look.file.materials;
+            o.material_count = look.file.material_count;
+        }
+    } else {
+        if (py_mesh_from(&in, vertices, triangles, NULL, NULL, NULL, 0, "vertices", "triangles") <
+            0)
+            return NULL;
+        if (!plain && look_from_arrays(&look, &o, in.m.vertex_count, in.m.triangle_count,
+                                       texcoords, colors, face_materials, looks) < 0) {
+            py_look_release(&look);
+            py_mesh_release(&in);
+            return NULL;
+        }
+    }
     PyArrayObject *sc = NULL;
     if (face_scalar != Py_None || vertex_scalar != Py_None) {
         const int face = face_scalar != Py_None;
         if (face && in.m.triangle_count == 0) {
             py_mesh_release(&in);
+            py_look_release(&look);
             return PyErr_Format(PyExc_ValueError, "face_scalar needs triangles");
         }
         sc = scalar_array(face ? face_scalar : vertex_scalar,
@@ -2147,6 +2362,7 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
                           face ? "face_scalar" : "vertex_scalar", face ? "triangle" : "vertex");
         if (!sc) {
             py_mesh_release(&in);
+            py_look_release(&look);
             return NULL;
         }
         const float *v = PyArray_DATA(sc);
@@ -2163,6 +2379,7 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
             (smax != Py_None && to_double(smax, "scalar_max", &o.scalar_max) < 0)) {
             Py_DECREF(sc);
             py_mesh_release(&in);
+            py_look_release(&look);
             return NULL;
         }
         if (face)
@@ -2175,6 +2392,7 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
     if (!img) {
         Py_XDECREF(sc);
         py_mesh_release(&in);
+        py_look_release(&look);
         return NULL;
     }
     mr_error err;
@@ -2185,7 +2403,10 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
                    0, &err);
     Py_END_ALLOW_THREADS
     Py_XDECREF(sc);
+    if (look.from_file)
+        memset(&in, 0, sizeof in); /* the look's mesh: freed with it */
     py_mesh_release(&in);
+    py_look_release(&look);
     if (st != MR_OK) {
         Py_DECREF(img);
         return raise_mr_error(&err);

@@ -910,6 +910,49 @@ def test_render_matches_cli(tmp_path, torus):
     assert (tmp_path / "cli.png").read_bytes() == (tmp_path / "py.png").read_bytes()
 
 
+@needs_cli
+@pytest.mark.skipif(not meshreduce.features["png"], reason="built without libpng")
+def test_textured_render(tmp_path, sphere):
+    # a file is drawn as the CLI draws it: its materials and texture
+    tex = np.zeros((16, 16, 3), np.uint8)
+    tex[::4] = (255, 0, 0)
+    img = meshreduce.render(sphere.vertices, sphere.triangles, width=64, height=48)
+    meshreduce.write_png(tmp_path / "tex.png", np.dstack([tex, np.full((16, 16), 255, np.uint8)]))
+    uv = (sphere.vertices[:, :2] * 0.5 + 0.5).astype(np.float32)
+    m = meshreduce.Mesh(sphere.vertices, sphere.triangles, texcoords=uv,
+                        materials=np.zeros(len(sphere.triangles), np.int64))
+    meshreduce.write(tmp_path / "s.obj", m, material_names=["skin"])
+    text = (tmp_path / "s.obj").read_text()
+    (tmp_path / "s.obj").write_text("mtllib s.mtl\n" + text)
+    (tmp_path / "s.mtl").write_text("newmtl skin\nKd 1 1 1\nmap_Kd tex.png\n")
+    cli("render", tmp_path / "s.obj", "-o", tmp_path / "cli.png", "--size", "64x48", "-q")
+    got = meshreduce.render(tmp_path / "s.obj", width=64, height=48)
+    meshreduce.write_png(tmp_path / "py.png", got)
+    assert (tmp_path / "cli.png").read_bytes() == (tmp_path / "py.png").read_bytes()
+    assert not np.array_equal(got, img)
+    plain = meshreduce.render(str(tmp_path / "s.obj"), width=64, height=48, plain=True)
+    assert np.array_equal(plain, img)
+    # the same look from arrays
+    arr = meshreduce.render(sphere.vertices, sphere.triangles, width=64, height=48,
+                            texcoords=uv, looks=[{"color": (1, 1, 1), "texture": tex}])
+    assert np.array_equal(arr, got)
+    two = meshreduce.render(sphere.vertices, sphere.triangles, width=64, height=48,
+                            looks=[{"color": 0xFF8800}, {"color": (0.2, 0.4, 1.0)}],
+                            face_materials=np.arange(len(sphere.triangles)) % 2)
+    assert len(np.unique(two.reshape(-1, 4), axis=0)) > len(np.unique(img.reshape(-1, 4), axis=0)) / 4
+    with pytest.raises(ValueError, match="face_materials: value 2"):
+        meshreduce.render(sphere.vertices, sphere.triangles, width=8, height=8,
+                          looks=[{}, {}], face_materials=np.full(len(sphere.triangles), 2))
+    with pytest.raises(ValueError, match="give looks too"):
+        meshreduce.render(sphere.vertices, sphere.triangles, width=8, height=8,
+                          face_materials=np.zeros(len(sphere.triangles)))
+    with pytest.raises(TypeError, match="brings its own triangles"):
+        meshreduce.render(tmp_path / "s.obj", sphere.triangles)
+    with pytest.raises(meshreduce.Error, match="tex2.png"):
+        (tmp_path / "s.mtl").write_text("newmtl skin\nKd 1 1 1\nmap_Kd tex2.png\n")
+        meshreduce.render(tmp_path / "s.obj", width=8, height=8)
+
+
 @pytest.mark.skipif(meshreduce.features["png"], reason="built with libpng")
 def test_write_png_without_libpng(tmp_path):
     with pytest.raises(meshreduce.UnsupportedError, match="PNG output: support was not built"):
