@@ -423,7 +423,7 @@ void cli_obj_materials_use(mr_write_options *w, const mr_obj_materials *m, const
     w->material_names = on ? (const char *const *)m->names : NULL;
     w->material_count = on ? m->count : 0;
     w->face_material = NULL;
-    w->mtllib_from = on ? in_path : NULL;
+    w->materials_from = in_path; /* a glTF's materials go into an OBJ's library */
 }
 
 void cli_summary(const char *out, size_t vertices, size_t triangles, const char *fmt, ...)

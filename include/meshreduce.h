@@ -195,13 +195,20 @@ typedef struct mr_write_options {
     const char *const *material_names;
     size_t material_count;
     const uint32_t *face_material;  /* NULL: the mesh's own materials */
-    /* glTF (since 0.3.0): one primitive per material, each a glTF material
-     * named by material_names; where mtllib_from is the path of the OBJ
+    /* The file the mesh's material ids come from (since 0.3.0), or NULL.
+     * Into glTF, the materials become one primitive each and a glTF
+     * material named by material_names; where materials_from is the OBJ
      * whose mtllib files (`mtllib`) define them, its Kd becomes the base
      * colour and its map_Kd (PNG or JPEG) the base colour texture, held
-     * in the file's buffer. Joints and weights are not written into a
-     * plain mesh's glTF (they need its skin: a glTF document keeps it). */
-    const char *mtllib_from;
+     * in the file's buffer. Into OBJ from a glTF (materials_from a .gltf
+     * or .glb, material_names NULL): OUT's name with .mtl is written
+     * beside it with a newmtl per glTF material (its name; Kd and d from
+     * baseColorFactor; map_Kd its base colour texture, written beside as
+     * OUT_K.png or .jpg), and the OBJ's mtllib and usemtl lines name
+     * them; all the files or none. Joints and weights are not written
+     * into a plain mesh's glTF (they need its skin: a glTF document keeps
+     * it). */
+    const char *materials_from;
 } mr_write_options;
 
 /* An OBJ file's materials: its mtllib lines' file names and each

@@ -1072,6 +1072,52 @@ static void test_texcoords_and_look(void **state)
     assert_int_equal(tu_run_cli(tu_fmt("render '%s' -o '%s' --size 60x60 -q", path, out), NULL),
                      0);
     assert_true(tu_file_exists(out));
+    /* its materials went into the OBJ's library, its texture beside it: the
+     * OBJ, and the glTF made from the OBJ, draw as the document does
+     * (tu_tmp_path's buffers rotate: the paths kept) */
+    char doc_path[1024], obj_path[1024], back_path[1024], png_path[1024];
+    snprintf(doc_path, sizeof doc_path, "%s", path);
+    snprintf(obj_path, sizeof obj_path, "%s", obj);
+    snprintf(back_path, sizeof back_path, "%s", back);
+    snprintf(png_path, sizeof png_path, "%s", png);
+    path = doc_path, obj = obj_path, back = back_path, png = png_path;
+    text = tu_read_file(obj, NULL);
+    tu_assert_contains(text, "mtllib look-uv.mtl\n");
+    tu_assert_contains(text, "usemtl material_0\n");
+    tu_assert_contains(text, "usemtl material_1\n");
+    free(text);
+    char *lib = tu_read_file(tu_tmp_path("look-uv.mtl"), NULL);
+    tu_assert_contains(lib, "newmtl material_0\nKd 0.735");
+    tu_assert_contains(lib, "map_Kd -clamp on look-uv_0.png\n");
+    tu_assert_contains(lib, "newmtl material_1\nKd 1 1 1\n"); /* its texture: set 1 */
+    assert_null(strstr(strstr(lib, "newmtl material_1"), "map_Kd"));
+    free(lib);
+    size_t n1, n2;
+    char *t1 = tu_read_file(png, &n1), *t2 = tu_read_file(tu_tmp_path("look-uv_0.png"), &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(t1, t2, n1);
+    free(t1), free(t2);
+    char img_doc[1024], img_obj[1024], img_back[1024];
+    snprintf(img_doc, sizeof img_doc, "%s", tu_tmp_path("look-doc.png"));
+    snprintf(img_obj, sizeof img_obj, "%s", tu_tmp_path("look-obj.png"));
+    snprintf(img_back, sizeof img_back, "%s", tu_tmp_path("look-back.png"));
+    const char *fmt = "render '%s' -o '%s' --size 48x48 --supersample 1 -q";
+    assert_int_equal(tu_run_cli(tu_fmt(fmt, path, img_doc), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt(fmt, obj, img_obj), NULL), 0);
+    assert_int_equal(tu_run_cli(tu_fmt(fmt, back, img_back), NULL), 0);
+    t1 = tu_read_file(img_doc, &n1);
+    t2 = tu_read_file(img_obj, &n2);
+    size_t n3;
+    char *t3 = tu_read_file(img_back, &n3);
+    assert_true(n1 == n2 && n2 == n3);
+    assert_memory_equal(t1, t2, n1);
+    assert_memory_equal(t1, t3, n1);
+    free(t1), free(t2), free(t3);
+    validate(back);
+    /* a library that cannot be written: no OBJ, no library, no texture */
+    const char *bad = tu_tmp_path("no-such-dir/x.obj");
+    assert_true(tu_run_cli(tu_fmt("convert '%s' '%s' -q", path, bad), NULL) != 0);
+    assert_false(tu_file_exists(tu_tmp_path("no-such-dir/x.mtl")));
 }
 
 /* ---- the data model (mr_mesh's texture sets, tangents, skin, materials) ------ */
@@ -1266,7 +1312,7 @@ static void test_obj_materials_to_gltf(void **state)
     w.mtllib = om.mtllib;
     w.material_names = (const char *const *)om.names;
     w.material_count = om.count;
-    w.mtllib_from = obj;
+    w.materials_from = obj;
     assert_int_equal(mr_mesh_write(out, &m, &w, &err), MR_OK);
     validate(out);
     doc d;

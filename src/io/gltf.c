@@ -102,6 +102,17 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
     return not_built(err, path);
 }
 
+mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_gltf_mtl *out,
+                             mr_error *err)
+{
+    (void)obj_path;
+    memset(out, 0, sizeof *out);
+    return not_built(err, gltf_path);
+}
+
+void mr_gltf_mtl_remove(const mr_gltf_mtl *m) { (void)m; }
+void mr_gltf_mtl_free(mr_gltf_mtl *m) { (void)m; }
+
 mr_status mr_convert_gltf(const char *in_path, const char *out_path, size_t *primitives,
                           mr_error *err)
 {
@@ -2576,8 +2587,8 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     mr_mtl_material *defs = NULL;
     size_t ndefs = 0;
     mr_status st = MR_OK;
-    if (o->mtllib && o->mtllib_from)
-        st = mr_mtl_read_all(o->mtllib_from, o->mtllib, &defs, &ndefs, err);
+    if (o->mtllib && o->materials_from)
+        st = mr_mtl_read_all(o->materials_from, o->mtllib, &defs, &ndefs, err);
     uint64_t *key = st == MR_OK ? mr_alloc_array(nt + 1, sizeof *key) : NULL;
     uint32_t *idx = key ? mr_alloc_array(3 * nt + 1, sizeof *idx) : NULL;
     if (st == MR_OK && (!key || !idx || nt > UINT32_MAX))
@@ -2696,6 +2707,179 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
     if (st == MR_OK)
         st = mr_gltf_write(g, path, err);
     mr_gltf_free(g);
+    return st;
+}
+
+
+/* ---- materials into an OBJ's library ---------------------------------------------- */
+
+void mr_gltf_mtl_remove(const mr_gltf_mtl *m)
+{
+    for (size_t i = 0; m && i < m->nfiles; i++)
+        unlink(m->files[i]);
+}
+
+void mr_gltf_mtl_free(mr_gltf_mtl *m)
+{
+    if (!m)
+        return;
+    for (size_t i = 0; i < m->count; i++)
+        free(m->names[i]);
+    for (size_t i = 0; i < m->nfiles; i++)
+        free(m->files[i]);
+    free(m->names);
+    free(m->files);
+    free(m->mtllib);
+    memset(m, 0, sizeof *m);
+}
+
+static bool add_file(mr_gltf_mtl *m, const char *path)
+{
+    char **nf = realloc(m->files, (m->nfiles + 1) * sizeof *nf);
+    if (!nf)
+        return false;
+    m->files = nf;
+    return (m->files[m->nfiles] = dup_str(path)) != NULL && ++m->nfiles;
+}
+
+/* Write `n` bytes to path (whole or not at all); recorded in m. */
+static mr_status write_bytes(mr_gltf_mtl *m, const char *path, const void *data, size_t n,
+                             mr_error *err)
+{
+    mr_output_file of;
+    mr_status st = mr_output_open(&of, path, err);
+    if (st != MR_OK)
+        return st;
+    if (n && fwrite(data, 1, n, of.f) != n)
+        st = mr_fail_write(err, path, errno);
+    st = mr_output_close(&of, path, st, err);
+    if (st == MR_OK && !add_file(m, path))
+        st = mr_fail_nomem(err, path, 4096);
+    return st;
+}
+
+/* Material i's name for the library: its own (blanks and controls as
+ * '_'), or material_I; a later duplicate gets _I. */
+static char *mtl_name(const cJSON *mat, size_t i, char *const *before)
+{
+    const char *n = str(mat, "name");
+    char buf[256];
+    if (!n || !*n)
+        snprintf(buf, sizeof buf, "material_%zu", i);
+    else
+        snprintf(buf, sizeof buf, "%s", n);
+    for (char *p = buf; *p; p++)
+        if ((unsigned char)*p <= ' ' || *p == 127)
+            *p = '_';
+    for (size_t j = 0; j < i; j++)
+        if (strcmp(before[j], buf) == 0) {
+            const size_t l = strlen(buf);
+            snprintf(buf + (l < 200 ? l : 200), sizeof buf - (l < 200 ? l : 200), "_%zu", i);
+            break;
+        }
+    return dup_str(buf);
+}
+
+mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_gltf_mtl *out,
+                             mr_error *err)
+{
+    memset(out, 0, sizeof *out);
+    mr_gltf *g;
+    mr_status st = mr_gltf_load_file(gltf_path, &g, err);
+    if (st != MR_OK)
+        return st;
+    /* OUT's folder and base name */
+    char dir[4200], base[1024];
+    const char *slash = strrchr(obj_path, '/');
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - obj_path) : 1, slash ? obj_path : ".");
+    if (slash == obj_path)
+        snprintf(dir, sizeof dir, "/");
+    const char *b = slash ? slash + 1 : obj_path;
+    size_t bl = strlen(b);
+    const char *dot = strrchr(b, '.');
+    if (dot && dot > b)
+        bl = (size_t)(dot - b);
+    snprintf(base, sizeof base, "%.*s", (int)(bl < 1000 ? bl : 1000), b);
+    const cJSON *mats = member(g->root, "materials");
+    const size_t nm = (size_t)array_size(mats);
+    const size_t ni = (size_t)array_size(member(g->root, "images"));
+    char *mtl = NULL;
+    size_t len = 0, cap = 0;
+    FILE *mf = open_memstream(&mtl, &cap);
+    out->names = calloc(nm + 1, sizeof *out->names);
+    char (*tex)[1100] = calloc(ni + 1, sizeof *tex); /* each image's file, once written */
+    if (!mf || !out->names || !tex)
+        st = mr_fail_nomem(err, gltf_path, 4096 + nm * 8);
+    if (mf)
+        fprintf(mf, "# materials of %s (meshreduce)\n",
+                strrchr(gltf_path, '/') ? strrchr(gltf_path, '/') + 1 : gltf_path);
+    for (size_t i = 0; st == MR_OK && i < nm; i++) {
+        const cJSON *mat = cJSON_GetArrayItem(mats, (int)i);
+        if (!(out->names[i] = mtl_name(mat, i, out->names))) {
+            st = mr_fail_nomem(err, gltf_path, 256);
+            break;
+        }
+        out->count = i + 1;
+        const cJSON *pbr = member(mat, "pbrMetallicRoughness");
+        double f[4] = {1, 1, 1, 1};
+        numbers(member(pbr, "baseColorFactor"), 4, f);
+        fprintf(mf, "\nnewmtl %s\nKd %.6g %.6g %.6g\n", out->names[i],
+                (double)mr_linear_to_srgb((float)f[0]), (double)mr_linear_to_srgb((float)f[1]),
+                (double)mr_linear_to_srgb((float)f[2]));
+        if (f[3] < 1)
+            fprintf(mf, "d %.6g\n", f[3] < 0 ? 0 : f[3]);
+        const cJSON *info = member(pbr, "baseColorTexture");
+        long long ti, set, src, smp;
+        if (!info || get_index(info, "index", -1, &ti) != 1)
+            continue;
+        get_index(info, "texCoord", 0, &set);
+        const cJSON *t = item(g->root, "textures", ti);
+        if (set != 0 || !t || get_index(t, "source", -1, &src) != 1 || (size_t)src >= ni)
+            continue; /* another set, or only an extension's source (KTX2, WebP) */
+        if (!tex[src][0]) {
+            char what[48];
+            snprintf(what, sizeof what, "materials[%zu]", i);
+            gl_blob img;
+            bool owned;
+            if ((st = image_bytes(g, src, what, &img, &owned, err)) != MR_OK)
+                break;
+            const bool png = img.size >= 8 && memcmp(img.data, "\x89PNG", 4) == 0;
+            const bool jpeg = img.size >= 3 && img.data[0] == 0xFF && img.data[1] == 0xD8;
+            if (png || jpeg) {
+                char path[5400];
+                snprintf(tex[src], sizeof tex[src], "%.1000s_%lld.%s", base, src,
+                         png ? "png" : "jpg");
+                snprintf(path, sizeof path, "%s/%s", dir, tex[src]);
+                st = write_bytes(out, path, img.data, img.size, err);
+            }
+            if (owned)
+                free(img.data);
+            if (st != MR_OK || !tex[src][0])
+                continue;
+        }
+        const cJSON *sampler = get_index(t, "sampler", -1, &smp) == 1
+                                   ? item(g->root, "samplers", smp) : NULL;
+        fprintf(mf, "map_Kd %s%s\n",
+                wrap_of(sampler, "wrapS") == MR_WRAP_CLAMP ? "-clamp on " : "", tex[src]);
+    }
+    if (mf && fclose(mf) != 0 && st == MR_OK)
+        st = mr_fail_nomem(err, gltf_path, cap);
+    len = mtl ? strlen(mtl) : 0;
+    if (st == MR_OK) {
+        char path[5400], name[1100];
+        snprintf(name, sizeof name, "%s.mtl", base);
+        snprintf(path, sizeof path, "%s/%s", dir, name);
+        st = write_bytes(out, path, mtl, len, err);
+        if (st == MR_OK && !(out->mtllib = dup_str(name)))
+            st = mr_fail_nomem(err, path, 64);
+    }
+    free(mtl);
+    free(tex);
+    mr_gltf_free(g);
+    if (st != MR_OK) {
+        mr_gltf_mtl_remove(out);
+        mr_gltf_mtl_free(out);
+    }
     return st;
 }
 

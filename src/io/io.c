@@ -271,11 +271,29 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
         return st;
     if (fmt == MR_FORMAT_GLTF)
         return mr_gltf_write_mesh(mesh, path, options, err); /* its own files */
+    /* an OBJ of a glTF's materials: their library and textures beside it */
+    mr_gltf_mtl lib;
+    memset(&lib, 0, sizeof lib);
+    mr_write_options with_lib;
+    if (fmt == MR_FORMAT_OBJ && mesh->materials && options->materials_from &&
+        !options->material_names &&
+        mr_format_from_path(options->materials_from) == MR_FORMAT_GLTF) {
+        if ((st = mr_gltf_mtl_export(options->materials_from, path, &lib, err)) != MR_OK)
+            return st;
+        with_lib = *options;
+        with_lib.mtllib = lib.mtllib;
+        with_lib.material_names = (const char *const *)lib.names;
+        with_lib.material_count = lib.count;
+        options = &with_lib;
+    }
 
     mr_output_file out;
     st = mr_output_open(&out, path, err);
-    if (st != MR_OK)
+    if (st != MR_OK) {
+        mr_gltf_mtl_remove(&lib);
+        mr_gltf_mtl_free(&lib);
         return st;
+    }
     FILE *f = out.f;
     static const size_t bufsize = 1 << 20;
     char *buf = malloc(bufsize);
@@ -291,6 +309,9 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     }
     st = mr_output_close(&out, path, st, err);
     free(buf);
+    if (st != MR_OK) /* all the files or none */
+        mr_gltf_mtl_remove(&lib);
+    mr_gltf_mtl_free(&lib);
     return st;
 }
 
