@@ -194,6 +194,7 @@ def write(
     texcoords: bool = ...,
     colors: bool = ...,
     material_names: Optional[Sequence[str]] = ...,
+    materials_from: Optional[_Path] = ...,
 ) -> None: ...
 def generate(
     kind: Literal["sphere", "torus", "scan"] = ..., triangles: int = ..., *, seed: int = ...

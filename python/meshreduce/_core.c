@@ -1360,7 +1360,7 @@ static PyObject *py_read(PyObject *self, PyObject *args, PyObject *kw)
 
 PyDoc_STRVAR(write_doc,
 "write($module, /, path, mesh, *, format=None, encoding=None, normals=True, texcoords=True,\n"
-"      colors=True, material_names=None)\n"
+"      colors=True, material_names=None, materials_from=None)\n"
 "--\n"
 "\n"
 "Write a mesh: any object with .vertices and .triangles (and optionally\n"
@@ -1371,23 +1371,33 @@ PyDoc_STRVAR(write_doc,
 "(texcoords1-3, tangents, materials) go where the format holds them: glTF\n"
 "writes every one (a primitive per material; joints and weights need a skin\n"
 "and are left out), OBJ its materials as usemtl groups. material_names: the\n"
-"materials' names, by id (OBJ usemtl lines; glTF materials' names). The file\n"
+"materials' names, by id (OBJ usemtl lines; glTF materials' names).\n"
+"materials_from: the file the materials come from, as `meshreduce convert` uses\n"
+"its input: a glTF's into an OBJ (OUT.mtl and the textures written beside it),\n"
+"an OBJ's mtllib colours and textures into a glTF (with material_names). The file\n"
 "appears complete or not at all (temporary file, then rename), as with the CLI.");
 
 static PyObject *py_write(PyObject *self, PyObject *args, PyObject *kw)
 {
     static char *kwlist[] = {"path", "mesh", "format", "encoding", "normals", "texcoords",
-                             "colors", "material_names", NULL};
+                             "colors", "material_names", "materials_from", NULL};
     static const char *const encodings[] = {"default", "ascii", "binary", "big-endian", NULL};
-    PyObject *path = NULL, *mesh, *names = Py_None, *seq = NULL;
+    PyObject *path = NULL, *mesh, *names = Py_None, *seq = NULL, *from = Py_None,
+             *from_path = NULL;
     const char *format = NULL, *encoding = NULL;
     const char **name_list = NULL;
     mr_write_options wo;
     mr_write_options_default(&wo);
     int normals = 1, texcoords = 1, colors = 1;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O|$zzpppO", kwlist, path_arg, &path, &mesh,
-                                     &format, &encoding, &normals, &texcoords, &colors, &names))
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O&O|$zzpppOO", kwlist, path_arg, &path, &mesh,
+                                     &format, &encoding, &normals, &texcoords, &colors, &names,
+                                     &from))
         return NULL;
+    if (from != Py_None) {
+        if (!path_arg(from, &from_path))
+            goto fail;
+        wo.materials_from = PyBytes_AS_STRING(from_path);
+    }
     if (names != Py_None) {
         /* the materials' names: usemtl lines (OBJ), glTF materials' names */
         if (!(seq = PySequence_Fast(names, "material_names must be a sequence of str")))
@@ -1435,6 +1445,7 @@ static PyObject *py_write(PyObject *self, PyObject *args, PyObject *kw)
     py_mesh_release(&in);
     Py_DECREF(path);
     Py_XDECREF(seq);
+    Py_XDECREF(from_path);
     free(name_list);
     if (st != MR_OK)
         return raise_mr_error(&err);
@@ -1442,6 +1453,7 @@ static PyObject *py_write(PyObject *self, PyObject *args, PyObject *kw)
 fail:
     Py_DECREF(path);
     Py_XDECREF(seq);
+    Py_XDECREF(from_path);
     free(name_list);
     return NULL;
 }

@@ -179,6 +179,18 @@ def test_materials_through_files(tmp_path):
     else:
         g = meshreduce.read(tmp_path / "o.glb")
         np.testing.assert_array_equal(np.sort(g.materials), [-1, 0, 1, 1])
+    # a glTF's materials into an OBJ's library, as convert writes it
+    duck = os.path.join(DATA, "gltf", "Duck", "glTF-Binary", "Duck.glb")
+    if os.path.exists(duck) and meshreduce.features["png"]:
+        d = meshreduce.read(duck)
+        try:
+            meshreduce.write(tmp_path / "duck.obj", d, materials_from=duck)
+        except meshreduce.Error as e:  # glTF support not built
+            assert "not built" in str(e)
+        else:
+            assert "map_Kd duck_0.png" in (tmp_path / "duck.mtl").read_text()
+            assert (tmp_path / "duck_0.png").exists()
+            assert "mtllib duck.mtl" in (tmp_path / "duck.obj").read_text()
     with pytest.raises(TypeError, match=r"material_names\[1\] is not a str"):
         meshreduce.write(tmp_path / "o.obj", m, material_names=["red", 2])
 
