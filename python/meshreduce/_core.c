@@ -538,29 +538,25 @@ static int move_mesh_arrays(PyObject *d, mr_mesh *m)
     int rc = 0;
     rc |= set_item(d, "vertices", take_array(x.positions, x.vertex_count, 3, NPY_FLOAT32));
     rc |= set_item(d, "triangles", take_array(x.indices, x.triangle_count, 3, NPY_UINT32));
-    rc |= set_item(d, "normals",
-                   x.normals ? take_array(x.normals, x.vertex_count, 3, NPY_FLOAT32)
-                             : Py_NewRef(Py_None));
-    rc |= set_item(d, "texcoords",
-                   x.texcoords ? take_array(x.texcoords, x.vertex_count, 2, NPY_FLOAT32)
-                               : Py_NewRef(Py_None));
-    rc |= set_item(d, "colors",
-                   x.colors ? take_array(x.colors, x.vertex_count, 4, NPY_FLOAT32)
-                            : Py_NewRef(Py_None));
-    for (int k = 0; k < MR_MORE_TEXCOORDS; k++)
-        rc |= set_item(d, more_names[k],
-                       x.more_texcoords[k]
-                           ? take_array(x.more_texcoords[k], x.vertex_count, 2, NPY_FLOAT32)
-                           : Py_NewRef(Py_None));
-    rc |= set_item(d, "tangents",
-                   x.tangents ? take_array(x.tangents, x.vertex_count, 4, NPY_FLOAT32)
-                              : Py_NewRef(Py_None));
-    rc |= set_item(d, "joints",
-                   x.joints ? take_array(x.joints, x.vertex_count, 4, NPY_UINT16)
-                            : Py_NewRef(Py_None));
-    rc |= set_item(d, "weights",
-                   x.weights ? take_array(x.weights, x.vertex_count, 4, NPY_FLOAT32)
-                             : Py_NewRef(Py_None));
+    /* the per-vertex arrays: None where absent */
+    const struct {
+        const char *name;
+        void *data;
+        int cols, type;
+    } per_vertex[] = {{"normals", x.normals, 3, NPY_FLOAT32},
+                      {"texcoords", x.texcoords, 2, NPY_FLOAT32},
+                      {"colors", x.colors, 4, NPY_FLOAT32},
+                      {more_names[0], x.more_texcoords[0], 2, NPY_FLOAT32},
+                      {more_names[1], x.more_texcoords[1], 2, NPY_FLOAT32},
+                      {more_names[2], x.more_texcoords[2], 2, NPY_FLOAT32},
+                      {"tangents", x.tangents, 4, NPY_FLOAT32},
+                      {"joints", x.joints, 4, NPY_UINT16},
+                      {"weights", x.weights, 4, NPY_FLOAT32}};
+    for (size_t i = 0; i < sizeof per_vertex / sizeof *per_vertex; i++)
+        rc |= set_item(d, per_vertex[i].name,
+                       per_vertex[i].data ? take_array(per_vertex[i].data, x.vertex_count,
+                                                       per_vertex[i].cols, per_vertex[i].type)
+                                          : Py_NewRef(Py_None));
     /* materials as int64, -1 for none */
     PyObject *mat = Py_NewRef(Py_None);
     if (x.materials) {

@@ -1530,6 +1530,34 @@ mr_status mr_gltf_image(const mr_gltf *g, long long i, const char *what, uint8_t
     return st;
 }
 
+/* A material's base colour in display values (baseColorFactor's rgb from
+ * linear light; alpha clamped) and its base colour texture's image on
+ * TEXCOORD_0 (*image, or -1: none, another set, or a source only an
+ * extension names: KTX2, WebP) with its sampler (or NULL). */
+static void base_color(const mr_gltf *g, const cJSON *mat, float color[4], long long *image,
+                       const cJSON **sampler)
+{
+    const cJSON *pbr = member(mat, "pbrMetallicRoughness");
+    double f[4] = {1, 1, 1, 1};
+    numbers(member(pbr, "baseColorFactor"), 4, f);
+    for (int k = 0; k < 4; k++)
+        color[k] = k < 3 ? mr_linear_to_srgb((float)f[k])
+                         : (float)(f[k] <= 0 ? 0 : f[k] >= 1 ? 1 : f[k]);
+    *image = -1;
+    *sampler = NULL;
+    const cJSON *info = member(pbr, "baseColorTexture");
+    long long ti, set, src, smp;
+    if (!info || get_index(info, "index", -1, &ti) != 1)
+        return;
+    get_index(info, "texCoord", 0, &set);
+    const cJSON *tex = item(g->root, "textures", ti);
+    if (set != 0 || !tex || get_index(tex, "source", -1, &src) != 1 ||
+        src >= array_size(member(g->root, "images")))
+        return;
+    *image = src;
+    *sampler = get_index(tex, "sampler", -1, &smp) == 1 ? item(g->root, "samplers", smp) : NULL;
+}
+
 mr_status mr_gltf_scene_look(const mr_gltf *g, mr_mesh *mesh, uint32_t **face_material,
                              mr_gltf_material **materials, size_t *material_count,
                              size_t *image_count, mr_error *err)
@@ -1549,30 +1577,10 @@ mr_status mr_gltf_scene_look(const mr_gltf *g, mr_mesh *mesh, uint32_t **face_ma
     }
     for (int m = 0; st == MR_OK && m < nm; m++) {
         mr_gltf_material *gm = &(*materials)[m];
-        const cJSON *mat = cJSON_GetArrayItem(mats, m);
-        const cJSON *pbr = member(mat, "pbrMetallicRoughness");
-        double f[4] = {1, 1, 1, 1};
-        numbers(member(pbr, "baseColorFactor"), 4, f);
-        for (int k = 0; k < 4; k++) /* linear light to display values */
-            gm->color[k] = k < 3 ? mr_linear_to_srgb((float)f[k])
-                                 : (float)(f[k] <= 0 ? 0 : f[k] >= 1 ? 1 : f[k]);
-        gm->image = -1;
-        const cJSON *info = member(pbr, "baseColorTexture");
-        long long ti, set, src, smp;
-        if (!info || get_index(info, "index", -1, &ti) != 1)
-            continue;
-        get_index(info, "texCoord", 0, &set);
-        const cJSON *tex = item(g->root, "textures", ti);
-        /* TEXCOORD_0 only (the mesh carries one set); a source that only
-         * an extension names (KTX2, WebP) is drawn in the colour alone */
-        if (set != 0 || !tex || get_index(tex, "source", -1, &src) != 1)
-            continue;
-        const cJSON *sampler = get_index(tex, "sampler", -1, &smp) == 1
-                                   ? item(g->root, "samplers", smp) : NULL;
+        const cJSON *sampler;
+        base_color(g, cJSON_GetArrayItem(mats, m), gm->color, &gm->image, &sampler);
         gm->wrap_s = wrap_of(sampler, "wrapS");
         gm->wrap_t = wrap_of(sampler, "wrapT");
-        if (src >= 0 && (size_t)src < *image_count)
-            gm->image = src;
     }
     if (st != MR_OK) {
         mr_mesh_free(mesh);
@@ -2820,22 +2828,16 @@ mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_glt
             break;
         }
         out->count = i + 1;
-        const cJSON *pbr = member(mat, "pbrMetallicRoughness");
-        double f[4] = {1, 1, 1, 1};
-        numbers(member(pbr, "baseColorFactor"), 4, f);
-        fprintf(mf, "\nnewmtl %s\nKd %.6g %.6g %.6g\n", out->names[i],
-                (double)mr_linear_to_srgb((float)f[0]), (double)mr_linear_to_srgb((float)f[1]),
-                (double)mr_linear_to_srgb((float)f[2]));
-        if (f[3] < 1)
-            fprintf(mf, "d %.6g\n", f[3] < 0 ? 0 : f[3]);
-        const cJSON *info = member(pbr, "baseColorTexture");
-        long long ti, set, src, smp;
-        if (!info || get_index(info, "index", -1, &ti) != 1)
+        float c[4];
+        long long src;
+        const cJSON *sampler;
+        base_color(g, mat, c, &src, &sampler);
+        fprintf(mf, "\nnewmtl %s\nKd %.6g %.6g %.6g\n", out->names[i], (double)c[0], (double)c[1],
+                (double)c[2]);
+        if (c[3] < 1)
+            fprintf(mf, "d %.6g\n", (double)c[3]);
+        if (src < 0)
             continue;
-        get_index(info, "texCoord", 0, &set);
-        const cJSON *t = item(g->root, "textures", ti);
-        if (set != 0 || !t || get_index(t, "source", -1, &src) != 1 || (size_t)src >= ni)
-            continue; /* another set, or only an extension's source (KTX2, WebP) */
         if (!tex[src][0]) {
             char what[48];
             snprintf(what, sizeof what, "materials[%zu]", i);
@@ -2857,8 +2859,6 @@ mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_glt
             if (st != MR_OK || !tex[src][0])
                 continue;
         }
-        const cJSON *sampler = get_index(t, "sampler", -1, &smp) == 1
-                                   ? item(g->root, "samplers", smp) : NULL;
         fprintf(mf, "map_Kd %s%s\n",
                 wrap_of(sampler, "wrapS") == MR_WRAP_CLAMP ? "-clamp on " : "", tex[src]);
     }
