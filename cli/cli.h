@@ -184,6 +184,8 @@ int cli_run_job(const cli_io *io, const cli_job *job, void *user);
  * none, or another pair of formats). CLI_OK, or the failure's status
  * (message printed). */
 int cli_obj_materials(const cli_io *io, mr_obj_materials *m);
+/* Whether a line of the file at path starts with `word` (after blanks). */
+bool cli_file_has_line(const char *path, const char *word);
 /* Point the write options at m's library and names where the output
  * mesh has materials (each face's is the mesh's), or at none; in_path is
  * the OBJ the libraries are beside (a glTF output takes their colours and

@@ -454,3 +454,32 @@ int cli_bbox_diagonal(const char *path, const mr_mesh *m, double *diagonal)
     *diagonal = s.bbox_diagonal;
     return CLI_OK;
 }
+
+bool cli_file_has_line(const char *path, const char *word)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return false;
+    const size_t wl = strlen(word), cap = 1 << 20;
+    char *buf = malloc(cap + wl + 1);
+    bool found = false;
+    size_t keep = 0; /* bytes carried over: a word across two reads */
+    char prev = '\n';
+    while (buf && !found) {
+        const size_t got = fread(buf + keep, 1, cap, f);
+        if (got == 0)
+            break;
+        const size_t n = keep + got;
+        for (size_t i = 0; i + wl <= n && !found; i++) {
+            const char before = i ? buf[i - 1] : prev;
+            found = (before == '\n' || before == ' ' || before == '\t') &&
+                    memcmp(buf + i, word, wl) == 0;
+        }
+        keep = n >= wl ? wl - 1 : n;
+        prev = n > keep ? buf[n - keep - 1] : prev;
+        memmove(buf, buf + n - keep, keep);
+    }
+    free(buf);
+    fclose(f);
+    return found;
+}

@@ -727,9 +727,26 @@ static int run_file(const cli_io *io, simplify_job *job)
         job->o.progress = show_progress;
         job->o.progress_user = &prog;
     }
+    /* an OBJ's usemtl groups: kept where the file is simplified in memory
+     * (the mesh has them; the writer needs their names) */
+    mr_write_options w = io->write;
+    const bool groups = mr_format_from_path(io->in) == MR_FORMAT_OBJ &&
+                        cli_file_has_line(io->in, "usemtl");
+    mr_obj_materials mats;
+    memset(&mats, 0, sizeof mats);
+    if (groups) {
+        int rc = cli_obj_materials(io, &mats);
+        if (rc != CLI_OK)
+            return rc;
+        w.mtllib = mats.mtllib;
+        w.material_names = (const char *const *)mats.names;
+        w.material_count = mats.count;
+        w.materials_from = io->in;
+    }
     mr_simplify_file_stats fs;
-    const mr_status st = ooc_simplify_file(io->in, io->out, &job->o, &job->ooc, &io->write,
-                                           cli_comm, &fs, &err);
+    const mr_status st = ooc_simplify_file(io->in, io->out, &job->o, &job->ooc, &w, cli_comm,
+                                           &fs, &err);
+    mr_obj_materials_free(&mats);
     free(job->lock);
     job->lock = NULL;
     job->o.vertex_lock = NULL;
@@ -739,6 +756,11 @@ static int run_file(const cli_io *io, simplify_job *job)
         return cli_fail_err(&err);
     job->s = fs.simplify;
     job->fs = &fs;
+    if (groups && fs.out_of_core && !io->quiet && (!cli_comm || cli_comm->rank == 0))
+        fprintf(stderr,
+                "meshreduce: note: %s: its usemtl groups are not kept out of core; the output "
+                "has none\n",
+                io->in);
     warn_after(io, job);
     const cli_times t = {fs.seconds_read, fs.seconds_simplify, fs.seconds_write};
     if (io->json)
