@@ -1149,8 +1149,38 @@ static void test_materials_kept(void **state)
         const uint32_t x = a.face_material[t], y = b.face_material[t];
         assert_true(x == UINT32_MAX ? y == UINT32_MAX : !strcmp(a.names[x], b.names[y]));
     }
+    /* the reader's materials are the usemtl groups */
+    mr_mesh r;
+    assert_int_equal(mr_mesh_read(in, NULL, &r, &err), MR_OK);
+    assert_non_null(r.materials);
+    assert_int_equal(r.triangle_count, a.triangle_count);
+    assert_memory_equal(r.materials, a.face_material, 4 * a.triangle_count);
+    mr_mesh_free(&r);
     mr_obj_materials_free(&a);
     mr_obj_materials_free(&b);
+    /* the file path in memory (a memory budget given): the same bytes */
+    char out_path[1024], file_path[1024], lods[1024], lod2[1024];
+    snprintf(out_path, sizeof out_path, "%s", out);
+    snprintf(file_path, sizeof file_path, "%s", tu_tmp_path("mat-sphere-file.obj"));
+    snprintf(lods, sizeof lods, "%s", tu_tmp_path("mat-sphere-lods.obj"));
+    snprintf(lod2, sizeof lod2, "%s", tu_tmp_path("mat-sphere-lods.lod2.obj"));
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --ratio 10%% --memory 1G -q", in,
+                                       file_path),
+                                NULL),
+                     0);
+    size_t n1, n2;
+    char *t1 = tu_read_file(out_path, &n1), *t2 = tu_read_file(file_path, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(t1, t2, n1);
+    free(t1), free(t2);
+    /* levels of detail: each keeps both groups */
+    assert_int_equal(tu_run_cli(tu_fmt("simplify '%s' -o '%s' --lods 30%%,5%% -q", in, lods),
+                                NULL),
+                     0);
+    assert_int_equal(mr_obj_materials_read(lod2, &a, &err), MR_OK);
+    assert_int_equal(a.count, 2);
+    assert_string_equal(a.mtllib, "mat.mtl");
+    mr_obj_materials_free(&a);
     mr_mesh_free(&g);
 }
 
