@@ -457,29 +457,21 @@ int cli_bbox_diagonal(const char *path, const mr_mesh *m, double *diagonal)
 
 bool cli_file_has_line(const char *path, const char *word)
 {
-    FILE *f = fopen(path, "rb");
+    const size_t wl = strlen(word);
+    FILE *f = wl ? fopen(path, "rb") : NULL;
     if (!f)
         return false;
-    const size_t wl = strlen(word), cap = 1 << 20;
-    char *buf = malloc(cap + wl + 1);
+    char *line = NULL;
+    size_t cap = 0;
     bool found = false;
-    size_t keep = 0; /* bytes carried over: a word across two reads */
-    char prev = '\n';
-    while (buf && !found) {
-        const size_t got = fread(buf + keep, 1, cap, f);
-        if (got == 0)
-            break;
-        const size_t n = keep + got;
-        for (size_t i = 0; i + wl <= n && !found; i++) {
-            const char before = i ? buf[i - 1] : prev;
-            found = (before == '\n' || before == ' ' || before == '\t') &&
-                    memcmp(buf + i, word, wl) == 0;
-        }
-        keep = n >= wl ? wl - 1 : n;
-        prev = n > keep ? buf[n - keep - 1] : prev;
-        memmove(buf, buf + n - keep, keep);
+    while (!found && getline(&line, &cap, f) >= 0) {
+        const char *p = line;
+        while (*p == ' ' || *p == '\t')
+            p++;
+        found = strncmp(p, word, wl) == 0 &&
+                (p[wl] == ' ' || p[wl] == '\t' || p[wl] == '\r' || p[wl] == '\n' || !p[wl]);
     }
-    free(buf);
+    free(line);
     fclose(f);
     return found;
 }

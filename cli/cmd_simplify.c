@@ -885,6 +885,34 @@ static void report_lods(const cli_io *io, const simplify_job *job, const mr_lod_
  * simplified from the one before (mr_mesh_lods) and measured against the
  * input; every file written, or none. A glTF document into glTF: one
  * document, its levels in MSFT_lod (mr_simplify_gltf_lods). */
+/* The library that a glTF's materials made beside an OBJ this run wrote
+ * (OBJ's name with .mtl, and the map_Kd files it names: mr_write_options'
+ * materials_from): removed with the OBJ when a later level fails. */
+static void remove_library(const char *obj_path)
+{
+    char mtl[4200], dir[4200];
+    const char *slash = strrchr(obj_path, '/'), *base = slash ? slash + 1 : obj_path;
+    const char *dot = strrchr(base, '.');
+    snprintf(mtl, sizeof mtl, "%.*s.mtl", (int)(dot && dot > base ? dot - obj_path : (long)strlen(obj_path)),
+             obj_path);
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - obj_path + 1) : 0, obj_path);
+    FILE *f = fopen(mtl, "r");
+    if (!f)
+        return;
+    char line[2400];
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "map_Kd ", 7) != 0)
+            continue;
+        line[strcspn(line, "\r\n")] = '\0';
+        const char *name = strrchr(line, ' ') + 1; /* after "-clamp on", if any */
+        char tex[6700];
+        snprintf(tex, sizeof tex, "%s%s", dir, name);
+        remove(tex);
+    }
+    fclose(f);
+    remove(mtl);
+}
+
 static int run_lods(const cli_io *io, simplify_job *job, bool gltf)
 {
     if (job->lock_path)
@@ -937,8 +965,11 @@ static int run_lods(const cli_io *io, simplify_job *job, bool gltf)
         written += st == MR_OK;
     }
     if (st != MR_OK) {
-        for (size_t k = 0; k < written; k++) /* all of them or none */
+        for (size_t k = 0; k < written; k++) { /* all of them or none */
+            if (mesh.materials && mr_format_from_path(io->in) == MR_FORMAT_GLTF)
+                remove_library(path[k]);
             remove(path[k]);
+        }
         mr_lod_levels_free(lv, job->nlods);
         mr_mesh_free(&mesh);
         return cli_fail_err(&err);

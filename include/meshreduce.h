@@ -198,9 +198,12 @@ typedef struct mr_write_options {
     /* The file the mesh's material ids come from (since 0.3.0), or NULL.
      * Into glTF, the materials become one primitive each and a glTF
      * material named by material_names; where materials_from is the OBJ
-     * whose mtllib files (`mtllib`) define them, its Kd becomes the base
-     * colour and its map_Kd (PNG or JPEG) the base colour texture, held
-     * in the file's buffer. Into OBJ from a glTF (materials_from a .gltf
+     * whose mtllib files define them (`mtllib` and material_names, or
+     * else its own mtllib and usemtl lines), its Kd becomes the base
+     * colour, d its alpha, and its map_Kd the base colour texture, held
+     * in the file's buffer (a library or texture that cannot be read, or
+     * a texture neither PNG nor JPEG, leaves the colour). Into OBJ from a
+     * glTF (materials_from a .gltf
      * or .glb, material_names NULL): OUT's name with .mtl is written
      * beside it with a newmtl per glTF material (its name; Kd and d from
      * baseColorFactor; map_Kd its base colour texture, written beside as

@@ -179,6 +179,20 @@ def test_materials_through_files(tmp_path):
     else:
         g = meshreduce.read(tmp_path / "o.glb")
         np.testing.assert_array_equal(np.sort(g.materials), [-1, 0, 1, 1])
+    # OBJ has no way back to no material: faces after a group take "None"
+    m2 = meshreduce.Mesh(m.vertices, m.triangles, materials=np.array([0, 1, -1, -1]))
+    meshreduce.write(tmp_path / "n.obj", m2, material_names=["red", "blue"])
+    assert (tmp_path / "n.obj").read_text().count("usemtl None\n") == 1
+    back = meshreduce.read(tmp_path / "n.obj").materials
+    assert back[0] != back[1] and back[2] == back[3] not in (back[0], back[1], -1)
+    try:  # a second texture set alone is written as glTF's set 0
+        meshreduce.write(tmp_path / "t1.glb", meshreduce.Mesh(
+            m.vertices, m.triangles, texcoords1=m.vertices[:, :2].copy()))
+    except meshreduce.Error as e:
+        assert "not built" in str(e)
+    else:
+        t1 = meshreduce.read(tmp_path / "t1.glb")
+        assert t1.texcoords is not None and t1.texcoords1 is None
     # a glTF's materials into an OBJ's library, as convert writes it
     duck = os.path.join(DATA, "gltf", "Duck", "glTF-Binary", "Duck.glb")
     if os.path.exists(duck) and meshreduce.features["png"]:

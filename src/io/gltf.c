@@ -110,7 +110,11 @@ mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_glt
     return not_built(err, gltf_path);
 }
 
-void mr_gltf_mtl_remove(const mr_gltf_mtl *m) { (void)m; }
+mr_status mr_gltf_mtl_commit(mr_gltf_mtl *m, mr_error *err)
+{
+    (void)m, (void)err;
+    return MR_OK;
+}
 void mr_gltf_mtl_free(mr_gltf_mtl *m) { (void)m; }
 
 mr_status mr_convert_gltf(const char *in_path, const char *out_path, size_t *primitives,
@@ -2479,24 +2483,17 @@ static long long obj_texture(mr_gltf *g, const mr_mtl_material *d, gl_tex **tex,
     for (size_t i = 0; i < *ntex; i++)
         if (strcmp((*tex)[i].path, d->texture) == 0 && (*tex)[i].wrap == d->wrap)
             return (*tex)[i].index;
+    /* a texture that cannot be read, or that glTF cannot hold (neither PNG
+     * nor JPEG: TGA, BMP), leaves the material its colour: -2 */
     gl_blob b;
-    mr_status st = read_whole(d->texture, g->name, &b, err);
-    if (st != MR_OK) {
-        char why[sizeof err->message];
-        snprintf(why, sizeof why, "%s", err->message);
-        mr_fail_plain(err, MR_ERR_IO, g->name, "material \"%s\": cannot read its map_Kd (%s)",
-                      d->name, why);
-        return -1;
-    }
+    mr_error ignored;
+    if (read_whole(d->texture, g->name, &b, &ignored) != MR_OK)
+        return -2;
     const bool png = b.size >= 8 && memcmp(b.data, "\x89PNG", 4) == 0;
     const bool jpeg = b.size >= 3 && b.data[0] == 0xFF && b.data[1] == 0xD8 && b.data[2] == 0xFF;
     if (!png && !jpeg) {
         free(b.data);
-        mr_fail_plain(err, MR_ERR_UNSUPPORTED, g->name,
-                      "material \"%s\": map_Kd %s is neither PNG nor JPEG, the images glTF "
-                      "takes (convert it, or write another format)",
-                      d->name, d->texture);
-        return -1;
+        return -2;
     }
     const long long view = add_view(g, b.data, b.size, err);
     cJSON *images = member(g->root, "images"), *textures = member(g->root, "textures"),
@@ -2565,10 +2562,10 @@ static mr_status add_material(mr_gltf *g, uint32_t id, const mr_write_options *o
         for (int k = 0; k < 4; k++)
             cJSON_AddItemToArray(f, cJSON_CreateNumber(k < 3 ? mr_srgb_to_linear(defs[d].color[k])
                                                              : defs[d].color[3]));
-        if (defs[d].texture[0]) {
-            const long long t = obj_texture(g, &defs[d], tex, ntex, err);
-            if (t < 0)
-                return err ? err->status : MR_ERR_IO;
+        const long long t = defs[d].texture[0] ? obj_texture(g, &defs[d], tex, ntex, err) : -2;
+        if (t == -1)
+            return err ? err->status : MR_ERR_NO_MEMORY;
+        if (t >= 0) {
             cJSON *bt = cJSON_CreateObject();
             if (!bt)
                 return mr_fail_nomem(err, g->name, 64);
@@ -2577,6 +2574,8 @@ static mr_status add_material(mr_gltf *g, uint32_t id, const mr_write_options *o
         }
     }
     cJSON_AddNumberToObject(pbr, "metallicFactor", 0);
+    if (d >= 0 && defs[d].color[3] < 1) /* an OBJ's d (or Tr): see-through */
+        cJSON_AddStringToObject(mat, "alphaMode", "BLEND");
     return MR_OK;
 }
 
@@ -2595,8 +2594,27 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     mr_mtl_material *defs = NULL;
     size_t ndefs = 0;
     mr_status st = MR_OK;
-    if (o->mtllib && o->materials_from)
-        st = mr_mtl_read_all(o->materials_from, o->mtllib, &defs, &ndefs, err);
+    /* an OBJ's libraries: as the options name them, else as its mtllib
+     * lines do (and its usemtl names, where the options give none); a
+     * library that cannot be read leaves the names alone */
+    mr_obj_materials om;
+    memset(&om, 0, sizeof om);
+    mr_write_options named = *o;
+    mr_error ignored;
+    if (o->materials_from && mr_format_from_path(o->materials_from) == MR_FORMAT_OBJ &&
+        (!o->mtllib || !o->material_names) &&
+        mr_obj_materials_read(o->materials_from, &om, &ignored) == MR_OK) {
+        if (!named.mtllib)
+            named.mtllib = om.mtllib;
+        if (!named.material_names) {
+            named.material_names = (const char *const *)om.names;
+            named.material_count = om.count;
+        }
+        o = &named;
+    }
+    if (o->mtllib && o->materials_from &&
+        mr_mtl_read_all(o->materials_from, o->mtllib, &defs, &ndefs, &ignored) != MR_OK)
+        defs = NULL, ndefs = 0;
     uint64_t *key = st == MR_OK ? mr_alloc_array(nt + 1, sizeof *key) : NULL;
     uint32_t *idx = key ? mr_alloc_array(3 * nt + 1, sizeof *idx) : NULL;
     if (st == MR_OK && (!key || !idx || nt > UINT32_MAX))
@@ -2642,6 +2660,7 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     free(defs);
     free(key);
     free(idx);
+    mr_obj_materials_free(&om);
     return st;
 }
 
@@ -2682,6 +2701,8 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
         acc = float_accessor(g, m->tangents, n, 4, false, GL_ARRAY_BUFFER, err);
         st = acc < 0 || !set_index(attrs, "TANGENT", acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
+    /* the sets present, numbered from 0 without gaps (as glTF asks) */
+    int sets_written = 0;
     for (int set = 0; set <= MR_MORE_TEXCOORDS && st == MR_OK && options->write_texcoords; set++) {
         const float *tc = set ? m->more_texcoords[set - 1] : m->texcoords;
         if (!tc)
@@ -2695,8 +2716,8 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
         acc = uv ? float_accessor(g, uv, n, 2, false, GL_ARRAY_BUFFER, err)
                  : (mr_fail_nomem(err, path, 8 * n), -1);
         free(uv);
-        char name[16];
-        snprintf(name, sizeof name, "TEXCOORD_%d", set);
+        char name[24];
+        snprintf(name, sizeof name, "TEXCOORD_%d", sets_written++);
         st = acc < 0 || !set_index(attrs, name, acc) ? MR_ERR_NO_MEMORY : MR_OK;
     }
     if (st == MR_OK && m->colors && options->write_colors) {
@@ -2721,10 +2742,14 @@ mr_status mr_gltf_write_mesh(const mr_mesh *m, const char *path,
 
 /* ---- materials into an OBJ's library ---------------------------------------------- */
 
-void mr_gltf_mtl_remove(const mr_gltf_mtl *m)
+mr_status mr_gltf_mtl_commit(mr_gltf_mtl *m, mr_error *err)
 {
-    for (size_t i = 0; m && i < m->nfiles; i++)
-        unlink(m->files[i]);
+    mr_status st = MR_OK;
+    for (size_t i = 0; i < m->nfiles; i++) {
+        const mr_status s1 = mr_output_commit(&m->files[i], m->paths[i], err);
+        st = st == MR_OK ? s1 : st;
+    }
+    return st;
 }
 
 void mr_gltf_mtl_free(mr_gltf_mtl *m)
@@ -2733,37 +2758,47 @@ void mr_gltf_mtl_free(mr_gltf_mtl *m)
         return;
     for (size_t i = 0; i < m->count; i++)
         free(m->names[i]);
-    for (size_t i = 0; i < m->nfiles; i++)
-        free(m->files[i]);
+    for (size_t i = 0; i < m->nfiles; i++) {
+        mr_output_abandon(&m->files[i]); /* those not committed */
+        free(m->paths[i]);
+    }
     free(m->names);
     free(m->files);
+    free(m->paths);
     free(m->mtllib);
     memset(m, 0, sizeof *m);
 }
 
-static bool add_file(mr_gltf_mtl *m, const char *path)
-{
-    char **nf = realloc(m->files, (m->nfiles + 1) * sizeof *nf);
-    if (!nf)
-        return false;
-    m->files = nf;
-    return (m->files[m->nfiles] = dup_str(path)) != NULL && ++m->nfiles;
-}
-
-/* Write `n` bytes to path (whole or not at all); recorded in m. */
+/* Write `n` bytes to path, staged (whole or not at all); recorded in m. */
 static mr_status write_bytes(mr_gltf_mtl *m, const char *path, const void *data, size_t n,
                              mr_error *err)
 {
-    mr_output_file of;
-    mr_status st = mr_output_open(&of, path, err);
-    if (st != MR_OK)
+    mr_output_file *nf = realloc(m->files, (m->nfiles + 1) * sizeof *nf);
+    if (nf)
+        m->files = nf;
+    char **np = realloc(m->paths, (m->nfiles + 1) * sizeof *np);
+    if (np)
+        m->paths = np;
+    char *name = dup_str(path);
+    if (!nf || !np || !name) {
+        free(name);
+        return mr_fail_nomem(err, path, 4096);
+    }
+    mr_output_file *of = &m->files[m->nfiles];
+    mr_status st = mr_output_open(of, path, err);
+    if (st != MR_OK) {
+        free(name);
         return st;
-    if (n && fwrite(data, 1, n, of.f) != n)
+    }
+    if (n && fwrite(data, 1, n, of->f) != n)
         st = mr_fail_write(err, path, errno);
-    st = mr_output_close(&of, path, st, err);
-    if (st == MR_OK && !add_file(m, path))
-        st = mr_fail_nomem(err, path, 4096);
-    return st;
+    st = mr_output_finish(of, path, st, err);
+    if (st != MR_OK) {
+        free(name);
+        return st;
+    }
+    m->paths[m->nfiles++] = name;
+    return MR_OK;
 }
 
 /* Material i's name for the library: its own (blanks and controls as
@@ -2876,10 +2911,8 @@ mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_glt
     free(mtl);
     free(tex);
     mr_gltf_free(g);
-    if (st != MR_OK) {
-        mr_gltf_mtl_remove(out);
+    if (st != MR_OK)
         mr_gltf_mtl_free(out);
-    }
     return st;
 }
 

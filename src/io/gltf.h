@@ -92,22 +92,24 @@ mr_status mr_gltf_add_lod(mr_gltf *g, const mr_mesh *levels, const uint32_t *con
 mr_status mr_gltf_write(mr_gltf *g, const char *path, mr_error *err);
 
 /* A glTF file's materials for an OBJ written from its mesh
- * (mr_write_options.materials_from): OBJ's name with .mtl written beside
- * it, a newmtl per material (names made unique, blanks as '_'; Kd and d
- * from baseColorFactor in display values; map_Kd the base colour texture
- * on TEXCOORD_0 where it is PNG or JPEG, written beside as OBJBASE_K.ext,
- * K the image's index). mtllib is the .mtl's file name, names[i] material
- * i's, files the paths written (mr_gltf_mtl_remove deletes them). */
+ * (mr_write_options.materials_from): OBJ's name with .mtl beside it, a
+ * newmtl per material (names made unique, blanks as '_'; Kd and d from
+ * baseColorFactor in display values; map_Kd the base colour texture on
+ * TEXCOORD_0 where it is PNG or JPEG, beside as OBJBASE_K.ext, K the
+ * image's index). mtllib is the .mtl's file name, names[i] material i's;
+ * the files are staged (output.h): mr_gltf_mtl_commit moves them into
+ * place, mr_gltf_mtl_free removes those not committed. */
 typedef struct mr_gltf_mtl {
     char *mtllib;
     char **names;
     size_t count;
-    char **files;
+    struct mr_output_file *files;
+    char **paths;
     size_t nfiles;
 } mr_gltf_mtl;
 mr_status mr_gltf_mtl_export(const char *gltf_path, const char *obj_path, mr_gltf_mtl *out,
                              mr_error *err);
-void mr_gltf_mtl_remove(const mr_gltf_mtl *m);
+mr_status mr_gltf_mtl_commit(mr_gltf_mtl *m, mr_error *err);
 void mr_gltf_mtl_free(mr_gltf_mtl *m);
 
 /* A plain mesh as a glTF document of one mesh, node and scene. */

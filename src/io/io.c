@@ -290,7 +290,6 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     mr_output_file out;
     st = mr_output_open(&out, path, err);
     if (st != MR_OK) {
-        mr_gltf_mtl_remove(&lib);
         mr_gltf_mtl_free(&lib);
         return st;
     }
@@ -307,10 +306,20 @@ mr_status mr_mesh_write(const char *path, const mr_mesh *mesh,
     case MR_FORMAT_XYZ: st = mr_write_xyz(f, mesh, options, path, err); break;
     default: st = mr_fail_plain(err, MR_ERR_UNSUPPORTED, path, "unknown output format");
     }
-    st = mr_output_close(&out, path, st, err);
+    /* all the files or none: the library and its textures go into place
+     * before the OBJ, which names them */
+    if (lib.nfiles) {
+        st = mr_output_finish(&out, path, st, err);
+        if (st == MR_OK)
+            st = mr_gltf_mtl_commit(&lib, err);
+        if (st == MR_OK)
+            st = mr_output_commit(&out, path, err);
+        else
+            mr_output_abandon(&out);
+    } else {
+        st = mr_output_close(&out, path, st, err);
+    }
     free(buf);
-    if (st != MR_OK) /* all the files or none */
-        mr_gltf_mtl_remove(&lib);
     mr_gltf_mtl_free(&lib);
     return st;
 }

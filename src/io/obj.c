@@ -990,8 +990,10 @@ static size_t format_f(const obj_writer *w, size_t first, size_t count, char *ou
         /* a usemtl line where the material changes (decided from the
          * faces alone: the same lines whatever the blocks) */
         const uint32_t g = face_group(w, i);
-        if (g != UINT32_MAX && (i == 0 || face_group(w, i - 1) != g)) {
-            const char *name = w->o->material_names[g];
+        if (i == 0 ? g != UINT32_MAX : g != face_group(w, i - 1)) {
+            /* OBJ has no way back to no material: faces without one after
+             * a group take "None" (as Blender writes them) */
+            const char *name = g == UINT32_MAX ? "None" : w->o->material_names[g];
             const size_t n = strlen(name);
             memcpy(p, "usemtl ", 7);
             memcpy(p + 7, name, n);
@@ -1085,6 +1087,7 @@ mr_status mr_write_obj(FILE *f, const mr_mesh *mesh, const mr_write_options *opt
                                  "material %zu has no name, or a line break in it", i);
         longest = n > longest ? n : longest;
     }
+    longest = longest < 4 ? 4 : longest; /* "None" (format_f) */
 
     size_t elements = mesh->vertex_count > mesh->triangle_count ? mesh->vertex_count
                                                                 : mesh->triangle_count;

@@ -285,6 +285,16 @@ static mr_status read_mtl(const char *path, mtl_list *ml, mr_error *err)
             }
             for (int k = 0; k < 3; k++)
                 cur->color[k] = c[k] < 0 ? 0 : c[k] > 1 ? 1 : c[k];
+        } else if (keyword(s, le, "d", &rest) || keyword(s, le, "Tr", &rest)) {
+            /* opacity: d, or Tr its complement */
+            char text[64];
+            snprintf(text, sizeof text, "%.*s", (int)(le - rest), rest);
+            char *next;
+            float a = strtof(text, &next);
+            if (next != text && isfinite(a)) {
+                a = *s == 'T' ? 1 - a : a;
+                cur->color[3] = a < 0 ? 0 : a > 1 ? 1 : a;
+            }
         } else if (keyword(s, le, "map_Kd", &rest)) {
             const char *fs;
             bool clamp;

@@ -446,6 +446,43 @@ mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, m
     return st;
 }
 
+mr_status mr_output_finish(mr_output_file *out, const char *path, mr_status st, mr_error *err)
+{
+    int e = close_stream(out->f);
+    out->f = NULL;
+    if (e != 0 && st == MR_OK)
+        st = mr_fail_write(err, path, e);
+    if (st != MR_OK)
+        mr_output_abandon(out);
+    return st;
+}
+
+mr_status mr_output_commit(mr_output_file *out, const char *path, mr_error *err)
+{
+    if (out->direct || !out->tmp[0])
+        return MR_OK;
+    mr_status st = MR_OK;
+    if (rename(out->tmp, out->dest) != 0) {
+        st = mr_fail_plain(err, MR_ERR_IO, path, "cannot move the written file into place: %s",
+                           strerror(errno));
+        unlink(out->tmp);
+    }
+    pending_drop(out->slot);
+    out->slot = -1;
+    out->tmp[0] = '\0';
+    return st;
+}
+
+void mr_output_abandon(mr_output_file *out)
+{
+    if (out->direct || !out->tmp[0])
+        return;
+    unlink(out->tmp);
+    pending_drop(out->slot);
+    out->slot = -1;
+    out->tmp[0] = '\0';
+}
+
 mr_status mr_fail_write(mr_error *err, const char *name, int errnum)
 {
     return mr_fail_plain(err, MR_ERR_IO, name, "write failed: %s",

@@ -32,6 +32,13 @@ typedef struct mr_output_file {
 } mr_output_file;
 mr_status mr_output_open(mr_output_file *out, const char *path, mr_error *err);
 mr_status mr_output_close(mr_output_file *out, const char *path, mr_status st, mr_error *err);
+/* Files that appear together: mr_output_finish closes one as
+ * mr_output_close does but keeps its temporary file (removed on failure);
+ * mr_output_commit then moves it into place, or mr_output_abandon removes
+ * it (each at most once; a file written in place is already there). */
+mr_status mr_output_finish(mr_output_file *out, const char *path, mr_status st, mr_error *err);
+mr_status mr_output_commit(mr_output_file *out, const char *path, mr_error *err);
+void mr_output_abandon(mr_output_file *out);
 
 /* Report a failed write as "<name>: write failed: <strerror(errnum)>"
  * (MR_ERR_IO); errnum 0 (no errno) reads as an I/O error. */

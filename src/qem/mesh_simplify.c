@@ -841,6 +841,9 @@ static mr_status simplify_carried(const mr_mesh *in, const mr_simplify_options *
                                   mr_mesh *out, uint32_t **origin, mr_simplify_stats *stats,
                                   mr_error *err)
 {
+    if (origin)
+        *origin = NULL;
+    mr_mesh_init(out);
     mr_carried c;
     memset(&c, 0, sizeof c);
     mr_mesh run = *in; /* its weighed attributes only */
