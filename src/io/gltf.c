@@ -2601,7 +2601,8 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     memset(&om, 0, sizeof om);
     mr_write_options named = *o;
     mr_error ignored;
-    if (o->materials_from && mr_format_from_path(o->materials_from) == MR_FORMAT_OBJ &&
+    const size_t fl = o->materials_from ? strlen(o->materials_from) : 0;
+    if (fl > 4 && strcasecmp(o->materials_from + fl - 4, ".obj") == 0 &&
         (!o->mtllib || !o->material_names) &&
         mr_obj_materials_read(o->materials_from, &om, &ignored) == MR_OK) {
         if (!named.mtllib)
