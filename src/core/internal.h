@@ -61,6 +61,11 @@ void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_c
  * vertex `from` on to dst's vertex `at` on (each array both have; may
  * overlap). */
 void mr_mesh_copy_more(mr_mesh *dst, size_t at, const mr_mesh *src, size_t from, size_t n);
+/* n triangles in material order (mesh.c): *order the triangles, none
+ * first, then by material, each run in its input order (a stable sort);
+ * *key[i] order[i]'s material + 1 (0: none). Both malloc'd. */
+mr_status mr_material_order(const uint32_t *materials, size_t n, uint32_t **key,
+                            uint32_t **order, mr_error *err);
 
 /* Monotonic wall clock in seconds (phase timings). */
 double mr_now_seconds(void);

@@ -2579,12 +2579,6 @@ static mr_status add_material(mr_gltf *g, uint32_t id, const mr_write_options *o
     return MR_OK;
 }
 
-static int by_key64(const void *a, const void *b)
-{
-    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* The triangles as one primitive per material (none first, then by id),
  * each with the attributes of `prim` (which becomes the first). */
 static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_t *fm,
@@ -2616,14 +2610,9 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     if (o->mtllib && o->materials_from &&
         mr_mtl_read_all(o->materials_from, o->mtllib, &defs, &ndefs, &ignored) != MR_OK)
         defs = NULL, ndefs = 0;
-    uint64_t *key = st == MR_OK ? mr_alloc_array(nt + 1, sizeof *key) : NULL;
-    uint32_t *idx = key ? mr_alloc_array(3 * nt + 1, sizeof *idx) : NULL;
-    if (st == MR_OK && (!key || !idx || nt > UINT32_MAX))
-        st = mr_fail_nomem(err, g->name, nt * 20);
-    for (size_t t = 0; st == MR_OK && t < nt; t++)
-        key[t] = (uint64_t)(uint32_t)(fm[t] + 1u) << 32 | t;
-    if (st == MR_OK)
-        qsort(key, nt, sizeof *key, by_key64);
+    uint32_t *key = NULL, *order = NULL;
+    uint32_t *idx = mr_alloc_array(3 * nt + 1, sizeof *idx);
+    st = idx ? mr_material_order(fm, nt, &key, &order, err) : mr_fail_nomem(err, g->name, nt * 12);
     cJSON *prims = member(cJSON_GetArrayItem(member(g->root, "meshes"), 0), "primitives");
     cJSON *templ = st == MR_OK ? cJSON_Duplicate(prim, true) : NULL;
     if (st == MR_OK && !templ)
@@ -2631,10 +2620,10 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     gl_tex *tex = NULL;
     size_t ntex = 0, nmat = 0;
     for (size_t i = 0, first = 1; st == MR_OK && i < nt; first = 0) {
-        const uint32_t g1 = (uint32_t)(key[i] >> 32);
+        const uint32_t g1 = key[i];
         size_t j = i;
-        for (; j < nt && (uint32_t)(key[j] >> 32) == g1; j++)
-            memcpy(idx + 3 * (j - i), m->indices + 3 * (key[j] & 0xFFFFFFFFu), 12);
+        for (; j < nt && key[j] == g1; j++)
+            memcpy(idx + 3 * (j - i), m->indices + 3 * (size_t)order[j], 12);
         cJSON *p = first ? prim : cJSON_Duplicate(templ, true);
         if (!p) {
             st = mr_fail_nomem(err, g->name, 256);
@@ -2660,6 +2649,7 @@ static mr_status material_primitives(mr_gltf *g, const mr_mesh *m, const uint32_
     free(tex);
     free(defs);
     free(key);
+    free(order);
     free(idx);
     mr_obj_materials_free(&om);
     return st;

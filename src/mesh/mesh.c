@@ -1,5 +1,6 @@
 /* The owning mesh container. */
 #include "../core/internal.h"
+#include "adjacency.h"
 
 void mr_mesh_init(mr_mesh *mesh)
 {
@@ -145,24 +146,41 @@ void mr_mesh_compact_vertices(mr_mesh *mesh, const uint32_t *remap, size_t new_c
     mesh->vertex_count = new_count;
 }
 
-static int by_u32(const void *a, const void *b)
-{
-    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return (x > y) - (x < y);
-}
-
 size_t mr_mesh_material_count(const mr_mesh *mesh)
 {
     if (!mesh || !mesh->materials || !mesh->triangle_count)
         return 0;
-    uint32_t *ids = mr_alloc_array(mesh->triangle_count, sizeof *ids);
-    if (!ids)
+    uint32_t *key, *order;
+    if (mr_material_order(mesh->materials, mesh->triangle_count, &key, &order, NULL) != MR_OK)
         return 0;
-    memcpy(ids, mesh->materials, mesh->triangle_count * sizeof *ids);
-    qsort(ids, mesh->triangle_count, sizeof *ids, by_u32);
     size_t n = 0;
     for (size_t t = 0; t < mesh->triangle_count; t++)
-        n += ids[t] != UINT32_MAX && (t == 0 || ids[t] != ids[t - 1]);
-    free(ids);
+        n += key[t] != 0 && (t == 0 || key[t] != key[t - 1]);
+    free(key);
+    free(order);
     return n;
+}
+
+mr_status mr_material_order(const uint32_t *materials, size_t n, uint32_t **key,
+                            uint32_t **order, mr_error *err)
+{
+    *key = *order = NULL;
+    if (n > UINT32_MAX)
+        return mr_fail_plain(err, MR_ERR_TOO_LARGE, NULL, "%zu triangles to order", n);
+    uint32_t *k = mr_alloc_array(n + 1, sizeof *k), *o = mr_alloc_array(n + 1, sizeof *o);
+    mr_status st = k && o ? MR_OK : mr_fail_nomem(err, NULL, n * 8);
+    for (size_t t = 0; st == MR_OK && t < n; t++) {
+        k[t] = materials[t] + 1u; /* none (UINT32_MAX) wraps to 0: first */
+        o[t] = (uint32_t)t;
+    }
+    if (st == MR_OK)
+        st = mr_radix_sort_u32(k, o, n, 32, 1, err); /* stable: each run in its order */
+    if (st != MR_OK) {
+        free(k);
+        free(o);
+        return st;
+    }
+    *key = k;
+    *order = o;
+    return MR_OK;
 }

@@ -88,12 +88,6 @@ mr_status mr_carried_split(const mr_mesh *in, const uint8_t *lock, mr_carried *c
     return st;
 }
 
-static int by_key(const void *a, const void *b)
-{
-    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
 mr_status mr_carried_finish(const mr_mesh *in, const mr_carried *c, mr_mesh *out,
                             uint32_t *origin, mr_error *err)
 {
@@ -108,29 +102,29 @@ mr_status mr_carried_finish(const mr_mesh *in, const mr_carried *c, mr_mesh *out
     if (st != MR_OK)
         return st;
     if (in->materials) {
-        uint64_t *key = mr_alloc_array(nt + 1, sizeof *key);
+        /* each triangle's material by its first corner's split vertex
+         * (origin is still the split mesh's); the triangles grouped */
+        uint32_t *fm = mr_alloc_array(nt + 1, sizeof *fm), *key = NULL, *order = NULL;
         uint32_t *idx = mr_alloc_array(3 * nt + 1, sizeof *idx);
-        if (!key || !idx || nt > UINT32_MAX) {
-            free(key);
-            free(idx);
-            mr_mesh_free(&extra);
-            return mr_fail_nomem(err, NULL, nt * 20);
+        st = fm && idx ? MR_OK : mr_fail_nomem(err, NULL, nt * 16);
+        for (size_t t = 0; st == MR_OK && t < nt; t++)
+            fm[t] = c->vmat[origin[out->indices[3 * t]]];
+        if (st == MR_OK)
+            st = mr_material_order(fm, nt, &key, &order, err);
+        for (size_t i = 0; st == MR_OK && i < nt; i++) {
+            memcpy(idx + 3 * i, out->indices + 3 * (size_t)order[i], 3 * sizeof *idx);
+            extra.materials[i] = key[i] - 1u;
         }
-        /* by split vertex (origin is still the split mesh's); none
-         * (UINT32_MAX) first: + 1 wraps it to 0 */
-        for (size_t t = 0; t < nt; t++) {
-            const uint32_t g = c->vmat[origin[out->indices[3 * t]]];
-            key[t] = (uint64_t)(uint32_t)(g + 1u) << 32 | t;
-        }
-        qsort(key, nt, sizeof *key, by_key);
-        for (size_t i = 0; i < nt; i++) {
-            const size_t t = (size_t)(key[i] & 0xFFFFFFFFu);
-            memcpy(idx + 3 * i, out->indices + 3 * t, 3 * sizeof *idx);
-            extra.materials[i] = (uint32_t)(key[i] >> 32) - 1u;
-        }
-        memcpy(out->indices, idx, 3 * nt * sizeof *idx);
+        if (st == MR_OK)
+            memcpy(out->indices, idx, 3 * nt * sizeof *idx);
+        free(fm);
         free(key);
+        free(order);
         free(idx);
+        if (st != MR_OK) {
+            mr_mesh_free(&extra);
+            return st;
+        }
     }
     /* origin: into the input's vertices */
     if (c->src)
