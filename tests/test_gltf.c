@@ -1249,6 +1249,25 @@ static void test_data_model(void **state)
         assert_memory_equal(r.joints + 4 * v, s.joints + 4 * i, 8);
         assert_memory_equal(r.weights + 4 * v, s.weights + 4 * i, 16);
     }
+    /* the same at 1, 2, 3 and 8 threads: materials, carried arrays, origin */
+    static const int teams[4] = {1, 2, 3, 8};
+    for (int k = 0; k < 4; k++) {
+        mr_simplify_options ot = o;
+        ot.threads = teams[k];
+        mr_mesh rt;
+        uint32_t *ort = NULL;
+        assert_int_equal(mr_mesh_simplify(&s, &ot, &rt, &ort, NULL, &err), MR_OK);
+        assert_int_equal(rt.vertex_count, r.vertex_count);
+        assert_int_equal(rt.triangle_count, r.triangle_count);
+        assert_memory_equal(rt.indices, r.indices, 12 * r.triangle_count);
+        assert_memory_equal(rt.positions, r.positions, 12 * r.vertex_count);
+        assert_memory_equal(rt.materials, r.materials, 4 * r.triangle_count);
+        assert_memory_equal(rt.more_texcoords[0], r.more_texcoords[0], 8 * r.vertex_count);
+        assert_memory_equal(rt.joints, r.joints, 8 * r.vertex_count);
+        assert_memory_equal(ort, origin, 4 * r.vertex_count);
+        free(ort);
+        mr_mesh_free(&rt);
+    }
     free(origin);
     /* a plain mesh's glTF: a primitive per material; read back the same */
     assert_int_equal(mr_mesh_write(out, &s, NULL, &err), MR_OK);
